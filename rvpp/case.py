@@ -1,0 +1,671 @@
+"""The case: typed, validated, immutable inputs of one RVPP.
+
+A case is a folder holding ``case.yaml`` (units and settings) and the hourly history
+CSV it names. Every object here is frozen and hashable, so a case can key a cache.
+Validation happens on creation and every error names the unit, the field, the value
+and the rule, e.g. ``csp "CSP1": storage.e_min_mwh_th=1200 must be <
+storage.e_max_mwh_th=1100``. Parameters follow MODEL_SPEC §12 (paper Tables 3-7);
+efficiencies and shares are fractions in [0, 1].
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Annotated, Any, Literal
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .errors import CaseError
+from .history import PRICE_COLUMNS, History
+from .periods import ALLOWED_DT_H
+
+Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
+NonNegative = Annotated[float, Field(ge=0.0)]
+Positive = Annotated[float, Field(gt=0.0)]
+UnitName = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,39}$")]
+
+STRATEGIES = ("deterministic", "optimistic", "balanced", "pessimistic")
+Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
+MARKET_NAMES = ("DAM", "SRM", "HPA")
+RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}
+CASE_FILE = "case.yaml"
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+
+class NdresUnit(_Frozen):
+    """Wind farm or PV plant: non-dispatchable, curtailable (MODEL_SPEC §9, paper Table 6)."""
+
+    name: UnitName
+    kind: Literal["wind", "pv"]
+    p_max_mw: Positive
+    p_min_mw: NonNegative = 0.0
+    om_eur_per_mwh: NonNegative = 0.0
+    ramp_up_mw_per_min: NonNegative
+    ramp_dn_mw_per_min: NonNegative
+    reserve_share: Fraction = 0.1
+    series: str | None = None
+    series_scale: Positive = 1.0
+
+    @property
+    def column(self) -> str:
+        return self.series or self.name
+
+    @model_validator(mode="after")
+    def _limits(self) -> "NdresUnit":
+        _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
+        return self
+
+
+class SolarField(_Frozen):
+    """CSP solar field: thermal power collected, uncertain [MW_th]."""
+
+    p_max_mw_th: Positive
+    series: str | None = None
+    series_scale: Positive = 1.0
+
+
+class ThermalStorage(_Frozen):
+    """Two-tank molten-salt storage (paper TS1-TS11)."""
+
+    e_min_mwh_th: NonNegative
+    e_max_mwh_th: Positive
+    p_ch_max_mw_th: NonNegative
+    p_ch_min_mw_th: NonNegative = 0.0
+    p_dis_max_mw_th: NonNegative
+    p_dis_min_mw_th: NonNegative = 0.0
+    eta_ch: Annotated[float, Field(gt=0.0, le=1.0)]
+    eta_dis: Annotated[float, Field(gt=0.0, le=1.0)]
+    e_init_mwh_th: NonNegative | None = None
+
+    @property
+    def cyclic(self) -> bool:
+        """True when the day is cyclic (no fixed initial energy)."""
+        return self.e_init_mwh_th is None
+
+
+class PowerBlock(_Frozen):
+    """Steam power block and turbine (paper STU2-STU8, Appendix A).
+
+    ``breakpoints`` are ``(thermal input [MW_th], efficiency [-])`` pairs; the
+    electrical output at a breakpoint is ``efficiency * input``.
+    """
+
+    p_in_max_mw_th: Positive
+    p_in_min_mw_th: Positive
+    p_el_max_mw: Positive
+    breakpoints: tuple[tuple[float, float], ...]
+    min_up_h: NonNegative = 0.0
+    min_down_h: NonNegative = 0.0
+    startup_fraction: NonNegative = 0.0
+    startup_duration_h: Positive = 1.0
+    initially_on: bool = False
+
+
+class CSP(_Frozen):
+    """Concentrated solar power plant: solar field, thermal storage, power block."""
+
+    name: UnitName
+    om_eur_per_mwh: NonNegative = 0.0
+    heat_efficiency: Annotated[float, Field(gt=0.0, le=1.0)] = 1.0
+    ramp_mw_per_min: NonNegative
+    reserve_share: Fraction = 0.5
+    solar_field: SolarField
+    storage: ThermalStorage
+    power_block: PowerBlock
+
+    @property
+    def column(self) -> str:
+        return self.solar_field.series or self.name
+
+    @property
+    def p_max_mw(self) -> float:
+        """Electrical nameplate [MW]."""
+        return self.power_block.p_el_max_mw
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "CSP":
+        ts, pb = self.storage, self.power_block
+        _require(ts.e_min_mwh_th < ts.e_max_mwh_th, "storage.e_min_mwh_th", ts.e_min_mwh_th, "<",
+                 "storage.e_max_mwh_th", ts.e_max_mwh_th)
+        _require(ts.p_ch_min_mw_th <= ts.p_ch_max_mw_th, "storage.p_ch_min_mw_th", ts.p_ch_min_mw_th,
+                 "<=", "storage.p_ch_max_mw_th", ts.p_ch_max_mw_th)
+        _require(ts.p_dis_min_mw_th <= ts.p_dis_max_mw_th, "storage.p_dis_min_mw_th", ts.p_dis_min_mw_th,
+                 "<=", "storage.p_dis_max_mw_th", ts.p_dis_max_mw_th)
+        if ts.e_init_mwh_th is not None and not ts.e_min_mwh_th <= ts.e_init_mwh_th <= ts.e_max_mwh_th:
+            raise ValueError(f"storage.e_init_mwh_th={ts.e_init_mwh_th:g} must lie in "
+                             f"[storage.e_min_mwh_th={ts.e_min_mwh_th:g}, "
+                             f"storage.e_max_mwh_th={ts.e_max_mwh_th:g}]")
+        _require(pb.p_in_min_mw_th < pb.p_in_max_mw_th, "power_block.p_in_min_mw_th", pb.p_in_min_mw_th,
+                 "<", "power_block.p_in_max_mw_th", pb.p_in_max_mw_th)
+        _check_breakpoints(pb)
+        return self
+
+
+def _check_breakpoints(pb: PowerBlock) -> None:
+    points = pb.breakpoints
+    if len(points) < 2:
+        raise ValueError(f"power_block.breakpoints has {len(points)} point(s); at least 2 are needed")
+    inputs = [p for p, _ in points]
+    if inputs[0] != 0.0:
+        raise ValueError(f"power_block.breakpoints must start at input 0 MW_th (got {inputs[0]:g})")
+    for i, (prev, nxt) in enumerate(zip(inputs, inputs[1:]), start=2):
+        if not nxt > prev:
+            raise ValueError(f"power_block.breakpoints input {nxt:g} (point {i}) must be greater than "
+                             f"the previous input {prev:g}: breakpoints must be strictly increasing")
+    for i, (p, eta) in enumerate(points, start=1):
+        if not 0.0 <= eta <= 1.0:
+            raise ValueError(f"power_block.breakpoints efficiency {eta:g} at {p:g} MW_th (point {i}) "
+                             "must be a fraction in [0, 1]")
+    outputs = [p * eta for p, eta in points]
+    for i, (prev, nxt) in enumerate(zip(outputs, outputs[1:]), start=2):
+        if nxt < prev:
+            raise ValueError(f"power_block.breakpoints output {nxt:g} MW at point {i} is below "
+                             f"{prev:g} MW at the previous point: output must not decrease with input")
+    if pb.p_in_max_mw_th > inputs[-1]:
+        raise ValueError(f"power_block.p_in_max_mw_th={pb.p_in_max_mw_th:g} must be <= the last "
+                         f"breakpoint input {inputs[-1]:g}")
+
+
+class ElectricalDemand(_Frozen):
+    """Flexible electrical demand (MODEL_SPEC §9, paper Demand1-Demand8, Table 4)."""
+
+    name: UnitName
+    p_min_mw: NonNegative
+    p_max_mw: Positive
+    e_min_mwh: NonNegative
+    p_init_mw: NonNegative | None = None
+    ramp_up_mw_per_min: NonNegative
+    ramp_dn_mw_per_min: NonNegative
+    flex_up: Fraction = 0.1
+    flex_dn: Fraction = 0.1
+    series: str | None = None
+    series_scale: Positive = 1.0
+
+    @property
+    def column(self) -> str:
+        return self.series or self.name
+
+    @model_validator(mode="after")
+    def _limits(self) -> "ElectricalDemand":
+        _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
+        if self.p_init_mw is not None and not self.p_min_mw <= self.p_init_mw <= self.p_max_mw:
+            raise ValueError(f"p_init_mw={self.p_init_mw:g} must lie in [p_min_mw={self.p_min_mw:g}, "
+                             f"p_max_mw={self.p_max_mw:g}]")
+        return self
+
+
+class ThermalDemand(_Frozen):
+    """Thermal demand served by the CSPs and the HPA (MODEL_SPEC §9, paper Demand_Heat1-3)."""
+
+    name: UnitName
+    h_min_mw_th: NonNegative
+    h_max_mw_th: Positive
+    q_min_mwh_th: NonNegative
+    h_init_mw_th: NonNegative | None = None
+    series: str | None = None
+    series_scale: Positive = 1.0
+
+    @property
+    def column(self) -> str:
+        return self.series or self.name
+
+    @model_validator(mode="after")
+    def _limits(self) -> "ThermalDemand":
+        _require(self.h_min_mw_th <= self.h_max_mw_th, "h_min_mw_th", self.h_min_mw_th, "<=",
+                 "h_max_mw_th", self.h_max_mw_th)
+        if self.h_init_mw_th is not None and not self.h_min_mw_th <= self.h_init_mw_th <= self.h_max_mw_th:
+            raise ValueError(f"h_init_mw_th={self.h_init_mw_th:g} must lie in "
+                             f"[h_min_mw_th={self.h_min_mw_th:g}, h_max_mw_th={self.h_max_mw_th:g}]")
+        return self
+
+
+class Markets(_Frozen):
+    """Market switches and parameters (MODEL_SPEC §2, §7)."""
+
+    dam: Literal[True] = True
+    srm: bool = True
+    hpa: bool = True
+    kappa: Fraction = 0.3
+    reserve_duration_min: Positive = 15.0
+    hpa_tariff_eur_per_mwh: Annotated[tuple[NonNegative, ...], Field(min_length=24, max_length=24)]
+
+    @property
+    def label(self) -> str:
+        """e.g. ``DAM+SRM+HPA``."""
+        return "+".join(name for name, on in zip(MARKET_NAMES, (True, self.srm, self.hpa)) if on)
+
+    @property
+    def reserve_duration_h(self) -> float:
+        return self.reserve_duration_min / 60.0
+
+
+class UncertaintySettings(_Frozen):
+    """How forecast bands are drawn from the history (MODEL_SPEC §6)."""
+
+    window_days: Annotated[int, Field(ge=1, le=366)] = 30
+    q_lo: Annotated[float, Field(gt=0.0, lt=0.5)] = 0.2
+    q_hi: Annotated[float, Field(gt=0.5, lt=1.0)] = 0.8
+
+
+class Budgets(_Frozen):
+    """Strategy preset, per-source overrides of Γ [periods] and the budget variant."""
+
+    strategy: Strategy = "balanced"
+    overrides: tuple[tuple[str, Annotated[int, Field(ge=0)]], ...] = ()
+    mode: Literal["paper", "planner_chosen"] = "paper"
+
+    @field_validator("overrides", mode="before")
+    @classmethod
+    def _from_mapping(cls, value: Any) -> Any:
+        if isinstance(value, Mapping):
+            return tuple(sorted(value.items()))
+        return value
+
+    @model_validator(mode="after")
+    def _unique(self) -> "Budgets":
+        names = [name for name, _ in self.overrides]
+        duplicated = sorted({n for n in names if names.count(n) > 1})
+        if duplicated:
+            raise ValueError(f"overrides name {duplicated[0]!r} more than once")
+        return self
+
+    @property
+    def override_map(self) -> dict[str, int]:
+        return dict(self.overrides)
+
+
+class SolverSettings(_Frozen):
+    """HiGHS settings and formulation choices."""
+
+    time_limit_s: Positive = 120.0
+    rel_gap: Annotated[float, Field(ge=0.0, lt=1.0)] = 1e-4
+    threads: Annotated[int, Field(ge=0)] = 0
+    budget_encoding: Literal["top_gamma", "binary"] = "top_gamma"
+    pwl_encoding: Literal["incremental", "convex_combination"] = "incremental"
+
+
+class Case(_Frozen):
+    """One RVPP: its units, market settings, uncertainty settings and history."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False,
+                              arbitrary_types_allowed=True)
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    delivery_date: dt.date
+    timezone: str = "Europe/Madrid"
+    dt_h: float = 1.0
+    markets: Markets
+    uncertainty: UncertaintySettings = UncertaintySettings()
+    budgets: Budgets = Budgets()
+    solver: SolverSettings = SolverSettings()
+    wind: tuple[NdresUnit, ...] = ()
+    pv: tuple[NdresUnit, ...] = ()
+    csp: tuple[CSP, ...] = ()
+    ed: tuple[ElectricalDemand, ...] = ()
+    td: tuple[ThermalDemand, ...] = ()
+    history: History
+
+    @property
+    def ndres(self) -> tuple[NdresUnit, ...]:
+        return self.wind + self.pv
+
+    def units(self) -> Iterator[tuple[str, Any]]:
+        """``(kind, unit)`` for every unit, kinds ``wind|pv|csp|ed|td``."""
+        for kind in ("wind", "pv", "csp", "ed", "td"):
+            for unit in getattr(self, kind):
+                yield kind, unit
+
+    def unit_names(self) -> list[str]:
+        return [unit.name for _, unit in self.units()]
+
+    def sources(self) -> list[str]:
+        """Names of every uncertain source that has a budget Γ."""
+        return list(PRICE_COLUMNS) + self.unit_names()
+
+    def replace(self, **changes: Any) -> "Case":
+        """A validated copy with fields changed.
+
+        Sections (``markets``, ``budgets``, ...) may be given as objects or as dicts of
+        the fields to change; unit kinds (``wind``, ``csp``, ...) as lists of units or
+        dicts; ``history`` as a :class:`History`.
+        """
+        data = self.to_data()
+        history = changes.pop("history", self.history)
+        for key, value in changes.items():
+            if isinstance(value, BaseModel):
+                value = value.model_dump(mode="python")
+            if key in UNIT_KINDS:
+                data["units"][key] = [_plain(kind=key, unit=u) for u in value]
+            elif key in _SECTIONS and isinstance(value, Mapping):
+                data[key] = {**data[key], **value}
+            else:
+                data[key] = value
+        return parse_case(data, history)
+
+    def to_data(self) -> dict[str, Any]:
+        """Plain data in the layout of ``case.yaml`` (without the history)."""
+        dump = self.model_dump(mode="python", exclude={"history"})
+        units = {kind: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
+        dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
+        return {**dump, "units": units}
+
+    @field_validator("dt_h")
+    @classmethod
+    def _dt(cls, value: float) -> float:
+        if value not in ALLOWED_DT_H:
+            raise ValueError(f"dt_h={value:g} must be one of {', '.join(f'{v:g}' for v in ALLOWED_DT_H)} [h]")
+        return float(value)
+
+    @field_validator("timezone")
+    @classmethod
+    def _timezone(cls, value: str) -> str:
+        try:
+            ZoneInfo(value)
+        except (ZoneInfoNotFoundError, ValueError):
+            raise ValueError(f"timezone={value!r} is not an IANA time zone such as Europe/Madrid") from None
+        return value
+
+    @model_validator(mode="after")
+    def _cross_checks(self) -> "Case":
+        problems = []
+        for kind in ("wind", "pv"):
+            for unit in getattr(self, kind):
+                if unit.kind != kind:
+                    problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind!r} in the {kind} list')
+        names = self.unit_names()
+        seen: set[str] = set()
+        for kind, unit in self.units():
+            if unit.name in seen:
+                problems.append(f'{kind} "{unit.name}": name is used by more than one unit; names must be unique')
+            if unit.name in RESERVED_NAMES:
+                problems.append(f'{kind} "{unit.name}": name is reserved for a price series; choose another')
+            seen.add(unit.name)
+        known = set(PRICE_COLUMNS) | set(names)
+        for source, _ in self.budgets.overrides:
+            if source not in known:
+                problems.append(f"budgets.overrides: unknown source {source!r}; sources are "
+                                f"{', '.join(PRICE_COLUMNS)} and the unit names ({', '.join(names)})")
+        columns = set(self.history.columns)
+        for kind, unit in self.units():
+            if unit.column not in columns:
+                problems.append(f'{kind} "{unit.name}": history column {unit.column!r} is missing from '
+                                f"{self.history.source} (columns: {', '.join(sorted(columns))})")
+        for price in PRICE_COLUMNS:
+            if price not in columns:
+                problems.append(f"{self.history.source}: price column {price!r} is missing")
+        for csp in self.csp:
+            for field in ("min_up_h", "min_down_h", "startup_duration_h"):
+                hours = getattr(csp.power_block, field)
+                if not _is_multiple(hours, self.dt_h):
+                    problems.append(f'csp "{csp.name}": power_block.{field}={hours:g} must be a multiple of '
+                                    f"dt_h={self.dt_h:g}")
+        if problems:
+            raise ValueError("\n".join(problems))
+        return self
+
+
+UNIT_KINDS = ("wind", "pv", "csp", "ed", "td")
+_UNIT_MODELS = {"wind": NdresUnit, "pv": NdresUnit, "csp": CSP, "ed": ElectricalDemand, "td": ThermalDemand}
+_SECTIONS = {"markets": Markets, "uncertainty": UncertaintySettings, "budgets": Budgets, "solver": SolverSettings}
+_TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "history", "units", *_SECTIONS}
+
+
+def _plain(kind: str, unit: Any) -> dict[str, Any]:
+    if isinstance(unit, BaseModel):
+        return _unit_data(kind, unit.model_dump(mode="python"))
+    return dict(unit)
+
+
+def _unit_data(kind: str, unit: dict[str, Any]) -> dict[str, Any]:
+    if kind in ("wind", "pv"):
+        unit = {k: v for k, v in unit.items() if k != "kind"}
+    if kind == "csp":
+        unit["power_block"]["breakpoints"] = [list(p) for p in unit["power_block"]["breakpoints"]]
+    return unit
+
+
+def _is_multiple(hours: float, dt_h: float) -> bool:
+    ratio = hours / dt_h
+    return math.isclose(ratio, round(ratio), abs_tol=1e-9)
+
+
+def _require(ok: bool, left: str, lval: float, op: str, right: str, rval: float) -> None:
+    if not ok:
+        raise ValueError(f"{left}={lval:g} must be {op} {right}={rval:g}")
+
+
+# ----------------------------------------------------------------------------- parsing
+
+
+def parse_case(data: Mapping[str, Any], history: History) -> Case:
+    """Build a :class:`Case` from plain data (the ``case.yaml`` layout).
+
+    Raises :class:`CaseError` listing every problem found, each naming unit, field,
+    value and rule.
+    """
+    if not isinstance(data, Mapping):
+        raise CaseError(f"{CASE_FILE}: the top level must be a mapping of settings, got {type(data).__name__}")
+    problems: list[str] = []
+    for key in data:
+        if key not in _TOP_FIELDS:
+            problems.append(f'{CASE_FILE}: unknown setting "{key}" (known: {", ".join(sorted(_TOP_FIELDS))})')
+    sections: dict[str, Any] = {}
+    for key, model in _SECTIONS.items():
+        raw = data.get(key, {} if key != "markets" else None)
+        if raw is None:
+            problems.append(f"{key}: section is required")
+            continue
+        sections[key] = _validate(model, raw, key, problems)
+    units: dict[str, tuple] = {}
+    raw_units = data.get("units", {}) or {}
+    if not isinstance(raw_units, Mapping):
+        problems.append("units: must be a mapping of unit lists (wind, pv, csp, ed, td)")
+        raw_units = {}
+    for kind in raw_units:
+        if kind not in UNIT_KINDS:
+            problems.append(f'units: unknown unit kind "{kind}" (known: {", ".join(UNIT_KINDS)})')
+    for kind in UNIT_KINDS:
+        entries = raw_units.get(kind) or []
+        if not isinstance(entries, (list, tuple)):
+            problems.append(f"units.{kind}: must be a list of units")
+            continue
+        built = []
+        for i, entry in enumerate(entries):
+            if not isinstance(entry, Mapping):
+                problems.append(f"units.{kind}[{i}]: must be a mapping of fields")
+                continue
+            label = f'{kind} "{entry.get("name", f"#{i + 1}")}"'
+            payload = dict(entry)
+            if kind in ("wind", "pv"):
+                payload.setdefault("kind", kind)
+            unit = _validate(_UNIT_MODELS[kind], payload, label, problems)
+            if unit is not None:
+                built.append(unit)
+        units[kind] = tuple(built)
+    if problems:
+        raise CaseError(problems)
+    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h") if k in data}
+    case = _validate(Case, {**top, **sections, **units, "history": history}, "case", problems)
+    if problems:
+        raise CaseError(problems)
+    return case
+
+
+def _validate(model: type[BaseModel], raw: Any, label: str, problems: list[str]) -> Any:
+    try:
+        return model.model_validate(raw)
+    except ValidationError as err:
+        problems.extend(_describe(err, label, raw))
+        return None
+
+
+def _describe(err: ValidationError, label: str, raw: Any) -> list[str]:
+    lines = []
+    for e in err.errors():
+        loc = ".".join(str(p) for p in e["loc"])
+        kind, ctx = e["type"], e.get("ctx", {})
+        value = e.get("input")
+        if kind == "value_error":
+            for line in str(ctx.get("error", e["msg"])).splitlines():
+                lines.append(line if label == "case" else f"{label}: {loc + ': ' if loc else ''}{line}")
+            continue
+        if kind == "missing":
+            lines.append(f"{label}: {loc} is required")
+            continue
+        if kind == "extra_forbidden":
+            lines.append(f'{label}: unknown field "{loc}"')
+            continue
+        lines.append(f"{label}: {loc}={_show(value)} {_rule(kind, ctx, e['msg'])}")
+    return lines
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, (list, tuple)) and len(value) > 6:
+        return f"[{len(value)} values]"
+    return repr(value) if isinstance(value, str) else str(value)
+
+
+def _rule(kind: str, ctx: dict, msg: str) -> str:
+    rules = {
+        "greater_than_equal": lambda: f"must be >= {ctx.get('ge'):g}",
+        "greater_than": lambda: f"must be > {ctx.get('gt'):g}",
+        "less_than_equal": lambda: f"must be <= {ctx.get('le'):g}",
+        "less_than": lambda: f"must be < {ctx.get('lt'):g}",
+        "float_parsing": lambda: "must be a number",
+        "float_type": lambda: "must be a number",
+        "finite_number": lambda: "must be a finite number",
+        "int_parsing": lambda: "must be a whole number",
+        "int_from_float": lambda: "must be a whole number",
+        "int_type": lambda: "must be a whole number",
+        "bool_parsing": lambda: "must be true or false",
+        "bool_type": lambda: "must be true or false",
+        "literal_error": lambda: f"must be {ctx.get('expected')}",
+        "string_pattern_mismatch": lambda: "must start with a letter or digit and use at most 40 letters, "
+                                            "digits, '_', '.' or '-'",
+        "string_too_short": lambda: "must not be empty",
+        "too_short": lambda: f"must have {ctx.get('min_length')} values (has {ctx.get('actual_length')})",
+        "too_long": lambda: f"must have at most {ctx.get('max_length')} values (has {ctx.get('actual_length')})",
+        "date_from_datetime_parsing": lambda: "must be a date such as 2025-03-18",
+        "date_parsing": lambda: "must be a date such as 2025-03-18",
+        "date_type": lambda: "must be a date such as 2025-03-18",
+        "tuple_type": lambda: "must be a list",
+        "model_type": lambda: "must be a mapping of fields",
+        "model_attributes_type": lambda: "must be a mapping of fields",
+        "dict_type": lambda: "must be a mapping",
+    }
+    return rules.get(kind, lambda: msg.lower())()
+
+
+# ----------------------------------------------------------------------------- files
+
+
+def load_case(path: str | Path) -> Case:
+    """Read a case folder (or its ``case.yaml``) and validate it."""
+    path = Path(path)
+    file = path / CASE_FILE if path.is_dir() else path
+    if not file.is_file():
+        raise CaseError(f"no {CASE_FILE} found at {path}")
+    try:
+        data = yaml.safe_load(file.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise CaseError(f"{file.name}: not valid YAML{where} ({getattr(exc, 'problem', exc)})") from None
+    if not isinstance(data, Mapping):
+        raise CaseError(f"{file.name}: the top level must be a mapping of settings")
+    history_name = data.get("history")
+    if not isinstance(history_name, str):
+        raise CaseError(f'{file.name}: "history" must name the history CSV file of the case')
+    history = History.read_csv(file.parent / history_name)
+    return parse_case(data, history)
+
+
+def save_case(case: Case, folder: str | Path, history_file: str = "history.csv") -> Path:
+    """Write ``case.yaml`` and the history CSV into ``folder``; return the folder."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    data = case.to_data()
+    data["history"] = history_file
+    data["delivery_date"] = case.delivery_date.isoformat()
+    ordered = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "history")}
+    ordered.update({k: data[k] for k in ("markets", "uncertainty", "budgets", "solver", "units")})
+    ordered["markets"]["hpa_tariff_eur_per_mwh"] = list(ordered["markets"]["hpa_tariff_eur_per_mwh"])
+    text = yaml.safe_dump(ordered, sort_keys=False, allow_unicode=True, width=100)
+    (folder / CASE_FILE).write_text(text, encoding="utf-8")
+    case.history.to_csv(folder / history_file, case.timezone)
+    return folder
+
+
+# ----------------------------------------------------------------------------- options
+
+
+def parse_markets(text: str) -> dict[str, bool]:
+    """``"DAM,SRM"`` -> ``{"srm": True, "hpa": False}``; the DAM is always required."""
+    names = [part.strip().upper() for part in text.replace("+", ",").split(",") if part.strip()]
+    unknown = [n for n in names if n not in MARKET_NAMES]
+    if unknown:
+        raise CaseError(f"markets: unknown market {unknown[0]!r}; choose from {', '.join(MARKET_NAMES)}")
+    if "DAM" not in names:
+        raise CaseError(f"markets={text!r} must include DAM (the day-ahead market is always on)")
+    return {"srm": "SRM" in names, "hpa": "HPA" in names}
+
+
+def with_options(
+    case: Case,
+    *,
+    date: dt.date | str | None = None,
+    strategy: str | None = None,
+    gammas: Mapping[str, int] | None = None,
+    markets: str | None = None,
+    csp: bool = True,
+    hpa_flat: float | None = None,
+    dt_h: float | None = None,
+    budget_mode: str | None = None,
+    time_limit_s: float | None = None,
+    rel_gap: float | None = None,
+    threads: int | None = None,
+    budget_encoding: str | None = None,
+    pwl_encoding: str | None = None,
+) -> Case:
+    """A copy of ``case`` with run options applied (what the command line offers)."""
+    changes: dict[str, Any] = {}
+    if date is not None:
+        changes["delivery_date"] = date
+    if dt_h is not None:
+        changes["dt_h"] = dt_h
+    budgets: dict[str, Any] = {}
+    if strategy is not None:
+        budgets["strategy"] = strategy
+    if budget_mode is not None:
+        budgets["mode"] = budget_mode
+    if gammas:
+        budgets["overrides"] = {**case.budgets.override_map, **gammas}
+    if budgets:
+        changes["budgets"] = budgets
+    market_changes: dict[str, Any] = parse_markets(markets) if markets else {}
+    if hpa_flat is not None:
+        market_changes["hpa_tariff_eur_per_mwh"] = [hpa_flat] * 24
+    if market_changes:
+        changes["markets"] = market_changes
+    if not csp:
+        changes["csp"] = []
+        overrides = (changes.get("budgets") or {}).get("overrides", case.budgets.override_map)
+        dropped = {c.name for c in case.csp}
+        changes.setdefault("budgets", {})["overrides"] = {k: v for k, v in overrides.items() if k not in dropped}
+    solver = {k: v for k, v in {"time_limit_s": time_limit_s, "rel_gap": rel_gap, "threads": threads,
+                                "budget_encoding": budget_encoding, "pwl_encoding": pwl_encoding}.items()
+              if v is not None}
+    if solver:
+        changes["solver"] = solver
+    return case.replace(**changes) if changes else case

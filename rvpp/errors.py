@@ -1,0 +1,31 @@
+"""Errors that carry a message meant for the user, never a traceback."""
+
+from __future__ import annotations
+
+
+class RvppError(Exception):
+    """Base class for every error rvpp reports to a user."""
+
+
+class CaseError(RvppError):
+    """A case (units, settings or time series) breaks a rule.
+
+    ``problems`` lists one line per broken rule, each naming the unit, the field,
+    the value and the rule, e.g. ``csp "CSP1": storage.e_min_mwh_th=1200 must be <
+    storage.e_max_mwh_th=1100``.
+    """
+
+    def __init__(self, problems: list[str] | str):
+        self.problems = [problems] if isinstance(problems, str) else list(problems)
+        super().__init__("\n".join(self.problems))
+
+    def __str__(self) -> str:
+        if len(self.problems) == 1:
+            return self.problems[0]
+        lines = [f"{len(self.problems)} problems in the case:"]
+        lines += [f"  - {p}" for p in self.problems]
+        return "\n".join(lines)
+
+
+class ModelError(RvppError):
+    """The optimisation could not produce a plan (infeasible, solver failure)."""

@@ -1,0 +1,207 @@
+"""Hourly history of every uncertain series of a case.
+
+The history is one table with a ``timestamp`` column (hour-beginning, ISO 8601 with
+UTC offset) and one numeric column per series: ``price_da`` [EUR/MWh],
+``price_sr_up`` and ``price_sr_dn`` [EUR/MW per h], and one column per unit
+(availability or consumption [MW] / [MW_th]). Rows must be hourly, contiguous and
+complete; every problem is reported with the column and the time it concerns.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import CaseError
+
+PRICE_COLUMNS = ("price_da", "price_sr_up", "price_sr_dn")
+HOUR = pd.Timedelta(hours=1)
+
+
+class History:
+    """An immutable, validated hourly table indexed by UTC hour-beginning instants.
+
+    Equality and hashing use a content fingerprint, so two histories with the same
+    data are interchangeable as cache keys.
+    """
+
+    def __init__(self, frame: pd.DataFrame, source: str = "history"):
+        self.source = source
+        self._frame = _validated(frame, source)
+        self._frame.flags.allows_duplicate_labels = False
+        self.fingerprint = _fingerprint(self._frame)
+
+    @classmethod
+    def read_csv(cls, path: str | Path) -> "History":
+        path = Path(path)
+        if not path.is_file():
+            raise CaseError(f'history file "{path.name}" does not exist')
+        try:
+            frame = pd.read_csv(path)
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+            raise CaseError(f"{path.name}: cannot be read as CSV ({exc})") from None
+        return cls(frame, source=path.name)
+
+    def to_csv(self, path: str | Path, timezone: str) -> None:
+        """Write with local ISO-8601 timestamps (UTC offset included)."""
+        out = self._frame.copy()
+        local = out.index.tz_convert(timezone)
+        out.insert(0, "timestamp", [t.isoformat() for t in local])
+        out.to_csv(path, index=False, float_format="%.6g")
+
+    @property
+    def frame(self) -> pd.DataFrame:
+        """A copy of the table [UTC index; one column per series]."""
+        return self._frame.copy()
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return tuple(self._frame.columns)
+
+    @property
+    def start(self) -> pd.Timestamp:
+        return self._frame.index[0]
+
+    @property
+    def end(self) -> pd.Timestamp:
+        """Instant just after the last hour."""
+        return self._frame.index[-1] + HOUR
+
+    def between(self, first: pd.Timestamp, last: pd.Timestamp) -> pd.DataFrame:
+        """Rows with ``first <= timestamp < last`` (tz-aware instants)."""
+        index = self._frame.index
+        return self._frame.loc[(index >= first) & (index < last)].copy()
+
+    def days(self, first_day: dt.date, n_days: int, timezone: str) -> pd.DataFrame:
+        """Rows of ``n_days`` whole local days starting at ``first_day`` [local index]."""
+        first = pd.Timestamp(first_day).tz_localize(timezone)
+        last = (pd.Timestamp(first_day) + pd.Timedelta(days=n_days)).tz_localize(timezone)
+        if first < self.start or last > self.end:
+            raise CaseError(
+                f"{self.source}: days {first.date()} to {(last - pd.Timedelta(days=1)).date()} "
+                f"are not all covered (history runs from {self.start.tz_convert(timezone).date()} "
+                f"to {(self.end - HOUR).tz_convert(timezone).date()})"
+            )
+        rows = self.between(first, last)
+        rows.index = rows.index.tz_convert(timezone)
+        return rows
+
+    def local_days(self, timezone: str) -> list[dt.date]:
+        """Every local day the history covers completely."""
+        local = self._frame.index.tz_convert(timezone)
+        counts = pd.Series(1, index=local.date).groupby(level=0).size()
+        first, last = self.start.tz_convert(timezone), (self.end - HOUR).tz_convert(timezone)
+        whole = [d for d in counts.index if not (d == first.date() and first.hour != 0)]
+        return [d for d in whole if not (d == last.date() and last.hour != 23)]
+
+    def with_columns(self, columns: dict[str, np.ndarray]) -> "History":
+        """A new history with columns replaced or added."""
+        frame = self._frame.copy()
+        for name, values in columns.items():
+            frame[name] = values
+        return History(frame.reset_index(names="timestamp"), source=self.source)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, History) and other.fingerprint == self.fingerprint
+
+    def __hash__(self) -> int:
+        return hash(self.fingerprint)
+
+    def __repr__(self) -> str:
+        return (f"History({self.source}: {len(self._frame)} hours, {self.start} to {self.end}, "
+                f"columns={list(self._frame.columns)})")
+
+    def __reduce__(self):
+        return (_rebuild, (self._frame.reset_index(names="timestamp"), self.source))
+
+
+def _rebuild(frame: pd.DataFrame, source: str) -> History:
+    return History(frame, source)
+
+
+def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
+    if isinstance(frame.index, pd.DatetimeIndex) and "timestamp" not in frame.columns:
+        frame = frame.reset_index(names="timestamp")
+    if "timestamp" not in frame.columns:
+        raise CaseError(f'{source}: no "timestamp" column (found {list(frame.columns)})')
+    if len(frame) == 0:
+        raise CaseError(f"{source}: no rows")
+    stamps = _parse_timestamps(frame["timestamp"], source)
+    data = frame.drop(columns="timestamp")
+    problems = []
+    numeric = {}
+    for column in data.columns:
+        values = pd.to_numeric(data[column], errors="coerce")
+        bad_text = values.isna() & data[column].notna()
+        if bad_text.any():
+            where = stamps[bad_text.to_numpy()][0].isoformat()
+            problems.append(f'{source}: column "{column}" has a non-numeric value '
+                            f'{data[column][bad_text].iloc[0]!r} at {where}')
+        missing = values.isna() & ~bad_text
+        if missing.any():
+            times = stamps[missing.to_numpy()]
+            problems.append(f'{source}: column "{column}" is empty (NaN) at {times[0].isoformat()}'
+                            + (f" and {len(times) - 1} more hours" if len(times) > 1 else ""))
+        infinite = np.isinf(values.to_numpy(dtype=float, na_value=0.0))
+        if infinite.any():
+            problems.append(f'{source}: column "{column}" is infinite at '
+                            f"{stamps[infinite][0].isoformat()}")
+        numeric[column] = values.to_numpy(dtype=float)
+    problems += _timeline_problems(stamps, source)
+    if problems:
+        raise CaseError(problems)
+    out = pd.DataFrame(numeric, index=stamps.tz_convert("UTC"))
+    out.index.name = "timestamp"
+    return out
+
+
+def _parse_timestamps(column: pd.Series, source: str) -> pd.DatetimeIndex:
+    if isinstance(column.dtype, pd.DatetimeTZDtype):
+        return pd.DatetimeIndex(column)
+    text = column.astype("string")
+    if text.isna().any():
+        row = int(np.flatnonzero(text.isna().to_numpy())[0])
+        raise CaseError(f'{source}: "timestamp" is empty in data row {row + 1}')
+    naive = ~text.str.contains(r"(?:Z|[+-]\d\d:?\d\d)$", regex=True)
+    if naive.any():
+        raise CaseError(f'{source}: timestamp {text[naive].iloc[0]!r} has no UTC offset '
+                        "(write e.g. 2025-03-30T03:00:00+02:00 so hours are unambiguous)")
+    try:
+        return pd.DatetimeIndex(pd.to_datetime(text, utc=True, format="ISO8601"))
+    except (ValueError, TypeError) as exc:
+        raise CaseError(f'{source}: a timestamp cannot be read ({exc})') from None
+
+
+def _timeline_problems(stamps: pd.DatetimeIndex, source: str) -> list[str]:
+    problems = []
+    duplicated = stamps.duplicated()
+    if duplicated.any():
+        problems.append(f"{source}: timestamp {stamps[duplicated][0].isoformat()} appears more than once")
+        return problems
+    if not stamps.is_monotonic_increasing:
+        problems.append(f"{source}: timestamps are not in increasing order")
+        return problems
+    off_hour = (stamps.minute != 0) | (stamps.second != 0)
+    if off_hour.any():
+        problems.append(f"{source}: timestamp {stamps[off_hour][0].isoformat()} is not on the hour")
+    steps = stamps[1:] - stamps[:-1]
+    gaps = np.flatnonzero(steps != HOUR)
+    if len(gaps):
+        first = stamps[gaps[0]] + HOUR
+        missing = int(sum((steps[i] // HOUR) - 1 for i in gaps))
+        problems.append(f"{source}: hour {first.isoformat()} is missing"
+                        + (f" ({missing} missing hours in all)" if missing > 1 else "")
+                        + "; the history must be hourly and contiguous")
+    return problems
+
+
+def _fingerprint(frame: pd.DataFrame) -> str:
+    digest = hashlib.sha256()
+    digest.update(",".join(frame.columns).encode())
+    digest.update(frame.index.asi8.tobytes())
+    digest.update(np.ascontiguousarray(frame.to_numpy(dtype=float)).tobytes())
+    return digest.hexdigest()[:16]
