@@ -1,0 +1,210 @@
+"""One delivery day made concrete: periods, forecast bands, uncertain sources, budgets.
+
+:func:`prepare` turns a :class:`~rvpp.case.Case` into a :class:`Problem`, the only
+input of the model builder. The conventions of MODEL_SPEC §6 live here:
+
+=====================  ==================  ==========================================
+series                 nominal             adverse deviation
+=====================  ==================  ==========================================
+DAM price              median              down ``mid - lo`` (selling), up ``hi - mid``
+SR up / down price     upper percentile    ``hi - lo`` (downwards)
+ND-RES, SF available   upper percentile    ``hi - lo`` (downwards)
+ED, TD consumption     lower percentile    ``hi - lo`` (upwards)
+=====================  ==================  ==========================================
+
+Availabilities are clipped to ``[0, nameplate]``; budgets of the strategy presets
+(paper Table 7) count hours and are scaled by ``1/dt`` to count periods.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .case import STRATEGIES, Case
+from .errors import CaseError
+from .history import PRICE_COLUMNS
+from .periods import delivery_periods, period_labels
+from .uncertainty import forecast_bands
+
+# Γ in hours per strategy (paper Table 7; MODEL_SPEC §6).
+STRATEGY_BUDGETS_H = {
+    "deterministic": {"price": 0, "wind": 0, "pv": 0, "csp": 0, "ed": 0, "td": 0},
+    "optimistic": {"price": 3, "wind": 3, "pv": 2, "csp": 2, "ed": 3, "td": 3},
+    "balanced": {"price": 6, "wind": 6, "pv": 4, "csp": 4, "ed": 6, "td": 6},
+    "pessimistic": {"price": 9, "wind": 9, "pv": 6, "csp": 6, "ed": 9, "td": 9},
+}
+assert tuple(STRATEGY_BUDGETS_H) == STRATEGIES
+
+
+@dataclass(frozen=True, eq=False)
+class Source:
+    """An uncertain series with its budget.
+
+    ``kind`` is ``price_da``, ``price_sr``, ``production`` (bad direction: down) or
+    ``consumption`` (bad direction: up). ``deviation`` is the adverse deviation per
+    period (for the DAM price, the downward one ``mid - lo``); ``deviation_up`` is the
+    DAM price's upward deviation ``hi - mid``.
+    """
+
+    name: str
+    kind: str
+    unit_kind: str | None
+    nominal: np.ndarray
+    deviation: np.ndarray
+    gamma: int
+    deviation_up: np.ndarray | None = None
+
+    @property
+    def is_price(self) -> bool:
+        return self.unit_kind is None
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """Everything the model needs for one delivery day."""
+
+    case: Case
+    day: dt.date
+    periods: pd.DatetimeIndex
+    bands: pd.DataFrame
+    sources: dict[str, Source]
+    tariff_hpa: np.ndarray
+    labels: list[str] = field(default_factory=list)
+
+    @property
+    def nt(self) -> int:
+        return len(self.periods)
+
+    @property
+    def dt_h(self) -> float:
+        return self.case.dt_h
+
+    @property
+    def budgets(self) -> dict[str, int]:
+        return {name: src.gamma for name, src in self.sources.items()}
+
+    def periods_for_hours(self, hours: float) -> int:
+        """A duration [h] as a whole number of periods."""
+        return int(round(hours / self.dt_h))
+
+
+def strategy_budgets(case: Case, nt: int) -> dict[str, int]:
+    """Γ [periods] per source: strategy preset scaled to the period length, then overrides."""
+    preset = STRATEGY_BUDGETS_H[case.budgets.strategy]
+    per_hour = int(round(1.0 / case.dt_h))
+    budgets = {name: preset["price"] * per_hour for name in PRICE_COLUMNS}
+    for kind, unit in case.units():
+        budgets[unit.name] = preset[kind] * per_hour
+    budgets = {name: min(g, nt) for name, g in budgets.items()}
+    for name, gamma in case.budgets.overrides:
+        if gamma > nt:
+            raise CaseError(f"budgets.overrides: Γ for {name!r}={gamma} exceeds the {nt} periods of "
+                            f"{case.delivery_date} at dt_h={case.dt_h:g}")
+        budgets[name] = gamma
+    return budgets
+
+
+def source_columns(case: Case) -> dict[str, tuple[str, float]]:
+    """History column and scale of every uncertain source."""
+    columns = {name: (name, 1.0) for name in PRICE_COLUMNS}
+    for kind, unit in case.units():
+        scale = unit.solar_field.series_scale if kind == "csp" else unit.series_scale
+        columns[unit.name] = (unit.column, scale)
+    return columns
+
+
+def prepare(case: Case) -> Problem:
+    """Resolve the delivery day of ``case`` into a :class:`Problem`."""
+    periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
+    bands = forecast_bands(case.history, case.delivery_date, periods, source_columns(case),
+                           n_days=case.uncertainty.window_days, q_lo=case.uncertainty.q_lo,
+                           q_hi=case.uncertainty.q_hi, timezone=case.timezone)
+    return problem_from_bands(case, periods, bands)
+
+
+def problem_from_bands(case: Case, periods: pd.DatetimeIndex, bands: pd.DataFrame) -> Problem:
+    """A :class:`Problem` from given bands ``(source, lo|mid|hi)`` per period."""
+    budgets = strategy_budgets(case, len(periods))
+    sources: dict[str, Source] = {}
+    lo = {name: bands[(name, "lo")].to_numpy(float) for name in bands.columns.levels[0]}
+    mid = {name: bands[(name, "mid")].to_numpy(float) for name in bands.columns.levels[0]}
+    hi = {name: bands[(name, "hi")].to_numpy(float) for name in bands.columns.levels[0]}
+    sources["price_da"] = Source("price_da", "price_da", None, mid["price_da"],
+                                 mid["price_da"] - lo["price_da"], budgets["price_da"],
+                                 deviation_up=hi["price_da"] - mid["price_da"])
+    for name in ("price_sr_up", "price_sr_dn"):
+        sources[name] = Source(name, "price_sr", None, hi[name], hi[name] - lo[name], budgets[name])
+    for kind, unit in case.units():
+        n = unit.name
+        if kind in ("wind", "pv", "csp"):
+            cap = unit.solar_field.p_max_mw_th if kind == "csp" else unit.p_max_mw
+            top, bottom = np.clip(hi[n], 0.0, cap), np.clip(lo[n], 0.0, cap)
+            sources[n] = Source(n, "production", kind, top, top - bottom, budgets[n])
+        else:
+            sources[n] = Source(n, "consumption", kind, lo[n], hi[n] - lo[n], budgets[n])
+    tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
+    return Problem(case=case, day=case.delivery_date, periods=periods, bands=bands,
+                   sources=sources, tariff_hpa=tariff, labels=period_labels(periods))
+
+
+def top_gamma_deviation(deviation: np.ndarray, gamma: int) -> np.ndarray:
+    """Paper-mode deviation: ``dev`` in the Γ largest-deviation periods, 0 elsewhere.
+
+    Ties are broken towards earlier periods (any tie-break gives the same bound set
+    except when tied values straddle the Γ boundary; the model handles that case).
+    """
+    y = np.zeros_like(deviation, dtype=float)
+    if gamma > 0:
+        order = np.argsort(-deviation, kind="stable")[:gamma]
+        y[order] = deviation[order]
+    return y
+
+
+def infeasibility_reasons(problem: Problem) -> list[str]:
+    """Causes of infeasibility that can be named before solving (empty if none found)."""
+    case, hours = problem.case, problem.nt * problem.dt_h
+    labels = problem.labels
+    reasons = []
+    needs_heat = [td.name for td in case.td
+                  if td.q_min_mwh_th > 0 or td.h_min_mw_th > 0 or problem.sources[td.name].nominal.max() > 0]
+    if needs_heat and not case.csp and not case.markets.hpa:
+        who = f"thermal demand {needs_heat[0]} needs" if len(needs_heat) == 1 else (
+            f"thermal demands {', '.join(needs_heat[:-1])} and {needs_heat[-1]} need")
+        reasons.append(f"no heat source: {who} heat but the case has no CSP and the HPA is off; "
+                       "enable the HPA or add a CSP")
+    paper = case.budgets.mode == "paper"
+
+    def bound(name: str, sign: float) -> np.ndarray:
+        src = problem.sources[name]
+        y = top_gamma_deviation(src.deviation, src.gamma) if paper else 0 * src.deviation
+        return src.nominal + sign * y
+
+    for ed in case.ed:
+        need = bound(ed.name, +1)
+        if (over := need > ed.p_max_mw + 1e-9).any():
+            t = int(np.flatnonzero(over)[0])
+            reasons.append(f'ed "{ed.name}": required consumption {need[t]:.2f} MW at {labels[t]} exceeds '
+                           f"p_max_mw={ed.p_max_mw:g}")
+        if ed.e_min_mwh > ed.p_max_mw * hours + 1e-9:
+            reasons.append(f'ed "{ed.name}": e_min_mwh={ed.e_min_mwh:g} exceeds p_max_mw x {hours:g} h = '
+                           f"{ed.p_max_mw * hours:g} MWh")
+    for td in case.td:
+        need = bound(td.name, +1)
+        if (over := need > td.h_max_mw_th + 1e-9).any():
+            t = int(np.flatnonzero(over)[0])
+            reasons.append(f'td "{td.name}": required heat {need[t]:.2f} MW_th at {labels[t]} exceeds '
+                           f"h_max_mw_th={td.h_max_mw_th:g}")
+        if td.q_min_mwh_th > td.h_max_mw_th * hours + 1e-9:
+            reasons.append(f'td "{td.name}": q_min_mwh_th={td.q_min_mwh_th:g} exceeds h_max_mw_th x '
+                           f"{hours:g} h = {td.h_max_mw_th * hours:g} MWh_th")
+    for unit in case.ndres:
+        avail = bound(unit.name, -1)
+        if (short := avail < unit.p_min_mw - 1e-9).any():
+            t = int(np.flatnonzero(short)[0])
+            reasons.append(f'{unit.kind} "{unit.name}": available power {avail[t]:.2f} MW at {labels[t]} is '
+                           f"below p_min_mw={unit.p_min_mw:g}")
+    return reasons
