@@ -1,0 +1,178 @@
+"""Concentrated solar power plant (MODEL_SPEC §8; paper STU, STU_SOS, TS, Appendix A).
+
+One block per CSP on the shared periods. Thermal flows are in [MW_th], stored energy
+in [MWh_th], electrical output in [MW]. The electrical output ``e[s,t]`` exists for
+every activation scenario ``s``; ``p_θ = e[none]``, ``r↑_θ = e[up] − e[none]`` and
+``r↓_θ = e[none] − e[dn]``.
+"""
+
+from __future__ import annotations
+
+import pyomo.environ as pyo
+
+from ..case import CSP
+from ..problem import Problem
+from .market import activation
+from .piecewise import add_convex_combination, add_incremental, on_curve
+from .units import reserve_cap
+
+
+def add_csp_solar_field(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
+    """Solar-field thermal power ``0 ≤ p_sf ≤ P̂sf − y`` (STU1, MILP-STU1) [MW_th]."""
+    b = m.csp[csp.name]
+    nominal = problem.sources[csp.name].nominal
+    b.p_sf = pyo.Var(m.T, bounds=(0.0, csp.solar_field.p_max_mw_th))
+    b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
+    b.sf_available = pyo.Constraint(m.T, rule=lambda b, t: b.p_sf[t] <= b.bound[t])
+
+
+def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
+    """Two-tank thermal storage with reserve margins (TS1-TS11; MODEL_SPEC §8).
+
+    Mode binary ``charging`` (1 = charging). Power limits with reserves (TS1-TS4):
+    ``P̲ch·u ≤ p_ch − r_ch↑``, ``p_ch + r_ch↓ ≤ P̄ch·u``, ``p_dis + r_dis↑ ≤ P̄dis·(1−u)``,
+    ``P̲dis·(1−u) ≤ p_dis − r_dis↓``; ``r_ts↑ = r_ch↑ + r_dis↑``, ``r_ts↓ = r_ch↓ + r_dis↓``
+    (TS5-TS6). Energy ``e[t] = e[t−1] + η_ch·p_ch·dt − p_dis·dt/η_dis`` for every ``t``
+    with ``e[0] ≡ e[NT]`` (cyclic day; MODEL_SPEC corrects TS7-TS8), or from a fixed
+    ``e_init`` with ``e[NT] ≥ e_init``. Reserve energy shares (TS9-TS10)
+    ``Σ r_ts↑·dt/η_dis ≤ σ↑·ΔE``, ``Σ r_ts↓·η_ch·dt ≤ σ↓·ΔE`` and margins (TS11, corrected)
+    ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``.
+    """
+    b = m.csp[csp.name]
+    ts, dt = csp.storage, problem.dt_h
+    srm = problem.case.markets.srm
+    span = ts.e_max_mwh_th - ts.e_min_mwh_th
+    b.charging = pyo.Var(m.T, domain=pyo.Binary)
+    b.p_ch = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th))
+    b.p_dis = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th))
+    b.e_ts = pyo.Var(m.T, bounds=(ts.e_min_mwh_th, ts.e_max_mwh_th))
+    b.r_ch_up = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th if srm else 0.0))
+    b.r_ch_dn = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th if srm else 0.0))
+    b.r_dis_up = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th if srm else 0.0))
+    b.r_dis_dn = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th if srm else 0.0))
+    b.sigma_up = pyo.Var(bounds=(0.0, 1.0))
+    b.sigma_dn = pyo.Var(bounds=(0.0, 1.0))
+
+    b.charge_floor = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_ch[t] - b.r_ch_up[t] >= ts.p_ch_min_mw_th * b.charging[t]))
+    b.charge_ceiling = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_ch[t] + b.r_ch_dn[t] <= ts.p_ch_max_mw_th * b.charging[t]))
+    b.discharge_ceiling = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_dis[t] + b.r_dis_up[t] <= ts.p_dis_max_mw_th * (1 - b.charging[t])))
+    b.discharge_floor = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_dis[t] - b.r_dis_dn[t] >= ts.p_dis_min_mw_th * (1 - b.charging[t])))
+    b.r_ts_up = pyo.Expression(m.T, rule=lambda b, t: b.r_ch_up[t] + b.r_dis_up[t])
+    b.r_ts_dn = pyo.Expression(m.T, rule=lambda b, t: b.r_ch_dn[t] + b.r_dis_dn[t])
+
+    def previous_energy(b, t):
+        if not ts.cyclic and t == m.T.first():
+            return ts.e_init_mwh_th
+        return b.e_ts[m.T.prevw(t)]
+
+    b.energy_balance = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.e_ts[t] == previous_energy(b, t) + ts.eta_ch * b.p_ch[t] * dt - b.p_dis[t] * dt / ts.eta_dis))
+    if not ts.cyclic:
+        b.energy_end = pyo.Constraint(expr=b.e_ts[m.T.last()] >= ts.e_init_mwh_th)
+    b.reserve_energy_up = pyo.Constraint(expr=sum(b.r_ts_up[t] * dt / ts.eta_dis for t in m.T)
+                                         <= b.sigma_up * span)
+    b.reserve_energy_dn = pyo.Constraint(expr=sum(b.r_ts_dn[t] * ts.eta_ch * dt for t in m.T)
+                                         <= b.sigma_dn * span)
+    b.margin_low = pyo.Constraint(m.T, rule=lambda b, t: b.e_ts[t] >= ts.e_min_mwh_th + b.sigma_up * span)
+    b.margin_high = pyo.Constraint(m.T, rule=lambda b, t: b.e_ts[t] <= ts.e_max_mwh_th - b.sigma_dn * span)
+
+
+def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
+    """Turbine commitment with minimum up and down times (Appendix A, STU10-STU17).
+
+    ``u[t] − u[t−1] = v_su[t] − v_sd[t]``, ``v_su + v_sd ≤ 1``, and in the equivalent
+    tight form of Rajan and Takriti (2005): ``Σ_{τ=t−UT+1..t} v_su[τ] ≤ u[t]``,
+    ``Σ_{τ=t−DT+1..t} v_sd[τ] ≤ 1 − u[t]``. ``u[0]`` is the initial status; no up or down
+    time is carried over from the day before.
+    """
+    b = m.csp[csp.name]
+    pb = csp.power_block
+    up_periods = problem.periods_for_hours(pb.min_up_h)
+    down_periods = problem.periods_for_hours(pb.min_down_h)
+    initial = 1.0 if pb.initially_on else 0.0
+    b.online = pyo.Var(m.T, domain=pyo.Binary)
+    b.startup = pyo.Var(m.T, domain=pyo.Binary)
+    b.shutdown = pyo.Var(m.T, domain=pyo.Binary)
+
+    def previous(b, t):
+        return initial if t == m.T.first() else b.online[m.T.prev(t)]
+
+    b.transition = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.online[t] - previous(b, t) == b.startup[t] - b.shutdown[t]))
+    b.one_transition = pyo.Constraint(m.T, rule=lambda b, t: b.startup[t] + b.shutdown[t] <= 1)
+    b.min_up = pyo.Constraint(m.T, rule=lambda b, t: (
+        sum(b.startup[k] for k in _window(m, t, up_periods)) <= b.online[t]))
+    b.min_down = pyo.Constraint(m.T, rule=lambda b, t: (
+        sum(b.shutdown[k] for k in _window(m, t, down_periods)) <= 1 - b.online[t]))
+
+
+def _window(m: pyo.ConcreteModel, t: int, length: int) -> list[int]:
+    """The ``length`` periods ending at ``t`` that lie inside the day."""
+    return [k for k in range(max(m.T.first(), t - length + 1), t + 1)]
+
+
+def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
+    """Power-block heat balance, limits and conversion curve (STU2-STU5, STU_SOS).
+
+    Thermal input (STU2) ``p_pb = p_sf − h/η_heat + p_dis − p_ch − K_su·P̄pb·Σ v_su``
+    where the start-up draws ``K_su·P̄pb`` during ``startup_duration_h`` after a start;
+    limits (STU3-STU4) ``p_pb + r_ts↑ ≤ P̄pb·u``, ``P̲pb·u ≤ p_pb − r_ts↓``; in every scenario
+    the input ``x_s = p_pb + a_s(r_ts↑, r_ts↓)`` gives output ``e_s = f(x_s)`` on the
+    breakpoint curve, capped by the turbine nameplate ``e_s ≤ Pmax_θ·u``.
+    """
+    b = m.csp[csp.name]
+    pb = csp.power_block
+    startup_periods = problem.periods_for_hours(pb.startup_duration_h)
+    startup_heat = pb.startup_fraction * pb.p_in_max_mw_th
+    b.h = pyo.Var(m.T, domain=pyo.NonNegativeReals)
+    b.p_pb = pyo.Var(m.T, bounds=(0.0, pb.p_in_max_mw_th))
+    b.e = pyo.Var(m.S, m.T, bounds=(0.0, pb.p_el_max_mw))
+
+    b.heat_split = pyo.Constraint(m.T, rule=lambda b, t: b.p_pb[t] == (
+        b.p_sf[t] - b.h[t] / csp.heat_efficiency + b.p_dis[t] - b.p_ch[t]
+        - startup_heat * sum(b.startup[k] for k in _window(m, t, startup_periods))))
+    b.input_ceiling = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_pb[t] + b.r_ts_up[t] <= pb.p_in_max_mw_th * b.online[t]))
+    b.input_floor = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_pb[t] - b.r_ts_dn[t] >= pb.p_in_min_mw_th * b.online[t]))
+    b.x = pyo.Expression(m.S, m.T, rule=lambda b, s, t: b.p_pb[t] + activation(s, b.r_ts_up[t], b.r_ts_dn[t]))
+    b.turbine_cap = pyo.Constraint(m.S, m.T, rule=lambda b, s, t: b.e[s, t] <= pb.p_el_max_mw * b.online[t])
+
+    index = [(s, t) for s in m.S for t in m.T]
+    curve = on_curve(pb)
+    if problem.case.solver.pwl_encoding == "incremental":
+        add_incremental(b, "pb", index, b.x, b.e, b.online, curve)
+        if len(m.S) > 1:
+            _order_fill(m, b, len(curve.lengths) - 1)
+    else:
+        add_convex_combination(b, "pb", index, b.x, b.e, b.online, curve)
+
+
+def _order_fill(m: pyo.ConcreteModel, b, n_fill: int) -> None:
+    """Valid inequalities: inputs are ordered ``x_dn ≤ x_none ≤ x_up``, so are the fill binaries."""
+    fills = range(n_fill)
+    b.pb_fill_order_up = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
+        b.pb_fill["none", t, k] <= b.pb_fill["up", t, k]))
+    b.pb_fill_order_dn = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
+        b.pb_fill["dn", t, k] <= b.pb_fill["none", t, k]))
+
+
+def add_csp_reserves(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
+    """Electrical reserves of the CSP (STU6-STU7) [MW].
+
+    ``r↑_θ = e_up − e_none``, ``r↓_θ = e_none − e_dn``, each ``≤ min(T_sr·R_θ, share·Pmax_θ)``.
+    """
+    b = m.csp[csp.name]
+    cap = reserve_cap(problem, csp.ramp_mw_per_min, csp.reserve_share * csp.p_max_mw)
+    if "up" not in m.S:
+        b.r_up = pyo.Expression(m.T, rule=lambda b, t: 0.0)
+        b.r_dn = pyo.Expression(m.T, rule=lambda b, t: 0.0)
+        return
+    b.r_up = pyo.Expression(m.T, rule=lambda b, t: b.e["up", t] - b.e["none", t])
+    b.r_dn = pyo.Expression(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t])
+    b.reserve_up_cap = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= cap)
+    b.reserve_dn_cap = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= cap)

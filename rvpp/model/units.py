@@ -1,0 +1,74 @@
+"""Non-dispatchable renewables and demands (MODEL_SPEC §9; paper NDRES, Demand).
+
+Each unit is a Pyomo block on the shared periods ``m.T`` with an Expression ``bound[t]``:
+the available power of an ND-RES or the required consumption of a demand. It starts
+at the nominal forecast; :mod:`rvpp.robust` moves it by the budgeted deviation.
+"""
+
+from __future__ import annotations
+
+import pyomo.environ as pyo
+
+from ..case import ElectricalDemand, NdresUnit, ThermalDemand
+from ..problem import Problem
+
+
+def reserve_cap(problem: Problem, ramp_mw_per_min: float, share_cap_mw: float = float("inf")) -> float:
+    """Largest reserve band a unit may offer [MW]: ``min(T_sr·ramp, share·Pmax)``; 0 without SRM."""
+    markets = problem.case.markets
+    if not markets.srm:
+        return 0.0
+    return min(markets.reserve_duration_min * ramp_mw_per_min, share_cap_mw)
+
+
+def add_ndres(m: pyo.ConcreteModel, unit: NdresUnit, problem: Problem) -> None:
+    """Wind farm or PV plant (NDRES1-4, MILP-NDRES1) [MW].
+
+    ``p + r↑ ≤ P̂ − y`` (available power), ``Pmin ≤ p − r↓``,
+    ``r↑ ≤ min(T_sr·R↑, share·Pmax)``, ``r↓ ≤ min(T_sr·R↓, share·Pmax)``.
+    """
+    b = m.ndres[unit.name]
+    nominal = problem.sources[unit.name].nominal
+    share = unit.reserve_share * unit.p_max_mw
+    b.p = pyo.Var(m.T, bounds=(0.0, unit.p_max_mw))
+    b.r_up = pyo.Var(m.T, bounds=(0.0, reserve_cap(problem, unit.ramp_up_mw_per_min, share)))
+    b.r_dn = pyo.Var(m.T, bounds=(0.0, reserve_cap(problem, unit.ramp_dn_mw_per_min, share)))
+    b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
+    b.available = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] + b.r_up[t] <= b.bound[t])
+    b.minimum = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] - b.r_dn[t] >= unit.p_min_mw)
+
+
+def add_electrical_demand(m: pyo.ConcreteModel, ed: ElectricalDemand, problem: Problem) -> None:
+    """Flexible electrical demand (Demand1-Demand8, MILP-Demand1) [MW], [MWh].
+
+    ``p ≥ P̌ + y`` (required consumption), ``Pmin ≤ p − r↑``, ``p + r↓ ≤ Pmax``,
+    ``r↑ ≤ β↑·p``, ``r↓ ≤ β↓·p``, ``r ≤ T_sr·ramp``, ``Emin ≤ Σt (p − r↑)·dt``.
+    Up reserve is a consumption decrease.
+    """
+    b = m.ed[ed.name]
+    dt = problem.dt_h
+    nominal = problem.sources[ed.name].nominal
+    b.p = pyo.Var(m.T, bounds=(ed.p_min_mw, ed.p_max_mw))
+    b.r_up = pyo.Var(m.T, bounds=(0.0, reserve_cap(problem, ed.ramp_up_mw_per_min)))
+    b.r_dn = pyo.Var(m.T, bounds=(0.0, reserve_cap(problem, ed.ramp_dn_mw_per_min)))
+    b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
+    b.required = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] >= b.bound[t])
+    b.floor = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] - b.r_up[t] >= ed.p_min_mw)
+    b.ceiling = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] + b.r_dn[t] <= ed.p_max_mw)
+    b.flex_up = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= ed.flex_up * b.p[t])
+    b.flex_dn = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= ed.flex_dn * b.p[t])
+    b.energy = pyo.Constraint(expr=sum((b.p[t] - b.r_up[t]) * dt for t in m.T) >= ed.e_min_mwh)
+
+
+def add_thermal_demand(m: pyo.ConcreteModel, td: ThermalDemand, problem: Problem) -> None:
+    """Thermal demand (Demand_Heat1-3, MILP-Demand_Heat1) [MW_th], [MWh_th].
+
+    ``h ≥ Ȟ + y`` (required heat), ``Hmin ≤ h ≤ Hmax``, ``Qmin ≤ Σt h·dt``.
+    """
+    b = m.td[td.name]
+    dt = problem.dt_h
+    nominal = problem.sources[td.name].nominal
+    b.h = pyo.Var(m.T, bounds=(td.h_min_mw_th, td.h_max_mw_th))
+    b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
+    b.required = pyo.Constraint(m.T, rule=lambda b, t: b.h[t] >= b.bound[t])
+    b.energy = pyo.Constraint(expr=sum(b.h[t] * dt for t in m.T) >= td.q_min_mwh_th)
