@@ -1,0 +1,372 @@
+"""Independent audit of a plan against MODEL_SPEC §4-§9.
+
+The audit reads only the exported tables (``market``, ``units``, ``csp``), the summary
+and the case parameters; it never touches the optimisation model. It re-checks every
+balance in all three activation scenarios, the market limits, every unit's bounds,
+the power-block curve, the storage energy recursion and reserve margins, the turbine
+commitment and minimum up/down times, the placement of the budgets χ, the price
+protection (sum of the Γ largest exposures) and the objective.
+
+Use :func:`audit_result` on a :class:`~rvpp.results.Result`, or :func:`audit_export`
+on a folder written by ``python -m rvpp solve``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .case import Case, with_options
+from .model.piecewise import on_curve
+from .problem import Problem, prepare
+
+TOLERANCE = 1e-4  # [MW], [MWh] or [EUR]: exported values carry 6 decimals
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One broken rule: which check, where, and by how much."""
+
+    check: str
+    unit: str | None
+    t: int | None
+    excess: float
+    detail: str = ""
+
+    def __str__(self) -> str:
+        where = " ".join(x for x in (self.unit or "", f"t={self.t}" if self.t is not None else "") if x)
+        return f"{self.check} [{where}] broken by {self.excess:.6g}" + (f": {self.detail}" if self.detail else "")
+
+
+class _Auditor:
+    def __init__(self, tol: float):
+        self.tol = tol
+        self.violations: list[Violation] = []
+
+    def leq(self, check: str, lhs, rhs, unit: str | None = None, scale: float = 1.0) -> None:
+        """Record every period where ``lhs <= rhs`` fails beyond the tolerance."""
+        lhs, rhs = np.broadcast_arrays(np.asarray(lhs, float), np.asarray(rhs, float))
+        excess = lhs - rhs
+        limit = self.tol * max(1.0, scale)
+        for i in np.flatnonzero(excess > limit):
+            t = int(i) + 1 if lhs.ndim else None
+            self.violations.append(Violation(check, unit, t, float(excess.flat[i]),
+                                             f"{lhs.flat[i]:.6g} > {rhs.flat[i]:.6g}"))
+
+    def eq(self, check: str, lhs, rhs, unit: str | None = None, scale: float = 1.0) -> None:
+        self.leq(check, lhs, rhs, unit, scale)
+        self.leq(check, rhs, lhs, unit, scale)
+
+    def fail(self, check: str, detail: str, unit: str | None = None, t: int | None = None,
+             excess: float = float("nan")) -> None:
+        self.violations.append(Violation(check, unit, t, excess, detail))
+
+
+def _activation(s: str, up, dn):
+    return up if s == "up" else (-dn if s == "dn" else 0.0 * up)
+
+
+def audit_result(result, tol: float = TOLERANCE) -> list[Violation]:
+    """Audit a solved :class:`~rvpp.results.Result` (empty list: every rule holds)."""
+    if not result.has_plan:
+        return [Violation("plan", None, None, float("nan"), f"no plan to audit ({result.status})")]
+    return audit_tables(result.problem, result.market, result.units, result.csp, result.summary(), tol)
+
+
+def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list[Violation]:
+    """Audit a folder written by ``python -m rvpp solve`` against ``case``.
+
+    The run options (date, strategy, budgets, markets, CSPs, period length, budget
+    mode) are read back from ``summary.json``.
+    """
+    folder = Path(folder)
+    summary = json.loads((folder / "summary.json").read_text())
+    run = with_options(case, date=summary["date"], strategy=summary["strategy"], markets=summary["markets"],
+                       dt_h=summary["dt_h"], budget_mode=summary.get("budget_mode", "paper"),
+                       csp=bool(summary.get("csp", [c.name for c in case.csp])))
+    kept = set(summary.get("csp", [c.name for c in case.csp]))
+    if kept != {c.name for c in run.csp}:
+        run = run.replace(csp=[c for c in run.csp if c.name in kept])
+    known = set(run.sources())
+    run = with_options(run, gammas={k: v for k, v in summary["budgets"].items() if k in known})
+    problem = prepare(run)
+    tables = {name: pd.read_csv(folder / f"{name}.csv") if (folder / f"{name}.csv").stat().st_size > 1
+              else pd.DataFrame() for name in ("market", "units", "csp")}
+    return audit_tables(problem, tables["market"], tables["units"], tables["csp"], summary, tol)
+
+
+def audit_tables(problem: Problem, market: pd.DataFrame, units: pd.DataFrame, csp: pd.DataFrame,
+                 summary: dict | None = None, tol: float = TOLERANCE) -> list[Violation]:
+    """Audit plan tables against the parameters of ``problem``."""
+    a = _Auditor(tol)
+    case, nt = problem.case, problem.nt
+    if len(market) != nt:
+        a.fail("market.rows", f"{len(market)} rows for {nt} periods")
+        return a.violations
+    by_unit = {name: part.sort_values("t").reset_index(drop=True) for name, part in units.groupby("unit")} \
+        if len(units) else {}
+    by_csp = {name: part.sort_values("t").reset_index(drop=True) for name, part in csp.groupby("unit")} \
+        if len(csp) else {}
+    for kind, unit in case.units():
+        if unit.name not in by_unit or len(by_unit[unit.name]) != nt:
+            a.fail("units.rows", f"missing or incomplete rows for {kind} {unit.name}", unit.name)
+        if kind == "csp" and (unit.name not in by_csp or len(by_csp[unit.name]) != nt):
+            a.fail("csp.rows", "missing or incomplete csp rows", unit.name)
+    if a.violations:
+        return a.violations
+
+    _audit_market(a, problem, market)
+    _audit_balances(a, problem, market, by_unit, by_csp)
+    _audit_ndres(a, problem, by_unit)
+    _audit_demands(a, problem, by_unit)
+    for unit in case.csp:
+        _audit_csp(a, problem, unit, by_unit[unit.name], by_csp[unit.name])
+    _audit_budgets(a, problem, by_unit, by_csp)
+    if summary is not None:
+        _audit_objective(a, problem, market, by_unit, by_csp, summary)
+    return a.violations
+
+
+def _audit_market(a: _Auditor, problem: Problem, market: pd.DataFrame) -> None:
+    case = problem.case
+    generation = sum(u.p_max_mw for u in case.ndres) + sum(c.p_max_mw for c in case.csp)
+    demand = sum(d.p_max_mw for d in case.ed)
+    cap = case.markets.kappa * max(0.0, generation - demand) if case.markets.srm else 0.0
+    p, up, dn, hpa = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw", "h_hpa_mw"))
+    a.leq("market.trade_upper", p + up, generation)
+    a.leq("market.trade_lower", -demand, p - dn)
+    for name, band in (("market.sr_up", up), ("market.sr_dn", dn)):
+        a.leq(f"{name}_cap", band, cap)
+        a.leq(f"{name}_nonnegative", -band, 0.0)
+    a.leq("market.hpa_nonnegative", -hpa, 0.0)
+    if not case.markets.hpa:
+        a.eq("market.hpa_off", hpa, 0.0)
+    da, sr_up, sr_dn = (problem.sources[n] for n in ("price_da", "price_sr_up", "price_sr_dn"))
+    for column, expected in (("price_da_mid", da.nominal), ("price_da_neg", da.deviation),
+                             ("price_da_pos", da.deviation_up), ("price_sr_up_hi", sr_up.nominal),
+                             ("price_sr_up_neg", sr_up.deviation), ("price_sr_dn_hi", sr_dn.nominal),
+                             ("price_sr_dn_neg", sr_dn.deviation), ("tariff_hpa", problem.tariff_hpa)):
+        a.eq(f"market.{column}", market[column].to_numpy(float), expected)
+
+
+def _audit_balances(a: _Auditor, problem: Problem, market: pd.DataFrame, by_unit: dict, by_csp: dict) -> None:
+    case = problem.case
+    p_da, sr_up, sr_dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
+    for s in ("none", "up", "dn"):
+        supply = np.zeros(problem.nt)
+        for unit in case.ndres:
+            u = by_unit[unit.name]
+            supply += u["p_mw"].to_numpy() + _activation(s, u["r_up_mw"].to_numpy(), u["r_dn_mw"].to_numpy())
+        for unit in case.csp:
+            supply += by_csp[unit.name][f"e_{s}_mw"].to_numpy()
+        for unit in case.ed:
+            u = by_unit[unit.name]
+            supply -= u["p_mw"].to_numpy() - _activation(s, u["r_up_mw"].to_numpy(), u["r_dn_mw"].to_numpy())
+        a.eq(f"electric_balance[{s}]", supply, p_da + _activation(s, sr_up, sr_dn))
+    heat = market["h_hpa_mw"].to_numpy(float).copy()
+    for unit in case.csp:
+        heat += by_csp[unit.name]["heat_to_td_mw"].to_numpy()
+    need = sum((by_unit[k.name]["p_mw"].to_numpy() for k in case.td), np.zeros(problem.nt))
+    a.eq("heat_balance", heat, need)
+
+
+def _reserve_cap(problem: Problem, ramp: float, share_cap: float = float("inf")) -> float:
+    markets = problem.case.markets
+    return min(markets.reserve_duration_min * ramp, share_cap) if markets.srm else 0.0
+
+
+def _audit_ndres(a: _Auditor, problem: Problem, by_unit: dict) -> None:
+    for unit in problem.case.ndres:
+        u, n = by_unit[unit.name], unit.name
+        p, up, dn, bound = (u[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw", "bound_mw"))
+        share = unit.reserve_share * unit.p_max_mw
+        a.leq("ndres.available", p + up, bound, n)
+        a.leq("ndres.minimum", unit.p_min_mw, p - dn, n)
+        a.leq("ndres.nonnegative", -np.minimum.reduce([p, up, dn]), 0.0, n)
+        a.leq("ndres.reserve_up_cap", up, _reserve_cap(problem, unit.ramp_up_mw_per_min, share), n)
+        a.leq("ndres.reserve_dn_cap", dn, _reserve_cap(problem, unit.ramp_dn_mw_per_min, share), n)
+
+
+def _audit_demands(a: _Auditor, problem: Problem, by_unit: dict) -> None:
+    dt = problem.dt_h
+    for ed in problem.case.ed:
+        u, n = by_unit[ed.name], ed.name
+        p, up, dn, bound = (u[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw", "bound_mw"))
+        a.leq("ed.required", bound, p, n)
+        a.leq("ed.floor", ed.p_min_mw, p - up, n)
+        a.leq("ed.ceiling", p + dn, ed.p_max_mw, n)
+        a.leq("ed.flex_up", up, ed.flex_up * p, n)
+        a.leq("ed.flex_dn", dn, ed.flex_dn * p, n)
+        a.leq("ed.reserve_up_cap", up, _reserve_cap(problem, ed.ramp_up_mw_per_min), n)
+        a.leq("ed.reserve_dn_cap", dn, _reserve_cap(problem, ed.ramp_dn_mw_per_min), n)
+        a.leq("ed.nonnegative", -np.minimum(up, dn), 0.0, n)
+        a.leq("ed.energy", ed.e_min_mwh, float(np.sum((p - up) * dt)), n, scale=ed.e_min_mwh)
+    for td in problem.case.td:
+        u, n = by_unit[td.name], td.name
+        h, bound = u["p_mw"].to_numpy(float), u["bound_mw"].to_numpy(float)
+        a.leq("td.required", bound, h, n)
+        a.leq("td.minimum", td.h_min_mw_th, h, n)
+        a.leq("td.maximum", h, td.h_max_mw_th, n)
+        a.leq("td.energy", td.q_min_mwh_th, float(np.sum(h * dt)), n, scale=td.q_min_mwh_th)
+
+
+def _audit_csp(a: _Auditor, problem: Problem, unit, rows: pd.DataFrame, c: pd.DataFrame) -> None:
+    n, ts, pb, dt = unit.name, unit.storage, unit.power_block, problem.dt_h
+    col = {name: c[name].to_numpy(float) for name in c.columns if name not in ("start", "clock", "unit")}
+    u, v_su, v_sd, mode = col["online"], col["startup"], col["shutdown"], col["charging"]
+    for name, values in (("online", u), ("startup", v_su), ("shutdown", v_sd), ("charging", mode)):
+        a.leq(f"csp.{name}_binary", np.abs(values - np.round(values)), 0.0, n)
+        a.leq(f"csp.{name}_binary", np.abs(np.round(values) - 0.5), 0.5, n)
+    # Solar field (STU1, MILP-STU1).
+    a.leq("csp.sf_available", col["p_sf_mw"], col["sf_bound_mw"], n)
+    a.leq("csp.sf_nonnegative", -col["p_sf_mw"], 0.0, n)
+    # Power-block thermal input (STU2), with the start-up heat of the periods after a start.
+    startup_periods = problem.periods_for_hours(pb.startup_duration_h)
+    starting = np.array([v_su[max(0, t - startup_periods + 1): t + 1].sum() for t in range(problem.nt)])
+    heat_in = (col["p_sf_mw"] - col["heat_to_td_mw"] / unit.heat_efficiency + col["ts_discharge_mw"]
+               - col["ts_charge_mw"] - pb.startup_fraction * pb.p_in_max_mw_th * starting)
+    a.eq("csp.heat_split", col["p_pb_mw"], heat_in, n)
+    a.leq("csp.heat_nonnegative", -col["heat_to_td_mw"], 0.0, n)
+    r_up, r_dn = col["ts_r_up_mw"], col["ts_r_dn_mw"]
+    a.eq("csp.ts_r_up_sum", r_up, col["ts_r_ch_up_mw"] + col["ts_r_dis_up_mw"], n)
+    a.eq("csp.ts_r_dn_sum", r_dn, col["ts_r_ch_dn_mw"] + col["ts_r_dis_dn_mw"], n)
+    a.leq("csp.input_ceiling", col["p_pb_mw"] + r_up, pb.p_in_max_mw_th * u, n)
+    a.leq("csp.input_floor", pb.p_in_min_mw_th * u, col["p_pb_mw"] - r_dn, n)
+    # Conversion curve in each activation scenario (STU5) and the turbine nameplate.
+    curve = on_curve(pb)
+    for s in ("none", "up", "dn"):
+        x = col["p_pb_mw"] + _activation(s, r_up, r_dn)
+        e = col[f"e_{s}_mw"]
+        expected = np.where(u > 0.5, curve(np.clip(x, curve.knots[0], curve.knots[-1])), 0.0)
+        a.eq(f"csp.pb_curve[{s}]", e, expected, n)
+        a.leq(f"csp.pb_input_range[{s}]", x, pb.p_in_max_mw_th * u, n)
+        a.leq(f"csp.pb_input_range[{s}]", pb.p_in_min_mw_th * u, x, n)
+        a.leq(f"csp.turbine_cap[{s}]", e, pb.p_el_max_mw * u, n)
+    # Electrical reserves (STU6-STU7) and the unit rows of units.csv.
+    cap = _reserve_cap(problem, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
+    a.leq("csp.reserve_up_cap", col["e_up_mw"] - col["e_none_mw"], cap, n)
+    a.leq("csp.reserve_dn_cap", col["e_none_mw"] - col["e_dn_mw"], cap, n)
+    a.eq("csp.units_p", rows["p_mw"].to_numpy(float), col["e_none_mw"], n)
+    a.eq("csp.units_r_up", rows["r_up_mw"].to_numpy(float), col["e_up_mw"] - col["e_none_mw"], n)
+    a.eq("csp.units_r_dn", rows["r_dn_mw"].to_numpy(float), col["e_none_mw"] - col["e_dn_mw"], n)
+    # Storage power limits by mode (TS1-TS4).
+    a.leq("csp.ts_charge_floor", ts.p_ch_min_mw_th * mode, col["ts_charge_mw"] - col["ts_r_ch_up_mw"], n)
+    a.leq("csp.ts_charge_ceiling", col["ts_charge_mw"] + col["ts_r_ch_dn_mw"], ts.p_ch_max_mw_th * mode, n)
+    a.leq("csp.ts_discharge_ceiling", col["ts_discharge_mw"] + col["ts_r_dis_up_mw"],
+          ts.p_dis_max_mw_th * (1 - mode), n)
+    a.leq("csp.ts_discharge_floor", ts.p_dis_min_mw_th * (1 - mode), col["ts_discharge_mw"] - col["ts_r_dis_dn_mw"],
+          n)
+    for name in ("ts_charge_mw", "ts_discharge_mw", "ts_r_ch_up_mw", "ts_r_ch_dn_mw", "ts_r_dis_up_mw",
+                 "ts_r_dis_dn_mw"):
+        a.leq(f"csp.{name}_nonnegative", -col[name], 0.0, n)
+    # Energy recursion, cyclic or from a fixed initial energy (TS7-TS8 as corrected).
+    energy = col["ts_energy_mwh"]
+    previous = np.roll(energy, 1)
+    if not ts.cyclic:
+        previous[0] = ts.e_init_mwh_th
+        a.leq("csp.ts_energy_end", ts.e_init_mwh_th, energy[-1], n)
+    a.eq("csp.ts_energy_balance", energy,
+         previous + ts.eta_ch * col["ts_charge_mw"] * dt - col["ts_discharge_mw"] * dt / ts.eta_dis, n)
+    # Reserve energy shares and margins (TS9-TS11, corrected).
+    span = ts.e_max_mwh_th - ts.e_min_mwh_th
+    sigma_up, sigma_dn = float(col["sigma_up"][0]), float(col["sigma_dn"][0])
+    a.leq("csp.sigma_range", np.array([-sigma_up, -sigma_dn, sigma_up - 1, sigma_dn - 1]), 0.0, n)
+    a.leq("csp.ts_reserve_energy_up", float(np.sum(r_up * dt / ts.eta_dis)), sigma_up * span, n, scale=span)
+    a.leq("csp.ts_reserve_energy_dn", float(np.sum(r_dn * ts.eta_ch * dt)), sigma_dn * span, n, scale=span)
+    a.leq("csp.ts_margin_low", ts.e_min_mwh_th + sigma_up * span, energy, n, scale=span)
+    a.leq("csp.ts_margin_high", energy, ts.e_max_mwh_th - sigma_dn * span, n, scale=span)
+    _audit_commitment(a, problem, unit, u, v_su, v_sd)
+
+
+def _audit_commitment(a: _Auditor, problem: Problem, unit, u, v_su, v_sd) -> None:
+    """Transitions and minimum up/down times by run lengths (Appendix A)."""
+    n, pb = unit.name, unit.power_block
+    state = np.round(u).astype(int)
+    previous = np.concatenate([[1 if pb.initially_on else 0], state[:-1]])
+    a.eq("csp.commitment_transition", state - previous, np.round(v_su) - np.round(v_sd), n)
+    for name, value, need in (("min_up", 1, problem.periods_for_hours(pb.min_up_h)),
+                              ("min_down", 0, problem.periods_for_hours(pb.min_down_h))):
+        t = 0
+        while t < problem.nt:
+            if state[t] != value:
+                t += 1
+                continue
+            end = t
+            while end < problem.nt and state[end] == value:
+                end += 1
+            started_today = previous[t] != value
+            if started_today and end < problem.nt and end - t < need:
+                a.fail(f"csp.{name}", f"run of {end - t} periods from t={t + 1} is shorter than {need}",
+                       n, t + 1, float(need - (end - t)))
+            t = end
+
+
+def _audit_budgets(a: _Auditor, problem: Problem, by_unit: dict, by_csp: dict) -> None:
+    """χ sums to Γ, lands on the largest deviations (paper mode), and bounds follow."""
+    paper = problem.case.budgets.mode == "paper"
+    for name, src in problem.sources.items():
+        if src.is_price:
+            continue
+        table = by_csp[name] if src.unit_kind == "csp" else by_unit[name]
+        prefix = "sf_" if src.unit_kind == "csp" else ""
+        nominal = table[f"{prefix}nominal_mw"].to_numpy(float)
+        deviation = table[f"{prefix}deviation_mw"].to_numpy(float)
+        bound = table[f"{prefix}bound_mw"].to_numpy(float)
+        chi = table["chi"].to_numpy(float)
+        a.eq("budget.nominal", nominal, src.nominal, name)
+        a.eq("budget.deviation", deviation, src.deviation, name)
+        if abs(chi.sum() - src.gamma) > 0.5 and deviation.max() > 0:
+            a.fail("budget.count", f"Σχ={chi.sum():g} but Γ={src.gamma}", name)
+        sign = -1.0 if src.kind == "production" else 1.0
+        a.eq("budget.bound", bound, nominal + sign * deviation * chi, name)
+        if paper and 0 < chi.sum() < len(chi):
+            chosen, other = deviation[chi > 0.5], deviation[chi < 0.5]
+            a.leq("budget.largest_deviations", other.max(), chosen.min(), name)
+
+
+def protection_exact(exposure: np.ndarray, gamma: int) -> float:
+    """Worst-case loss: the sum of the Γ largest exposures [EUR] (Bertsimas–Sim)."""
+    if gamma <= 0:
+        return 0.0
+    return float(np.sort(np.asarray(exposure, float))[::-1][:gamma].sum())
+
+
+def price_exposures(problem: Problem, market: pd.DataFrame) -> dict[str, np.ndarray]:
+    """Per-period loss [EUR] if each price moves adversely by its full deviation."""
+    dt = problem.dt_h
+    p = market["p_da_mw"].to_numpy(float)
+    da = problem.sources["price_da"]
+    return {
+        "price_da": np.maximum.reduce([da.deviation * p * dt, -da.deviation_up * p * dt, np.zeros_like(p)]),
+        "price_sr_up": problem.sources["price_sr_up"].deviation * market["r_sr_up_mw"].to_numpy(float) * dt,
+        "price_sr_dn": problem.sources["price_sr_dn"].deviation * market["r_sr_dn_mw"].to_numpy(float) * dt,
+    }
+
+
+def _audit_objective(a: _Auditor, problem: Problem, market: pd.DataFrame, by_unit: dict, by_csp: dict,
+                     summary: dict) -> None:
+    case, dt = problem.case, problem.dt_h
+    da, up, dn = (problem.sources[n].nominal for n in ("price_da", "price_sr_up", "price_sr_dn"))
+    revenue_dam = float(np.sum(da * market["p_da_mw"].to_numpy(float) * dt))
+    revenue_sr = float(np.sum((up * market["r_sr_up_mw"].to_numpy(float) + dn * market["r_sr_dn_mw"].to_numpy(float))
+                              * dt))
+    cost_hpa = float(np.sum(problem.tariff_hpa * market["h_hpa_mw"].to_numpy(float) * dt))
+    opex = sum(float(np.sum(u.om_eur_per_mwh * by_unit[u.name]["p_mw"].to_numpy(float) * dt)) for u in case.ndres)
+    opex += sum(float(np.sum(c.om_eur_per_mwh * (by_csp[c.name]["e_none_mw"].to_numpy(float)
+                                                 + by_csp[c.name]["heat_to_td_mw"].to_numpy(float)) * dt))
+                for c in case.csp)
+    exposures = price_exposures(problem, market)
+    protection = {name: protection_exact(exposures[name], problem.sources[name].gamma) for name in exposures}
+    keys = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}
+    scale = max(1.0, abs(summary["objective_eur"]))
+    for name, key in keys.items():
+        a.eq(f"objective.protection_{key}", summary["protection_eur"][key], protection[name], scale=scale)
+    for field, value in (("revenue_dam_eur", revenue_dam), ("revenue_sr_eur", revenue_sr),
+                         ("cost_hpa_eur", cost_hpa), ("cost_opex_eur", opex)):
+        a.eq(f"objective.{field}", summary[field], value, scale=scale)
+    total = revenue_dam + revenue_sr - cost_hpa - opex - sum(protection.values())
+    a.eq("objective.total", summary["objective_eur"], total, scale=scale)
