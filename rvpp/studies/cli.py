@@ -6,10 +6,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..case import STRATEGIES, load_case, with_options
+from ..case import STRATEGIES, load_case, parse_markets, with_options
 from ..errors import RvppError
 from ..recourse import Penalties
-from .settings import HPA_FLAT_PRICES, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings
+from .settings import HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 
@@ -37,6 +37,8 @@ def add_study_commands(commands) -> None:
                        "(default: every hour of the day)")
     study.add_argument("--sources", type=_words, default=(), help="sensitivity: sweep these sources or kinds "
                        "one at a time, e.g. PV1,wind,price (default: all sources at once)")
+    study.add_argument("--market-sets", type=_market_sets, help="market sets of Table 10, e.g. "
+                       f"DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
     study.add_argument("--hpa-prices", type=_floats, help=f"flat HPA tariffs [EUR/MWh_th] (default "
                        f"{','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
     study.add_argument("--test-days", type=int, default=TEST_DAYS, help=f"out-of-sample days (default {TEST_DAYS})")
@@ -69,6 +71,16 @@ def _names(allowed):
     return parse
 
 
+def _market_sets(text: str) -> tuple[str, ...]:
+    sets = _words(text)
+    for item in sets:
+        try:
+            parse_markets(item)
+        except RvppError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return sets
+
+
 def _words(text: str) -> tuple[str, ...]:
     return tuple(part.strip() for part in text.split(",") if part.strip())
 
@@ -90,6 +102,7 @@ def _floats(text: str) -> tuple[float, ...]:
 def settings_from(args: argparse.Namespace) -> StudySettings:
     """The study settings of the command line's options."""
     changes = {"strategies": args.strategies, "gammas": args.gammas, "hpa_flat_prices": args.hpa_prices,
+               "market_sets": args.market_sets,
                "scenario_counts": args.scenarios}
     settings = StudySettings(
         sources=args.sources, test_days=args.test_days, seed=args.seed, sp_time_limit_s=args.sp_time_limit,
