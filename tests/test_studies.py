@@ -15,7 +15,7 @@ import pytest
 import rvpp
 from rvpp.cli import main
 from rvpp.history import PRICE_COLUMNS
-from rvpp.studies import out_of_sample, sensitivity, stochastic
+from rvpp.studies import out_of_sample, sensitivity, stochastic, stress
 from rvpp.studies.evaluation import evaluation_days, sample_days, training_days
 from rvpp.studies.settings import StudySettings
 from rvpp.uncertainty import window_days
@@ -148,3 +148,31 @@ def test_bad_study_options_end_with_a_message(tmp_path, capsys):
     assert main(["study", "sensitivity", "--gammas", "0,30", "--out", str(tmp_path), "--quiet",
                  "--scheduler", "serial"]) == 2
     assert "outside 0..24" in capsys.readouterr().err
+
+
+def test_stress_screening_matches_the_hand_computed_settlement(case):
+    ed = case.ed[2].model_copy(update={"e_min_mwh": 0.0, "flex_up": 0.0, "flex_dn": 0.0})
+    small = case.replace(wind=list(case.wind), pv=[], csp=[], ed=[ed], td=[], markets={"srm": False, "hpa": False},
+                         budgets={"strategy": "optimistic", "overrides": {}})
+    out = stress.run(small, StudySettings(strategies=("optimistic",)))
+    table = out.tables["stress"].set_index("pattern")
+    assert (table["status"] == "optimal").all()
+    assert table.loc[stress.NOMINAL, "deviations"] == 0
+    for periods in table.loc[stress.GREEDY, "periods"].split("; "):
+        name, ts = periods.split(": ")
+        assert len(ts.split(",")) <= 3  # Γ of the optimistic strategy for prices, wind farms and demands
+    # Lost wind in one period: first the surplus over p_da goes (m_sur·λ), then a deficit (m_def·λ);
+    # the wind farm saves its O&M on every MWh not produced.
+    plan = rvpp.solve(small.replace(solver={"threads": 1}))
+    problem, market = plan.problem, plan.market.set_index("t")
+    src = {n: problem.sources[n] for n in ("WF1", "WF2", ed.name, "price_da")}
+    screening = out.tables["stress_screening"]
+    rows = screening[screening["source"] == "WF1"]
+    assert len(rows) == int((src["WF1"].deviation > 0).sum())
+    for row in rows.itertuples():
+        i = row.t - 1
+        surplus = src["WF1"].nominal[i] + src["WF2"].nominal[i] - src[ed.name].nominal[i] - market.loc[row.t, "p_da_mw"]
+        lost, price = src["WF1"].deviation[i], src["price_da"].nominal[i]
+        expected = (0.5 * price * min(surplus, lost) + 2.0 * price * max(0.0, lost - surplus)
+                    - small.wind[0].om_eur_per_mwh * lost)
+        assert row.impact_eur == pytest.approx(expected, rel=1e-6, abs=1e-6)

@@ -27,6 +27,7 @@ REPORT_TABLES = {  # the tables shown in report.md; every table is in tables/ an
     "markets": ("table10_markets", "table11_without_csp", "table12_hpa_price"),
     "out_of_sample": ("table13_out_of_sample",),
     "stochastic": ("table14_stochastic",),
+    "stress": ("stress",),
 }
 REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
     "strategies": ["strategy", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
@@ -56,6 +57,8 @@ def _cell(value: Any, digits: int) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
     if isinstance(value, (float, np.floating)):
+        if 0 < abs(value) < 10 ** -digits:  # e.g. a MIP gap: keep it visible
+            return f"{value:.1e}"
         return f"{value:,.{digits}f}"
     return str(value)
 
