@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from .runner import StudyOutput
+from .stress import GREEDY, PAPER
 
 COST_TOLERANCE_KEUR = 1e-3  # differences below 1 EUR count as ties (solver gap 1e-4)
 MAJORITY = 0.5
@@ -232,11 +233,24 @@ def ro_solves_faster(outputs: Outputs) -> Finding | None:
                    f"{status} (gap {largest['mip_gap'] if largest['mip_gap'] is not None else float('nan'):.2%})")
 
 
+def paper_pattern_is_not_the_worst(outputs: Outputs) -> Finding | None:
+    table = _fact(outputs, "stress", "stress")
+    if table is None or table.empty:
+        return None
+    net = table.pivot(index="strategy", columns="pattern", values="net_cost_keur")
+    paper, greedy = net[PAPER], net[GREEDY]
+    return Finding("Inside the same budget set, a pattern worse than the paper-mode deviations exists "
+                   "(greedy search: a lower bound on the worst case)", "beyond the paper (MODEL_SPEC §10)",
+                   bool((greedy > paper + COST_TOLERANCE_KEUR).all()),
+                   "net cost [kEUR], paper-mode vs greedy pattern: " + ", ".join(
+                       f"{s} {paper[s]:.1f} vs {greedy[s]:.1f}" for s in net.index))
+
+
 CHECKS: tuple[Callable[[Outputs], Finding | None], ...] = (
     cost_rises_with_gamma, cost_rises_with_strategy, all_markets_cheapest, dam_only_dearest, csp_lowers_cost,
     hpa_price_lowers_cost, csp_supplies_most_up_reserve, csp_highest_up_ratio, robust_cuts_penalty,
     robust_raise_market_cost, robust_lowers_net_cost, ro_beats_sp, sp_penalty_falls_with_scenarios,
-    ro_solves_faster,
+    ro_solves_faster, paper_pattern_is_not_the_worst,
 )
 
 

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from ..case import Case
+from ..results import SOLVER_ZERO
 from .findings import findings
 from .runner import StudyOutput
 from .settings import StudySettings
@@ -57,7 +58,7 @@ def _cell(value: Any, digits: int) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
     if isinstance(value, (float, np.floating)):
-        if 0 < abs(value) < 10 ** -digits:  # e.g. a MIP gap: keep it visible
+        if SOLVER_ZERO < abs(value) < 10 ** -digits:  # e.g. a MIP gap: keep it visible
             return f"{value:.1e}"
         return f"{value:,.{digits}f}"
     return str(value)

@@ -6,10 +6,13 @@ strategy's plan, a deviation pattern inside the same budget set (every source at
 adverse bound in at most Γ periods) that raises the settled net cost:
 
 1. screening: from the plan's nominal values, each source deviates alone in one period,
-   and the recourse model settles it (one solve per source and period);
+   and the recourse model settles it (one solve per source and period) with the plan's
+   CSP commitment kept, which makes each screening solve several times faster; it only
+   ranks the periods;
 2. pattern: each source deviates in the Γ periods whose screening raised the net cost
-   most; the combined pattern is settled once, next to the paper-mode pattern (the Γ
-   largest deviations) for comparison.
+   most; the combined pattern is settled once with the study's settings (commitment
+   free unless ``fix_commitment``), next to the paper-mode pattern (the Γ largest
+   deviations) for comparison.
 
 The pattern is found greedily, so its net cost is a **lower bound** on the worst case
 within the budget set, not the worst case itself.
@@ -102,10 +105,11 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     plans = {s: r for s, r in results.items() if r.has_plan}
     settle_case = with_options(case, threads=settings.threads)
     bids = {s: first_stage(r, settings.fix_commitment) for s, r in plans.items()}
+    screening_bids = {s: first_stage(r, fix_commitment=True) for s, r in plans.items()}
     bases = {s: nominal_realization(r.problem) for s, r in plans.items()}
     adverse = {s: adverse_values(r.problem, bids[s].p_da) for s, r in plans.items()}
     screens = [(s, name, t) for s, r in plans.items() for name, t in [("", 0)] + candidates(r.problem)]
-    tasks = [(f"{s}|{name}|{t}", settle_case, bids[s],
+    tasks = [(f"{s}|{name}|{t}", settle_case, screening_bids[s],
               deviating(bases[s], adverse[s], {name: [t]} if name else {}), settings.penalties)
              for s, name, t in screens]
     records = run_many(evaluate_task, tasks, executor, stage(progress, "stress screening"))
