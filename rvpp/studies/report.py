@@ -58,6 +58,8 @@ def _cell(value: Any, digits: int) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
     if isinstance(value, (float, np.floating)):
+        if abs(value) <= SOLVER_ZERO:
+            return f"{0.0:.{digits}f}"
         if SOLVER_ZERO < abs(value) < 10 ** -digits:  # e.g. a MIP gap: keep it visible
             return f"{value:.1e}"
         return f"{value:,.{digits}f}"
