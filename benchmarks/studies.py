@@ -22,6 +22,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+import pandas as pd  # noqa: E402
+
 import rvpp  # noqa: E402
 from rvpp.parallel import default_workers, open_executor  # noqa: E402
 from rvpp.studies import markets, out_of_sample, sensitivity, stochastic  # noqa: E402
@@ -72,7 +74,7 @@ def main() -> None:
         sp_s, sp = timed(stochastic.run, case, settings, "processes", args.workers)
         report["stochastic"] = {"wall_s": round(sp_s, 2), "time_limit_s": args.sp_time_limit, "runs": {
             int(r.n_scenarios): {"solve_s": round(r.solve_s, 1), "status": r.status,
-                                 "mip_gap": None if r.mip_gap != r.mip_gap or r.mip_gap is None else round(r.mip_gap, 5),
+                                 "mip_gap": None if pd.isna(r.mip_gap) else round(r.mip_gap, 5),
                                  "paper_solve_s": PAPER_SP_S.get(int(r.n_scenarios)),
                                  "avg_net_cost_keur": round(r.avg_net_cost_keur, 2)}
             for r in sp.tables["table14_stochastic"].itertuples()}}

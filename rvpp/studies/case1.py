@@ -7,7 +7,7 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from ..case import Case, with_options
+from ..case import Case
 from ..solve import solve
 from .runner import Config, Progress, StudyOutput, plan_row, stage
 from .settings import StudySettings
@@ -29,7 +29,7 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     """Solve the deterministic plan; its tables and the paper's Case 1 figures."""
     started = time.perf_counter()
     config = Config.of({"strategy": "deterministic"}, strategy="deterministic")
-    result = solve(with_options(case, strategy="deterministic", threads=settings.threads))
+    result = solve(config.case(case, settings))
     stage(progress, "deterministic plan")(1, 1)
     out = StudyOutput("case1", TITLE)
     out.tables = {"case1_summary": pd.DataFrame([plan_row(config, result)])}

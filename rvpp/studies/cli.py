@@ -9,7 +9,8 @@ from pathlib import Path
 from ..case import STRATEGIES, load_case, parse_markets, with_options
 from ..errors import RvppError
 from ..recourse import Penalties
-from .settings import HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings
+from .settings import (HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS,
+                       StudySettings)
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 
@@ -22,7 +23,8 @@ def add_study_commands(commands) -> None:
         "study", help="run a case study of the paper (or reproduce all of them)",
         description="Run one of the paper's case studies on a case and write its tables (CSV, Markdown, "
                     "tables.xlsx), figures (HTML, PNG) and report.md to --out.")
-    study.add_argument("name", choices=[*STUDIES, REPRODUCE], help="the study; reproduce runs those of the paper (all but stress)")
+    study.add_argument("name", choices=[*STUDIES, REPRODUCE],
+                       help="the study; reproduce runs those of the paper (all but stress)")
     study.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case folder (default: the paper case)")
     study.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
     study.add_argument("--dt", type=float, choices=(1.0, 0.5, 0.25), help="period length in hours")
