@@ -20,11 +20,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .case import Case, with_options
+from .case import Case
 from .model.piecewise import on_curve
 from .problem import Problem, prepare
 
-TOLERANCE = 1e-4  # [MW], [MWh] or [EUR]: exported values carry 6 decimals
+TOLERANCE = 1e-4  # [MW], [MWh]: exported values carry 6 decimals
+MONEY_TOLERANCE = 1e-2  # [EUR]: one cent on any objective part
 
 
 @dataclass(frozen=True)
@@ -80,23 +81,29 @@ def audit_result(result, tol: float = TOLERANCE) -> list[Violation]:
 def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list[Violation]:
     """Audit a folder written by ``python -m rvpp solve`` against ``case``.
 
-    The run options (date, strategy, budgets, markets, CSPs, period length, budget
-    mode) are read back from ``summary.json``.
+    The run (date, period length, strategy, budgets, budget mode, markets and their
+    settings, the CSPs kept) is read back from ``summary.json``.
     """
     folder = Path(folder)
     summary = json.loads((folder / "summary.json").read_text())
-    run = with_options(case, date=summary["date"], strategy=summary["strategy"], markets=summary["markets"],
-                       dt_h=summary["dt_h"], budget_mode=summary.get("budget_mode", "paper"),
-                       csp=bool(summary.get("csp", [c.name for c in case.csp])))
-    kept = set(summary.get("csp", [c.name for c in case.csp]))
-    if kept != {c.name for c in run.csp}:
-        run = run.replace(csp=[c for c in run.csp if c.name in kept])
-    known = set(run.sources())
-    run = with_options(run, gammas={k: v for k, v in summary["budgets"].items() if k in known})
+    settings = summary["settings"]
+    kept = set(summary["csp"])
+    run = case.replace(
+        delivery_date=summary["date"], dt_h=summary["dt_h"], markets=settings["markets"],
+        uncertainty=settings["uncertainty"], csp=[c for c in case.csp if c.name in kept],
+        budgets={"strategy": summary["strategy"], "mode": summary["budget_mode"],
+                 "overrides": summary["budgets"]})
     problem = prepare(run)
-    tables = {name: pd.read_csv(folder / f"{name}.csv") if (folder / f"{name}.csv").stat().st_size > 1
-              else pd.DataFrame() for name in ("market", "units", "csp")}
+    tables = {name: _read_table(folder / f"{name}.csv") for name in ("market", "units", "csp")}
     return audit_tables(problem, tables["market"], tables["units"], tables["csp"], summary, tol)
+
+
+def _read_table(path: Path) -> pd.DataFrame:
+    """An exported table; an empty file (e.g. no CSP) reads as an empty frame."""
+    try:
+        return pd.read_csv(path)
+    except pd.errors.EmptyDataError:
+        return pd.DataFrame()
 
 
 def audit_tables(problem: Problem, market: pd.DataFrame, units: pd.DataFrame, csp: pd.DataFrame,
@@ -362,7 +369,7 @@ def _audit_objective(a: _Auditor, problem: Problem, market: pd.DataFrame, by_uni
     exposures = price_exposures(problem, market)
     protection = {name: protection_exact(exposures[name], problem.sources[name].gamma) for name in exposures}
     keys = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}
-    scale = max(1.0, abs(summary["objective_eur"]))
+    scale = MONEY_TOLERANCE / a.tol
     for name, key in keys.items():
         a.eq(f"objective.protection_{key}", summary["protection_eur"][key], protection[name], scale=scale)
     for field, value in (("revenue_dam_eur", revenue_dam), ("revenue_sr_eur", revenue_sr),

@@ -131,32 +131,38 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
     if len(frame) == 0:
         raise CaseError(f"{source}: no rows")
     stamps = _parse_timestamps(frame["timestamp"], source)
+    shown = _as_written(frame["timestamp"])
     data = frame.drop(columns="timestamp")
     problems = []
     numeric = {}
     for column in data.columns:
         values = pd.to_numeric(data[column], errors="coerce")
-        bad_text = values.isna() & data[column].notna()
+        bad_text = (values.isna() & data[column].notna()).to_numpy()
         if bad_text.any():
-            where = stamps[bad_text.to_numpy()][0].isoformat()
+            i = int(np.flatnonzero(bad_text)[0])
             problems.append(f'{source}: column "{column}" has a non-numeric value '
-                            f'{data[column][bad_text].iloc[0]!r} at {where}')
-        missing = values.isna() & ~bad_text
+                            f"{data[column].iloc[i]!r} at {shown[i].isoformat()}")
+        missing = values.isna().to_numpy() & ~bad_text
         if missing.any():
-            times = stamps[missing.to_numpy()]
-            problems.append(f'{source}: column "{column}" is empty (NaN) at {times[0].isoformat()}'
-                            + (f" and {len(times) - 1} more hours" if len(times) > 1 else ""))
+            rows = np.flatnonzero(missing)
+            problems.append(f'{source}: column "{column}" is empty (NaN) at {shown[rows[0]].isoformat()}'
+                            + (f" and {len(rows) - 1} more hours" if len(rows) > 1 else ""))
         infinite = np.isinf(values.to_numpy(dtype=float, na_value=0.0))
         if infinite.any():
-            problems.append(f'{source}: column "{column}" is infinite at '
-                            f"{stamps[infinite][0].isoformat()}")
+            where = shown[int(np.flatnonzero(infinite)[0])].isoformat()
+            problems.append(f'{source}: column "{column}" is infinite at {where}')
         numeric[column] = values.to_numpy(dtype=float)
-    problems += _timeline_problems(stamps, source)
+    problems += _timeline_problems(stamps, shown, source)
     if problems:
         raise CaseError(problems)
     out = pd.DataFrame(numeric, index=stamps.tz_convert("UTC"))
     out.index.name = "timestamp"
     return out
+
+
+def _as_written(column: pd.Series) -> list[pd.Timestamp]:
+    """Timestamps with the UTC offset they were written with, for messages."""
+    return [pd.Timestamp(value) for value in column]
 
 
 def _parse_timestamps(column: pd.Series, source: str) -> pd.DatetimeIndex:
@@ -176,24 +182,22 @@ def _parse_timestamps(column: pd.Series, source: str) -> pd.DatetimeIndex:
         raise CaseError(f'{source}: a timestamp cannot be read ({exc})') from None
 
 
-def _timeline_problems(stamps: pd.DatetimeIndex, source: str) -> list[str]:
-    problems = []
-    duplicated = stamps.duplicated()
-    if duplicated.any():
-        problems.append(f"{source}: timestamp {stamps[duplicated][0].isoformat()} appears more than once")
-        return problems
+def _timeline_problems(stamps: pd.DatetimeIndex, shown: list[pd.Timestamp], source: str) -> list[str]:
+    duplicated = np.flatnonzero(stamps.duplicated())
+    if len(duplicated):
+        return [f"{source}: timestamp {shown[duplicated[0]].isoformat()} appears more than once"]
     if not stamps.is_monotonic_increasing:
-        problems.append(f"{source}: timestamps are not in increasing order")
-        return problems
-    off_hour = (stamps.minute != 0) | (stamps.second != 0)
-    if off_hour.any():
-        problems.append(f"{source}: timestamp {stamps[off_hour][0].isoformat()} is not on the hour")
+        return [f"{source}: timestamps are not in increasing order"]
+    problems = []
+    off_hour = np.flatnonzero((stamps.minute != 0) | (stamps.second != 0))
+    if len(off_hour):
+        problems.append(f"{source}: timestamp {shown[off_hour[0]].isoformat()} is not on the hour")
     steps = stamps[1:] - stamps[:-1]
     gaps = np.flatnonzero(steps != HOUR)
     if len(gaps):
-        first = stamps[gaps[0]] + HOUR
+        first = (shown[gaps[0]] + HOUR).isoformat()
         missing = int(sum((steps[i] // HOUR) - 1 for i in gaps))
-        problems.append(f"{source}: hour {first.isoformat()} is missing"
+        problems.append(f"{source}: hour {first} is missing"
                         + (f" ({missing} missing hours in all)" if missing > 1 else "")
                         + "; the history must be hourly and contiguous")
     return problems

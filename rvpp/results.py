@@ -92,6 +92,11 @@ class Result:
             "cost_hpa_eur": self.parts.get("cost_hpa_eur"),
             "cost_opex_eur": self.parts.get("cost_opex_eur"),
             "protection_eur": {PROTECTION_KEYS[k]: v for k, v in self.protection_eur.items()},
+            "settings": {
+                "markets": case.markets.model_dump(mode="json"),
+                "uncertainty": case.uncertainty.model_dump(mode="json"),
+                "solver": case.solver.model_dump(mode="json"),
+            },
         }
         return summary
 

@@ -42,7 +42,7 @@ def add_robustness(m: pyo.ConcreteModel, problem: Problem) -> None:
         block = m.robust[name]
         if source.is_price:
             exposure = _price_exposure(m, block, source, problem)
-            protection = add_price_protection(block, exposure, source.gamma, problem)
+            protection = add_price_protection(block, exposure, source.gamma)
             m.protection[name].set_value(protection)
         else:
             target = _bound_target(m, source)
@@ -74,7 +74,7 @@ def _price_exposure(m, block, source: Source, problem: Problem) -> dict:
     return {t: float(source.deviation[t - 1]) * band[t] * dt for t in m.T}
 
 
-def add_price_protection(block, exposure: dict, gamma: int, problem: Problem):
+def add_price_protection(block, exposure: dict, gamma: int):
     """Worst-case loss of Γ periods: ``Γ·φ + Σt ζ_t`` with ``φ + ζ_t ≥ exposure_t`` [EUR].
 
     Dual of the inner maximisation (paper Protection_obj), equation (MILP-DAMprice).

@@ -1,0 +1,27 @@
+"""Shared fixtures: the paper case and cached solves of it."""
+
+from __future__ import annotations
+
+import pytest
+
+from rvpp import load_case, solve, with_options
+from tests.factories import PAPER
+
+
+@pytest.fixture(scope="session")
+def paper_case():
+    return load_case(PAPER)
+
+
+@pytest.fixture(scope="session")
+def paper_solve(paper_case):
+    """Solve the paper case with options, once per distinct set of options."""
+    cache = {}
+
+    def run(**options):
+        key = repr(sorted(options.items()))
+        if key not in cache:
+            cache[key] = solve(with_options(paper_case, **options))
+        return cache[key]
+
+    return run

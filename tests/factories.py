@@ -1,0 +1,79 @@
+"""Builders of small hand-solvable cases with bands given explicitly."""
+
+from __future__ import annotations
+
+import datetime as dt
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rvpp.case import parse_case
+from rvpp.history import History
+from rvpp.periods import delivery_periods
+from rvpp.problem import problem_from_bands
+
+ROOT = Path(__file__).resolve().parent.parent
+PAPER = ROOT / "data" / "cases" / "paper"
+DAY = dt.date(2025, 3, 18)
+
+
+
+def tiny_history(columns: list[str], days: int = 2, start: str = "2025-03-17") -> History:
+    """A history with the given columns, all zero (bands are supplied directly)."""
+    first = pd.Timestamp(start, tz="Europe/Madrid")
+    stamps = pd.date_range(first.tz_convert("UTC"), periods=24 * days, freq="1h")
+    frame = pd.DataFrame({"timestamp": stamps, **{c: np.zeros(len(stamps)) for c in columns}})
+    return History(frame)
+
+
+def wind(name="W", p_max=50.0, om=10.0, share=0.1, **extra):
+    return {"name": name, "p_max_mw": p_max, "om_eur_per_mwh": om, "ramp_up_mw_per_min": 15,
+            "ramp_dn_mw_per_min": 25, "reserve_share": share, **extra}
+
+
+def demand(name="D", p_min=0.0, p_max=100.0, e_min=0.0, flex=0.0, **extra):
+    return {"name": name, "p_min_mw": p_min, "p_max_mw": p_max, "e_min_mwh": e_min,
+            "ramp_up_mw_per_min": 10, "ramp_dn_mw_per_min": 10, "flex_up": flex, "flex_dn": flex, **extra}
+
+
+def heat(name="H", h_min=0.0, h_max=100.0, q_min=0.0):
+    return {"name": name, "h_min_mw_th": h_min, "h_max_mw_th": h_max, "q_min_mwh_th": q_min}
+
+
+def tiny_case(wind_units=(), pv_units=(), ed_units=(), td_units=(), csp_units=(), srm=False, hpa=False,
+              tariff=80.0, kappa=0.3, strategy="deterministic", overrides=None, mode="paper",
+              encoding="top_gamma", dt_h=1.0, day=DAY):
+    units = {"wind": list(wind_units), "pv": list(pv_units), "ed": list(ed_units), "td": list(td_units),
+             "csp": list(csp_units)}
+    names = [u["name"] for group in units.values() for u in group]
+    data = {
+        "name": "tiny", "delivery_date": day.isoformat(), "dt_h": dt_h,
+        "markets": {"srm": srm, "hpa": hpa, "kappa": kappa,
+                    "hpa_tariff_eur_per_mwh": [tariff] * 24 if np.isscalar(tariff) else list(tariff)},
+        "budgets": {"strategy": strategy, "overrides": overrides or {}, "mode": mode},
+        "solver": {"budget_encoding": encoding, "rel_gap": 1e-9, "time_limit_s": 60},
+        "units": units,
+    }
+    history = tiny_history(["price_da", "price_sr_up", "price_sr_dn", *names])
+    return parse_case(data, history)
+
+
+def bands(nt: int, **series) -> pd.DataFrame:
+    """Bands per source from ``(lo, mid, hi)`` tuples of scalars or arrays of length ``nt``."""
+    data = {}
+    for name, (lo, mid, hi) in series.items():
+        for stat, value in zip(("lo", "mid", "hi"), (lo, mid, hi)):
+            data[(name, stat)] = np.broadcast_to(np.asarray(value, float), (nt,)).copy()
+    frame = pd.DataFrame(data, index=pd.RangeIndex(1, nt + 1, name="t"))
+    frame.columns = pd.MultiIndex.from_tuples(frame.columns, names=["source", "stat"])
+    return frame
+
+
+def tiny_problem(case, **series):
+    """A problem for ``case`` from explicit bands; unspecified prices are zero."""
+    periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
+    nt = len(periods)
+    for price in ("price_da", "price_sr_up", "price_sr_dn"):
+        series.setdefault(price, (0.0, 0.0, 0.0))
+    return problem_from_bands(case, periods, bands(nt, **series))

@@ -1,0 +1,201 @@
+"""Case validation: every bad input is refused with unit, field, value and rule named."""
+
+from __future__ import annotations
+
+import copy
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from rvpp import CaseError, load_case, prepare, save_case, with_options
+from rvpp.case import parse_case
+
+from tests.factories import PAPER
+
+
+@pytest.fixture(scope="module")
+def raw():
+    return yaml.safe_load((PAPER / "case.yaml").read_text())
+
+
+def problems_of(raw_data, history, edit):
+    data = copy.deepcopy(raw_data)
+    edit(data)
+    with pytest.raises(CaseError) as info:
+        parse_case(data, history)
+    return info.value.problems
+
+
+def unit(data, kind, name):
+    return next(u for u in data["units"][kind] if u["name"] == name)
+
+
+BAD_INPUTS = {
+    "negative capacity": (
+        lambda d: unit(d, "wind", "WF1").update(p_max_mw=-5),
+        'wind "WF1": p_max_mw=-5 must be > 0'),
+    "minimum above maximum": (
+        lambda d: unit(d, "ed", "ED_service").update(p_min_mw=90),
+        'ed "ED_service": p_min_mw=90 must be <= p_max_mw=80'),
+    "efficiency above one": (
+        lambda d: d["units"]["csp"][0]["storage"].update(eta_ch=1.2),
+        'csp "CSP1": storage.eta_ch=1.2 must be <= 1'),
+    "breakpoint efficiency above one": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(
+            breakpoints=[[0, 0], [19, 0.27], [40, 1.4], [140, 0.395]]),
+        "efficiency 1.4 at 40 MW_th (point 3) must be a fraction in [0, 1]"),
+    "breakpoints not increasing": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(
+            breakpoints=[[0, 0], [19, 0.27], [70, 0.34], [40, 0.38], [140, 0.395]]),
+        "input 40 (point 4) must be greater than the previous input 70"),
+    "storage minimum above maximum": (
+        lambda d: d["units"]["csp"][0]["storage"].update(e_min_mwh_th=1200),
+        'csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100'),
+    "duplicate names": (
+        lambda d: unit(d, "pv", "PV2").update(name="PV1"),
+        'pv "PV1": name is used by more than one unit; names must be unique'),
+    "unknown unit in a budget": (
+        lambda d: d["budgets"].update(overrides={"WF9": 3}),
+        "budgets.overrides: unknown source 'WF9'"),
+    "negative budget": (
+        lambda d: d["budgets"].update(overrides={"WF1": -1}),
+        "budgets: overrides.0.1=-1 must be >= 0"),
+    "unknown field": (
+        lambda d: unit(d, "pv", "PV3").update(p_max_mv=50),
+        'pv "PV3": unknown field "p_max_mv"'),
+    "share outside [0, 1]": (
+        lambda d: unit(d, "pv", "PV3").update(reserve_share=10),
+        'pv "PV3": reserve_share=10 must be <= 1'),
+    "text where a number belongs": (
+        lambda d: unit(d, "td", "TD_industry").update(h_max_mw_th="lots"),
+        "td \"TD_industry\": h_max_mw_th='lots' must be a number"),
+    "missing field": (
+        lambda d: unit(d, "ed", "ED_residential").pop("e_min_mwh"),
+        'ed "ED_residential": e_min_mwh is required'),
+    "invalid period length": (
+        lambda d: d.update(dt_h=0.3),
+        "dt_h=0.3 must be one of 1, 0.5, 0.25 [h]"),
+    "unknown time zone": (
+        lambda d: d.update(timezone="Europe/Atlantis"),
+        "timezone='Europe/Atlantis' is not an IANA time zone"),
+    "tariff with the wrong length": (
+        lambda d: d["markets"].update(hpa_tariff_eur_per_mwh=[70] * 23),
+        "markets: hpa_tariff_eur_per_mwh=[23 values] must have 24 values (has 23)"),
+    "percentiles swapped": (
+        lambda d: d["uncertainty"].update(q_lo=0.8, q_hi=0.2),
+        "uncertainty: q_lo=0.8 must be < 0.5"),
+    "unit named like a price": (
+        lambda d: unit(d, "wind", "WF2").update(name="price_da", series="WF2"),
+        'wind "price_da": name is reserved for a price series'),
+    "missing history column": (
+        lambda d: unit(d, "wind", "WF2").update(series="WF7"),
+        "wind \"WF2\": history column 'WF7' is missing from history.csv"),
+    "minimum up time not a whole number of periods": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=2.5),
+        'csp "CSP1": power_block.min_up_h=2.5 must be a multiple of dt_h=1'),
+    "unknown unit kind": (
+        lambda d: d["units"].update(battery=[{"name": "B1"}]),
+        'units: unknown unit kind "battery"'),
+    "the DAM switched off": (
+        lambda d: d["markets"].update(dam=False),
+        "markets: dam=False must be True"),
+}
+
+
+@pytest.mark.parametrize("label", list(BAD_INPUTS))
+def test_bad_input_is_refused_with_a_precise_message(raw, paper_case, label):
+    edit, message = BAD_INPUTS[label]
+    problems = problems_of(raw, paper_case.history, edit)
+    assert any(message in p for p in problems), problems
+
+
+def test_every_problem_is_reported_at_once(raw, paper_case):
+    def several(d):
+        unit(d, "wind", "WF1").update(p_max_mw=-1)
+        unit(d, "ed", "ED_industry").update(flex_up=3)
+    problems = problems_of(raw, paper_case.history, several)
+    assert len(problems) == 2
+
+
+def test_budget_above_the_number_of_periods_is_refused(paper_case):
+    with pytest.raises(CaseError, match=r"Γ for 'WF1'=30 exceeds the 24 periods of 2025-03-18"):
+        prepare(with_options(paper_case, gammas={"WF1": 30}))
+    with pytest.raises(CaseError, match=r"exceeds the 23 periods"):
+        prepare(with_options(paper_case, date="2025-03-30", gammas={"price_da": 24}))
+
+
+def test_history_shorter_than_the_window_is_refused(paper_case):
+    with pytest.raises(CaseError, match=r"the 30-day window before 2024-12-20 \(2024-11-20 to 2024-12-19\) "
+                                        r"is not covered; the history runs from 2024-12-01"):
+        prepare(with_options(paper_case, date="2024-12-20"))
+
+
+def _write_history_case(tmp_path, change):
+    """Copy the paper case with ``change(history frame) -> frame`` applied to its CSV."""
+    folder = tmp_path / "case"
+    shutil.copytree(PAPER, folder)
+    frame = change(pd.read_csv(folder / "history.csv"))
+    frame.to_csv(folder / "history.csv", index=False)
+    return folder
+
+
+def test_nan_in_a_csv_names_column_and_hour(tmp_path):
+    def blank(frame):
+        frame.loc[[100, 101], "PV2"] = np.nan
+        return frame
+
+    folder = _write_history_case(tmp_path, blank)
+    with pytest.raises(CaseError, match=r'history.csv: column "PV2" is empty \(NaN\) at 2024-12-05T04:00:00\+01:00 '
+                                        r"and 1 more hours"):
+        load_case(folder)
+
+
+def test_missing_hours_in_a_csv_are_named(tmp_path):
+    folder = _write_history_case(tmp_path, lambda f: f.drop(index=[500, 501, 502]))
+    with pytest.raises(CaseError, match=r"history.csv: hour 2024-12-21T20:00:00\+01:00 is missing "
+                                        r"\(3 missing hours in all\)"):
+        load_case(folder)
+
+
+def test_duplicated_and_naive_timestamps_are_refused(tmp_path):
+    folder = _write_history_case(tmp_path, lambda f: f.assign(
+        timestamp=f["timestamp"].where(f.index != 10, f["timestamp"].iloc[9])))
+    with pytest.raises(CaseError, match="appears more than once"):
+        load_case(folder)
+    folder2 = _write_history_case(tmp_path / "b", lambda f: f.assign(timestamp=f["timestamp"].str.slice(0, 19)))
+    with pytest.raises(CaseError, match="has no UTC offset"):
+        load_case(folder2)
+
+
+def test_invalid_yaml_is_reported_with_its_line(tmp_path):
+    folder = tmp_path / "case"
+    shutil.copytree(PAPER, folder)
+    (folder / "case.yaml").write_text("name: x\nunits: [unclosed\n")
+    with pytest.raises(CaseError, match=r"case.yaml: not valid YAML at line \d+"):
+        load_case(folder)
+
+
+def test_a_case_round_trips_through_its_folder(paper_case, tmp_path):
+    edited = paper_case.replace(markets={"kappa": 0.25}, wind=[paper_case.wind[0]])
+    save_case(edited, tmp_path / "saved")
+    again = load_case(tmp_path / "saved")
+    assert again == edited
+    assert hash(again) == hash(edited)
+    assert again.history.fingerprint == paper_case.history.fingerprint
+
+
+def test_cases_are_immutable_and_hash_by_content(paper_case):
+    with pytest.raises(Exception):
+        paper_case.dt_h = 0.25
+    assert with_options(paper_case, strategy="balanced") == paper_case
+    assert hash(with_options(paper_case, strategy="pessimistic")) != hash(paper_case)
+
+
+def test_markets_option_requires_the_dam(paper_case):
+    with pytest.raises(CaseError, match="must include DAM"):
+        with_options(paper_case, markets="SRM,HPA")
+    with pytest.raises(CaseError, match="unknown market 'IDM'"):
+        with_options(paper_case, markets="DAM,IDM")

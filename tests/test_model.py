@@ -1,0 +1,148 @@
+"""Small cases whose optimum is derived by hand (MODEL_SPEC §2-§9)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rvpp import solve_problem
+from rvpp.audit import audit_result
+
+from tests.factories import demand, heat, tiny_case, tiny_problem, wind
+
+NT = 24
+HOURS = np.arange(1, NT + 1, dtype=float)
+
+
+def solved(problem):
+    result = solve_problem(problem)
+    assert result.status == "optimal", result.message
+    assert audit_result(result) == []
+    return result
+
+
+def test_one_wind_farm_one_demand_sells_the_surplus():
+    # Wind 30 MW available at O&M 10 EUR/MWh, demand fixed at 10 MW, DAM price 50.
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)])
+    result = solved(tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(50, 50, 50)))
+    assert result.objective_eur == pytest.approx(NT * (50 * 20 - 10 * 30), rel=1e-9)
+    assert np.allclose(result.market["p_da_mw"], 20.0)
+
+
+def test_wind_is_curtailed_when_the_price_is_below_its_operating_cost():
+    price = np.where(HOURS <= 4, 5.0, 50.0)
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)])
+    result = solved(tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(price, price, price)))
+    expected = 4 * (5 * -10) + 20 * (50 * 20 - 10 * 30)
+    assert result.objective_eur == pytest.approx(expected, rel=1e-9)
+    wind_output = result.units.query("unit == 'W'")["p_mw"].to_numpy()
+    assert np.allclose(wind_output[:4], 0.0) and np.allclose(wind_output[4:], 30.0)
+
+
+def test_dam_price_protection_is_the_sum_of_the_largest_selling_losses():
+    # Downward deviation t EUR/MWh in period t; Γ = 3 -> the adversary hits 24, 23, 22.
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], overrides={"price_da": 3})
+    problem = tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(50 - HOURS, 50, 50))
+    result = solved(problem)
+    assert result.protection_eur["price_da"] == pytest.approx(20 * (24 + 23 + 22), rel=1e-9)
+    assert result.objective_eur == pytest.approx(NT * 700 - 20 * 69, rel=1e-9)
+
+
+def test_dam_price_protection_uses_the_upward_deviation_when_buying():
+    # Demand 40 MW > wind 30 MW: the RVPP buys 10 MW; upward deviation 2t, downward t.
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=40, p_max=40)], overrides={"price_da": 2})
+    problem = tiny_problem(case, W=(30, 30, 30), D=(40, 40, 40), price_da=(50 - HOURS, 50, 50 + 2 * HOURS))
+    result = solved(problem)
+    assert result.protection_eur["price_da"] == pytest.approx(10 * (48 + 46), rel=1e-9)
+    assert result.objective_eur == pytest.approx(NT * (-500 - 300) - 10 * 94, rel=1e-9)
+
+
+def test_full_price_budget_curtails_where_the_worst_price_is_below_cost():
+    # Γ = NT: every period at its worst price 50 - dev. Selling is worth it only where
+    # 50 - dev > 10 (O&M), so the farm is curtailed down to the demand elsewhere.
+    dev = np.where(HOURS <= 6, 45.0, 5.0)
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], overrides={"price_da": NT})
+    result = solved(tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(50 - dev, 50, 50)))
+    per_period = np.where(dev > 40, (50 - dev) * 0 - 10 * 10, (50 - dev) * 20 - 10 * 30)
+    assert result.objective_eur == pytest.approx(per_period.sum(), rel=1e-9)
+    sold = result.market["p_da_mw"].to_numpy()
+    assert np.allclose(sold[:6], 0.0) and np.allclose(sold[6:], 20.0)
+
+
+def test_availability_budget_removes_the_largest_deviations():
+    # Wind hi 30, deviation 0.5·t; Γ = 2 cuts the two largest (periods 24 and 23).
+    dev = 0.5 * HOURS
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], overrides={"W": 2})
+    result = solved(tiny_problem(case, W=(30 - dev, 30, 30), D=(10, 10, 10), price_da=(50, 50, 50)))
+    bound = 30 - np.where(HOURS >= 23, dev, 0.0)
+    assert result.objective_eur == pytest.approx(float(np.sum(40 * bound - 500)), rel=1e-9)
+    chi = result.units.query("unit == 'W'")["chi"].to_numpy()
+    assert list(np.flatnonzero(chi) + 1) == [23, 24]
+
+
+def test_demand_budget_raises_the_required_consumption():
+    dev = np.where(HOURS % 5 == 0, 8.0, 1.0)  # periods 5, 10, 15, 20 deviate most
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=0, p_max=100)], overrides={"D": 3})
+    result = solved(tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10 + dev), price_da=(50, 50, 50)))
+    chi = result.units.query("unit == 'D'")["chi"].to_numpy()
+    assert chi.sum() == 3 and set(np.flatnonzero(chi) + 1) <= {5, 10, 15, 20}
+    assert result.objective_eur == pytest.approx(NT * (50 * 20 - 300) - 3 * 50 * 8, rel=1e-9)
+
+
+def test_minimum_energy_shifts_flexible_consumption_to_the_cheapest_periods():
+    price = np.where(HOURS <= 3, 20.0, 60.0)
+    case = tiny_case(ed_units=[demand(p_min=0, p_max=50, e_min=300)])
+    result = solved(tiny_problem(case, D=(5, 5, 5), price_da=(price, price, price)))
+    # 24 x 5 = 120 MWh at the floor; the 180 MWh missing go to the 3 cheap hours (60 MW
+    # each would exceed p_max 50: 3 x 45 = 135 at 20, the last 45 at 60).
+    expected = -(np.sum(price * 5) + 135 * 20 + 45 * 60)
+    assert result.objective_eur == pytest.approx(expected, rel=1e-9)
+
+
+def test_heat_is_bought_from_the_hpa_at_the_tariff():
+    tariff = np.where(np.arange(24) < 6, 70.0, 110.0)
+    case = tiny_case(td_units=[heat(q_min=0)], hpa=True, tariff=tariff, overrides={"H": 2})
+    dev = np.where(HOURS == 12, 9.0, np.where(HOURS == 3, 7.0, 1.0))
+    result = solved(tiny_problem(case, H=(20, 20, 20 + dev)))
+    need = 20 + np.where(np.isin(HOURS, (3, 12)), dev, 0.0)
+    assert result.parts["cost_hpa_eur"] == pytest.approx(float(np.sum(tariff * need)), rel=1e-9)
+    assert result.objective_eur == pytest.approx(-float(np.sum(tariff * need)), rel=1e-9)
+
+
+def test_down_reserve_from_wind_is_free_money_up_reserve_only_when_it_pays():
+    # Reserve share 10 % of 50 MW -> bands up to 5 MW. Down reserve costs nothing;
+    # up reserve needs curtailment, worth it only if the up price beats the margin 50 - 10.
+    def run(up_price):
+        case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], srm=True)
+        problem = tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(50, 50, 50),
+                               price_sr_up=(up_price, up_price, up_price), price_sr_dn=(10, 10, 10))
+        return solved(problem)
+
+    cheap = run(20.0)
+    assert cheap.objective_eur == pytest.approx(NT * (50 * 20 - 10 * 30 + 10 * 5), rel=1e-9)
+    assert np.allclose(cheap.market["r_sr_dn_mw"], 5.0) and np.allclose(cheap.market["r_sr_up_mw"], 0.0)
+    dear = run(45.0)
+    assert dear.objective_eur == pytest.approx(NT * (50 * 15 - 10 * 25 + 45 * 5 + 10 * 5), rel=1e-9)
+    assert np.allclose(dear.market["r_sr_up_mw"], 5.0)
+
+
+def test_reserve_bands_respect_the_kappa_cap():
+    # Two 50 MW farms, demand nameplate 90 MW: κ·(100 − 90) = 3 MW caps the SR bands.
+    case = tiny_case([wind("A", om=0), wind("B", om=0)], ed_units=[demand(p_min=10, p_max=90)], srm=True)
+    problem = tiny_problem(case, A=(30, 30, 30), B=(30, 30, 30), D=(10, 10, 10), price_da=(50, 50, 50),
+                           price_sr_dn=(10, 10, 10))
+    result = solved(problem)
+    assert np.allclose(result.market["r_sr_dn_mw"], 3.0)
+
+
+def test_markets_switched_off_fix_their_decisions_to_zero():
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], td_units=[heat()], srm=False,
+                     hpa=True)
+    result = solved(tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), H=(5, 5, 5), price_da=(50, 50, 50),
+                                 price_sr_dn=(100, 100, 100)))
+    assert np.allclose(result.market[["r_sr_up_mw", "r_sr_dn_mw"]], 0.0)
+    assert np.allclose(result.units[["r_up_mw", "r_dn_mw"]], 0.0)
+    no_hpa = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], td_units=[heat()])
+    failed = solve_problem(tiny_problem(no_hpa, W=(30, 30, 30), D=(10, 10, 10), H=(5, 5, 5)))
+    assert failed.status == "infeasible"
+    assert "no heat source" in failed.message and "H" in failed.message

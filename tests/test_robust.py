@@ -1,0 +1,124 @@
+"""Laws of the robust layer that hold for all inputs (MODEL_SPEC §4-§5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyomo.environ as pyo
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rvpp import solve_problem
+from rvpp.audit import audit_result, protection_exact
+from rvpp.case import SolverSettings
+from rvpp.robust import add_price_protection
+from rvpp.solve import run_highs
+
+from tests.factories import demand, heat, tiny_case, tiny_problem, wind
+
+NT = 24
+FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+series = st.lists(st.floats(0.0, 50.0, allow_nan=False, width=32), min_size=NT, max_size=NT).map(np.array)
+gammas = st.integers(0, NT)
+
+
+@FAST
+@given(exposure=st.lists(st.floats(0.0, 1e4, allow_nan=False), min_size=1, max_size=30), data=st.data())
+def test_protection_dual_equals_the_sum_of_the_largest_exposures(exposure, data):
+    gamma = data.draw(st.integers(0, len(exposure)))
+    m = pyo.ConcreteModel()
+    m.b = pyo.Block()
+    periods = list(range(1, len(exposure) + 1))
+    protection = add_price_protection(m.b, {t: exposure[t - 1] for t in periods}, gamma)
+    if not hasattr(m.b, "phi"):  # Γ = 0 or Γ ≥ NT need no dual variables
+        value = float(pyo.value(protection))
+    else:
+        m.obj = pyo.Objective(expr=protection, sense=pyo.minimize)
+        outcome = run_highs(m, SolverSettings(rel_gap=0.0))
+        assert outcome["status"] == "optimal"
+        value = outcome["objective"]
+    assert value == pytest.approx(protection_exact(np.array(exposure), gamma), rel=1e-9, abs=1e-6)
+
+
+@FAST
+@given(w=series, d=series, mid=st.floats(20, 100), neg_share=series, pos=series, gamma=gammas)
+def test_dam_protection_of_a_fixed_plan_is_the_sum_of_the_gamma_largest_losses(w, d, mid, neg_share, pos, gamma):
+    # Wind at zero cost sells all it has, the demand buys exactly its forecast, so the
+    # plan p_da = w − d is fixed; deviations below the price keep it optimal.
+    neg = mid * 0.9 * neg_share / 50.0
+    case = tiny_case([wind(om=0)], ed_units=[demand(p_min=0, p_max=100)], overrides={"price_da": gamma})
+    result = solve_problem(tiny_problem(case, W=(w, w, w), D=(d, d, d), price_da=(mid - neg, mid, mid + pos)))
+    assert result.status == "optimal"
+    p = w - d
+    assert np.allclose(result.market["p_da_mw"], p, atol=1e-6)
+    losses = np.maximum(neg * p, -pos * p)
+    assert result.protection_eur["price_da"] == pytest.approx(protection_exact(losses, gamma), rel=1e-7, abs=1e-5)
+
+
+def _small_case(budgets, encoding="top_gamma", mode="paper"):
+    return tiny_case([wind("W", om=12)], pv_units=[wind("P", om=5)],
+                     ed_units=[demand("D", p_min=0, p_max=120, e_min=600, flex=0.1)],
+                     td_units=[heat("H", h_max=80, q_min=300)], srm=True, hpa=True,
+                     tariff=[60] * 6 + [100] * 18, overrides=budgets, encoding=encoding, mode=mode)
+
+
+def _small_bands(w_dev, p_dev, d_dev, h_dev):
+    hours = np.arange(NT)
+    sun = np.clip(np.sin((hours - 6) / 12 * np.pi), 0, None) * 45
+    return dict(W=(30 - w_dev * 0.5, 30, 30), P=(np.clip(sun - p_dev, 0, None), sun, sun),
+                D=(20, 22, 20 + d_dev * 0.3), H=(15, 16, 15 + h_dev * 0.2),
+                price_da=(40, 60 + 20 * np.cos(hours / 4), 75), price_sr_up=(5, 12, 15),
+                price_sr_dn=(2, 6, 9))
+
+
+tied = st.lists(st.sampled_from([0.0, 4.0, 10.0]), min_size=NT, max_size=NT).map(np.array)
+
+
+@FAST
+@given(w=tied, p=tied, d=tied, h=tied, g=st.tuples(gammas, gammas, gammas, gammas))
+def test_top_gamma_fast_path_equals_the_binary_formulation(w, p, d, h, g):
+    budgets = dict(zip(("W", "P", "D", "H"), g))
+    bands = _small_bands(w, p, d, h)
+    fast = solve_problem(tiny_problem(_small_case(budgets, "top_gamma"), **bands))
+    exact = solve_problem(tiny_problem(_small_case(budgets, "binary"), **bands))
+    assert fast.status == exact.status == "optimal"
+    assert fast.objective_eur == pytest.approx(exact.objective_eur, rel=1e-7, abs=1e-4)
+    assert audit_result(exact) == [] and audit_result(fast) == []
+
+
+@FAST
+@given(w=series, p=series, d=series, h=series, g=st.tuples(gammas, gammas, gammas, gammas),
+       which=st.integers(0, 3), step=st.integers(1, 6))
+def test_profit_never_increases_when_a_budget_increases(w, p, d, h, g, which, step):
+    names = ("W", "P", "D", "H")
+    budgets = dict(zip(names, g))
+    bigger = {**budgets, names[which]: min(NT, budgets[names[which]] + step)}
+    bands = _small_bands(w, p, d, h)
+    base = solve_problem(tiny_problem(_small_case(budgets), **bands))
+    safer = solve_problem(tiny_problem(_small_case(bigger), **bands))
+    assert base.status == safer.status == "optimal"
+    assert safer.objective_eur <= base.objective_eur + 1e-6 * max(1.0, abs(base.objective_eur))
+
+
+@FAST
+@given(w=series, d=series, g=st.tuples(gammas, gammas))
+def test_planner_chosen_hours_are_never_worse_than_paper_mode(w, d, g):
+    # The planner-chosen variant lets the maximiser pick the Γ hours, so it is an
+    # optimistic relaxation of paper mode.
+    budgets = dict(zip(("W", "D"), g))
+    bands = _small_bands(w, np.zeros(NT), d, np.zeros(NT))
+    paper = solve_problem(tiny_problem(_small_case(budgets), **bands))
+    planner = solve_problem(tiny_problem(_small_case(budgets, mode="planner_chosen"), **bands))
+    assert paper.status == planner.status == "optimal"
+    assert planner.objective_eur >= paper.objective_eur - 1e-6 * max(1.0, abs(paper.objective_eur))
+
+
+def test_binary_encoding_puts_chi_on_the_largest_deviations():
+    dev = np.array([3, 9, 1, 7, 7, 2, 0, 5, 8, 6, 4, 2, 1, 3, 9, 0, 2, 2, 5, 6, 1, 0, 4, 3], float)
+    bands = _small_bands(dev, np.zeros(NT), np.zeros(NT), np.zeros(NT))
+    result = solve_problem(tiny_problem(_small_case({"W": 4}, "binary"), **bands))
+    assert result.status == "optimal"
+    chi = result.units.query("unit == 'W'")["chi"].to_numpy()
+    chosen = set(np.flatnonzero(chi) + 1)
+    # Deviations 9 (t=2, 15) and 8 (t=9), then one of the two tied 7s (t=4, 5).
+    assert chi.sum() == 4 and {2, 9, 15} <= chosen and len(chosen & {4, 5}) == 1

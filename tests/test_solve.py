@@ -1,0 +1,159 @@
+"""The paper case end to end: every plan is optimal, audited and consistent."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rvpp import solve, with_options
+from rvpp.audit import audit_result
+from rvpp.model.piecewise import curve_output
+from rvpp.problem import STRATEGY_BUDGETS_H
+
+STRATEGIES = tuple(STRATEGY_BUDGETS_H)
+
+
+def assert_good(result, periods=24):
+    assert result.status == "optimal", result.message
+    assert result.mip_gap is not None and result.mip_gap <= result.case.solver.rel_gap + 1e-9
+    assert result.problem.nt == periods and len(result.market) == periods
+    violations = audit_result(result)
+    assert violations == [], "\n".join(map(str, violations[:10]))
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_every_strategy_gives_an_audited_optimal_plan(paper_solve, strategy):
+    result = paper_solve(strategy=strategy)
+    assert_good(result)
+    expected = {name: g for name, g in result.problem.budgets.items()}
+    preset = STRATEGY_BUDGETS_H[strategy]
+    assert expected["price_da"] == preset["price"] and expected["WF1"] == preset["wind"]
+    assert expected["PV2"] == preset["pv"] and expected["CSP1"] == preset["csp"]
+    assert expected["TD_residential"] == preset["td"]
+
+
+def test_profit_falls_from_deterministic_to_pessimistic(paper_solve):
+    profits = [paper_solve(strategy=s).objective_eur for s in STRATEGIES]
+    assert all(a >= b - 1e-4 * abs(a) for a, b in zip(profits, profits[1:])), profits
+    assert profits[0] > profits[-1]
+
+
+def test_raising_one_budget_never_raises_profit(paper_solve):
+    base = paper_solve(strategy="balanced")
+    for source in ("WF1", "CSP1", "ED_service", "price_sr_up"):
+        safer = paper_solve(strategy="balanced", gammas={source: 12})
+        assert safer.status == "optimal"
+        assert safer.objective_eur <= base.objective_eur + 1e-4 * abs(base.objective_eur), source
+
+
+@pytest.mark.parametrize("markets", ["DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA"])
+def test_every_market_set_gives_an_audited_plan(paper_solve, markets):
+    result = paper_solve(strategy="deterministic", markets=markets)
+    assert_good(result)
+    if "SRM" not in markets:
+        assert np.allclose(result.market[["r_sr_up_mw", "r_sr_dn_mw"]], 0.0)
+    if "HPA" not in markets:
+        assert np.allclose(result.market["h_hpa_mw"], 0.0)
+
+
+def test_more_markets_never_cost_more(paper_solve):
+    cost = {m: paper_solve(strategy="deterministic", markets=m).cost_keur
+            for m in ("DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA")}
+    tolerance = 1e-3
+    assert cost["DAM,SRM,HPA"] <= min(cost["DAM,HPA"], cost["DAM,SRM"]) + tolerance
+    assert max(cost["DAM,HPA"], cost["DAM,SRM"]) <= cost["DAM"] + tolerance
+
+
+def test_the_rvpp_without_csp_is_solved_and_costs_more(paper_solve):
+    without = paper_solve(strategy="balanced", csp=False)
+    assert_good(without)
+    assert without.csp.empty and "csp" not in set(without.units["kind"])
+    assert without.cost_keur > paper_solve(strategy="balanced").cost_keur
+
+
+@pytest.mark.parametrize("day, periods", [("2025-03-30", 23), ("2025-10-26", 25)])
+def test_clock_change_days_solve(paper_solve, day, periods):
+    result = paper_solve(strategy="balanced", date=day)
+    assert_good(result, periods)
+    clocks = list(result.market["clock"])
+    if periods == 23:
+        assert "02:00" not in clocks
+    else:
+        assert sum(c.startswith("02:00") for c in clocks) == 2
+
+
+def test_quarter_hour_day_is_at_least_as_good_as_hourly(paper_solve):
+    quarter = paper_solve(strategy="balanced", dt_h=0.25)
+    assert_good(quarter, 96)
+    assert quarter.problem.budgets["price_da"] == 4 * STRATEGY_BUDGETS_H["balanced"]["price"]
+    hourly = paper_solve(strategy="balanced")
+    # Bands are hourly steps and budgets scale by 4, so the hourly plan repeated per
+    # quarter is feasible at 15 minutes: the finer plan can only be better.
+    assert quarter.objective_eur >= hourly.objective_eur - 2e-4 * abs(hourly.objective_eur)
+
+
+def test_power_block_output_follows_the_breakpoint_curve(paper_solve, paper_case):
+    result = paper_solve(strategy="deterministic")
+    pb = paper_case.csp[0].power_block
+    csp = result.csp
+    online = csp["online"] == 1
+    assert online.any(), "the CSP should run on the default day"
+    for scenario, shift in (("none", 0), ("up", 1), ("dn", -1)):
+        reserve = csp["ts_r_up_mw"] if shift > 0 else csp["ts_r_dn_mw"]
+        thermal = csp["p_pb_mw"] + shift * reserve
+        expected = np.asarray(curve_output(pb, thermal[online]))
+        assert np.allclose(csp.loc[online, f"e_{scenario}_mw"], expected, atol=1e-5)
+    assert (csp.loc[online, "p_pb_mw"] >= pb.p_in_min_mw_th - 1e-6).all()
+    assert np.allclose(csp.loc[~online, ["p_pb_mw", "e_none_mw"]], 0.0)
+
+
+def _runs(states):
+    runs, start = [], 0
+    for t in range(1, len(states) + 1):
+        if t == len(states) or states[t] != states[start]:
+            runs.append((states[start], start, t - start))
+            start = t
+    return runs
+
+
+@pytest.mark.parametrize("hours", [6, 9])
+def test_turbine_respects_minimum_up_and_down_times(paper_case, hours):
+    csp = paper_case.csp[0]
+    longer = csp.model_copy(update={"power_block": csp.power_block.model_copy(
+        update={"min_up_h": hours, "min_down_h": hours})})
+    result = solve(with_options(paper_case.replace(csp=[longer]), strategy="optimistic"))
+    assert_good(result)
+    states = result.csp["online"].tolist()
+    for state, start, length in _runs(states):
+        begins_today = start > 0 or state == 1  # the day starts offline with no carried-over time
+        ends_today = start + length < len(states)
+        if begins_today and ends_today:
+            assert length >= hours, (state, start, length)
+
+
+def test_fast_top_gamma_path_equals_the_binary_formulation_on_the_paper_case(paper_case):
+    case = with_options(paper_case, strategy="pessimistic", rel_gap=1e-7)
+    fast = solve(case)
+    exact = solve(with_options(case, budget_encoding="binary"))
+    assert fast.status == exact.status == "optimal"
+    assert fast.objective_eur == pytest.approx(exact.objective_eur, rel=2e-7)
+    assert audit_result(exact) == []
+    for name, source in exact.problem.sources.items():
+        if source.is_price or source.gamma == 0:
+            continue
+        table = exact.csp if source.unit_kind == "csp" else exact.units
+        rows = table[table["unit"] == name]
+        chi = rows["chi"].to_numpy(int)
+        dev = source.deviation
+        assert chi.sum() == source.gamma
+        if 0 < chi.sum() < len(chi):
+            assert dev[chi == 1].min() >= dev[chi == 0].max() - 1e-9, name
+
+
+def test_incremental_and_convex_combination_encodings_agree(paper_case):
+    case = with_options(paper_case, strategy="optimistic", rel_gap=1e-7)
+    incremental = solve(case)
+    convex = solve(with_options(case, pwl_encoding="convex_combination"))
+    assert incremental.status == convex.status == "optimal"
+    assert incremental.objective_eur == pytest.approx(convex.objective_eur, rel=2e-7)
+    assert audit_result(convex) == []
