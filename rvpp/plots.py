@@ -403,7 +403,7 @@ def _percent(q: float) -> str:
 
 
 def _legend() -> dict:
-    return dict(orientation="h", yanchor="bottom", y=1.02, xanchor="left", x=0, title_text="")
+    return dict(orientation="h", yanchor="bottom", y=1.02, xanchor="left", x=0, title_text="", traceorder="normal")
 
 
 def _style(fig: go.Figure, result: Result, title: str, y_title: str | None, height: int = FIGURE_HEIGHT,

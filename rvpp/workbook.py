@@ -86,7 +86,9 @@ def unit_table(case: Case, kind: str) -> pd.DataFrame:
         row.pop(BREAKPOINTS, None)
         row[SERIES_FIELDS[kind]] = unit.column
         rows.append(row)
-    return pd.DataFrame(rows, columns=unit_columns(kind))
+    table = pd.DataFrame(rows, columns=unit_columns(kind))
+    empty = [c for c in table.columns if c != "name" and table[c].isna().all()]
+    return table.astype({c: float for c in empty})
 
 
 def unit_columns(kind: str) -> list[str]:

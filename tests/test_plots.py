@@ -11,17 +11,15 @@ from rvpp import plots
 from rvpp.audit import price_exposures
 from rvpp.problem import top_gamma_deviation
 
-CASE = "data/cases/paper"
+
+@pytest.fixture(scope="module")
+def case(paper_case):
+    return paper_case
 
 
 @pytest.fixture(scope="module")
-def case():
-    return rvpp.load_case(CASE)
-
-
-@pytest.fixture(scope="module")
-def result(case):
-    solved = rvpp.solve(case)
+def result(paper_solve):
+    solved = paper_solve()
     assert solved.status == "optimal"
     return solved
 
@@ -97,8 +95,8 @@ def test_storage_figure_shows_energy_limits_and_margins(case, result):
     np.testing.assert_allclose(traces(fig, "Discharge (negative)").y, -rows["ts_discharge_mw"])
 
 
-def test_storage_figure_refuses_a_case_without_csp(case):
-    solved = rvpp.solve(rvpp.with_options(case, csp=False))
+def test_storage_figure_refuses_a_case_without_csp(paper_solve):
+    solved = paper_solve(csp=False)
     assert solved.status == "optimal"
     with pytest.raises(ValueError, match="no CSP"):
         plots.storage_figure(solved)
@@ -160,8 +158,8 @@ def test_quarter_hours_keep_hourly_ticks(case):
     assert list(axis.tickvals) == [label for label in problem.labels if label.endswith(":00")]
 
 
-def test_compare_overlays_every_plan(case, result):
-    other = rvpp.solve(rvpp.with_options(case, strategy="deterministic"))
+def test_compare_overlays_every_plan(paper_solve, result):
+    other = paper_solve(strategy="deterministic")
     fig = plots.compare_trades_figure({"balanced": result, "deterministic": other})
     for label, plan in (("balanced", result), ("deterministic", other)):
         lines = [t for t in fig.data if t.name == label]
@@ -179,8 +177,8 @@ def test_robustness_and_curve_figures_have_units(case):
     np.testing.assert_allclose(curve.data[0].y, [p * eta for p, eta in pb.breakpoints])
 
 
-def test_figures_refuse_results_without_a_plan(case):
-    infeasible = rvpp.solve(rvpp.with_options(case, csp=False, markets="DAM,SRM"))
+def test_figures_refuse_results_without_a_plan(paper_solve):
+    infeasible = paper_solve(csp=False, markets="DAM,SRM")
     assert infeasible.status == "infeasible"
     with pytest.raises(ValueError, match="no plan"):
         plots.trades_figure(infeasible)
