@@ -21,6 +21,8 @@ KIND_TITLES = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP plants", "ed
 KPI_COLUMNS = 5
 PERCENT = 100.0
 KILO = 1000.0
+UNIT_FORMATS = {"[EUR]": "%.0f", "[kEUR]": "%.1f", "[%]": "%.1f", "[s]": "%.2f", "[MWh]": "%.1f", "[h]": "%.2f",
+                "[MW]": "%.0f"}
 
 
 def eur(value: float | None) -> str:
@@ -40,16 +42,16 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
     parts = result.parts
     protection = sum(result.protection_eur.values()) if result.protection_eur else None
     money = {
-        "Profit [kEUR]": (result.objective_eur, "Objective: revenues minus costs minus the price protection."),
-        "Cost [kEUR]": (None if result.objective_eur is None else -result.objective_eur,
-                        "The paper's cost: −profit (paper Tables 10-12)."),
-        "DAM revenue [kEUR]": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
-        "Reserve revenue [kEUR]": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
-                                                                "upper-percentile prices."),
-        "HPA cost [kEUR]": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
-        "Operating cost [kEUR]": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
-        "Protection cost [kEUR]": (protection, "Worst-case loss from price deviations in the Γ worst periods of "
-                                               "each price (DAM, SR up, SR down)."),
+        "Profit": (result.objective_eur, "Objective: revenues minus costs minus the price protection."),
+        "Cost": (None if result.objective_eur is None else -result.objective_eur,
+                 "The paper's cost: −profit (paper Tables 10-12)."),
+        "DAM revenue": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
+        "Reserve revenue": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
+                                                         "upper-percentile prices."),
+        "HPA cost": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
+        "Operating cost": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
+        "Protection cost": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
+                                        "price (DAM, SR up, SR down)."),
     }
     shown = {label: (keur(None if v is None else v / KILO, unit=False), f"{text} Exact: {eur(v)}.")
              for label, (v, text) in money.items()}
@@ -62,6 +64,9 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
 
 
 def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
+    """KPI cards; money in kEUR with the exact amount in each card's help."""
+    st.caption("Money in kEUR (one decimal, as in the paper's tables); the ⓘ of each card gives the exact "
+               "amount in EUR.")
     values = kpis(result)
     names = list(only or values)
     for start in range(0, len(names), KPI_COLUMNS):
@@ -69,6 +74,16 @@ def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
         for column, name in zip(columns, names[start:start + KPI_COLUMNS]):
             value, help_text = values[name]
             column.metric(name, value, help=help_text, border=True)
+
+
+def number_formats(frame: pd.DataFrame) -> dict:
+    """Column settings that round each number column by the unit in its name."""
+    config = {}
+    for column in frame.columns:
+        unit = next((u for u in UNIT_FORMATS if str(column).endswith(u)), None)
+        if unit:
+            config[column] = st.column_config.NumberColumn(format=UNIT_FORMATS[unit])
+    return config
 
 
 def status_line(result: Result) -> None:

@@ -9,7 +9,6 @@ from rvpp.case import STRATEGIES
 from rvpp.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
 from rvpp.plots import compare_trades_figure
 
-MONEY = st.column_config.NumberColumn(format="%.0f")
 KEUR = st.column_config.NumberColumn(format="%.1f")
 
 
@@ -62,13 +61,14 @@ if cases and (clicked or ready):
         st.subheader(f"Trades per strategy ({shown})")
         st.plotly_chart(compare_trades_figure(by_strategy), key="compare_trades")
         st.subheader("Profit and its parts")
-        st.dataframe(kpi_table(by_strategy), column_config={"Cost [kEUR]": KEUR, "Profit [EUR]": MONEY})
+        st.caption("What being safer costs: the extra cost of each strategy over the deterministic plan.")
+        kpis = kpi_table(by_strategy, baseline="deterministic" if "deterministic" in by_strategy else None)
+        st.dataframe(kpis, column_config=widgets.number_formats(kpis))
         st.subheader("Flexibility per strategy")
         st.caption("Paper Table 9 layout: reserve energy over the day and the same divided by installed "
                    "capacity [h].")
-        st.dataframe(flexibility_table(by_strategy), column_config={
-            c: st.column_config.NumberColumn(format="%.2f") for c in
-            ("Upward reserve to capacity [h]", "Downward reserve to capacity [h]")})
+        flexibility = flexibility_table(by_strategy)
+        st.dataframe(flexibility, column_config=widgets.number_formats(flexibility))
         st.button("Save these plans to the session", key="compare_save", on_click=save_all,
                   args=(by_strategy, shown))
 
@@ -77,7 +77,8 @@ runs = state.saved_runs()
 if not runs:
     st.caption("Runs saved on Results (or with the button above) appear here side by side.")
 else:
-    st.dataframe(kpi_table(runs), column_config={"Cost [kEUR]": KEUR, "Profit [EUR]": MONEY})
+    saved = kpi_table(runs)
+    st.dataframe(saved, column_config=widgets.number_formats(saved))
     chosen = st.multiselect("Overlay the trades of", list(runs), default=list(runs)[-4:], key="compare_saved")
     with_plan = {label: runs[label] for label in chosen if runs[label].has_plan}
     if with_plan:

@@ -8,7 +8,7 @@ from rvpp.bundle import read_case_files
 from rvpp.plots import trades_figure
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
-HEADLINE = ("Profit [kEUR]", "Cost [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection cost [kEUR]")
+HEADLINE = ("Profit", "Cost", "DAM revenue", "Reserve revenue", "Protection cost")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
     ("pages/markets.py", "Markets & tariffs", "DAM and reserve price bands, market switches, the HPA tariff"),
@@ -50,7 +50,7 @@ st.markdown(
 )
 
 case = state.case()
-left, right = st.columns([5, 4], gap="large")
+left, right = st.columns([3, 2], gap="large")
 with left:
     st.subheader("The case")
     st.markdown(f"**{case.name}** · loaded from `{state.source()}`")
@@ -59,30 +59,30 @@ with left:
     st.markdown(f":material/calendar_today: **{case.delivery_date:%A %d %B %Y}** · strategy "
                 f"**{case.budgets.strategy}** · markets **{case.markets.label}** · {case.dt_h * 60:g}-minute periods")
     widgets.case_summary(case)
-
 with right:
-    st.subheader("What should I bid tomorrow?")
-    balanced = rvpp.with_options(state.run_case(), strategy="balanced")
-    clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
-    if clicked or state.is_solved(balanced):
-        result = solving.solve(balanced, "Solving the balanced strategy")
-        if result is not None:
-            state.mark_solved(balanced)
-            widgets.status_line(result)
-            if result.has_plan:
-                widgets.kpi_cards(result, only=HEADLINE)
-                st.caption("The protection cost is what the balanced strategy sets aside against adverse prices. "
-                           "Compare strategies to see what being safer costs.")
-                st.plotly_chart(trades_figure(result), key="home_trades")
-    else:
-        st.caption("One click solves the current case with the balanced budgets of the paper (Table 7).")
+    st.subheader("Explore")
+    for page, title, description in LINKS:
+        st.page_link(page, label=f"**{title}** — {description}", icon=":material/arrow_forward:")
 
-st.subheader("Explore")
-columns = st.columns(3)
-for i, (page, title, description) in enumerate(LINKS):
-    with columns[i % 3]:
-        st.page_link(page, label=title, icon=":material/arrow_forward:")
-        st.caption(description)
+st.subheader("What should I bid tomorrow?")
+balanced = rvpp.with_options(state.run_case(), strategy="balanced")
+clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
+if clicked or state.is_solved(balanced):
+    result = solving.solve(balanced, "Solving the balanced strategy")
+    if result is not None:
+        state.mark_solved(balanced)
+        widgets.status_line(result)
+        if result.has_plan:
+            widgets.kpi_cards(result, only=HEADLINE)
+            st.plotly_chart(trades_figure(result), key="home_trades")
+            st.markdown("The protection cost is what the balanced strategy sets aside against adverse prices. "
+                        "**What does it cost to be safer?**")
+            st.page_link("pages/compare.py", label="Compare the four strategies side by side",
+                         icon=":material/compare_arrows:")
+            st.page_link("pages/results.py", label="Every chart and download of the current case",
+                         icon=":material/insights:")
+else:
+    st.caption("One click solves the current case with the balanced budgets of the paper's Table 7.")
 
 st.subheader("Load another case")
 shipped, folder_tab, upload_tab, download_tab = st.tabs(["Shipped cases", "Folder", "Upload", "Download"])

@@ -8,11 +8,13 @@ import rvpp
 from dashboard import solving, state, widgets
 from rvpp import CaseError
 from rvpp.audit import price_exposures, protection_exact
-from rvpp.plots import SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure
+from rvpp.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
+                        thin_clock_ticks)
 from rvpp.problem import top_gamma_deviation
 
 CURVE_POINTS = 9  # budgets 0, NT/8, ..., NT on the price-of-robustness curve
 KEUR = 1000.0
+NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 
 st.title("Robust bidding explained")
 st.markdown(
@@ -60,8 +62,8 @@ st.markdown(
     "Prices enter the profit, not the constraints. For a fixed plan, each period has a possible loss: the "
     "energy sold times how far the price may fall (or bought times how far it may rise), and each reserve "
     "band times how far its price may fall. With budget Γ the adversary takes the **Γ periods of largest "
-    "loss**; their sum is the protection charged in the objective. The model finds it exactly with the dual "
-    "variables φ and ζ (MODEL_SPEC §4) while choosing the plan.")
+    "loss**; their sum is the protection charged in the objective. The model finds it exactly, through the "
+    "dual variables φ and ζ of Bertsimas and Sim's reformulation, while it chooses the plan.")
 plan = solving.solve(run, "Solving the current case for the examples")
 if plan is None or not plan.has_plan:
     st.warning("The current case has no plan, so the price examples are not available.")
@@ -109,6 +111,7 @@ if all(state.is_solved(c) for c in variants.values()) or st.button(
         for column, (label, result) in zip(st.columns(2), (("paper mode", paper), ("planner-chosen", chosen))):
             figure = bands_figure(result.problem, source, deviating_periods(result, source))
             figure.update_layout(title_text=f"{source}, {label}")
+            thin_clock_ticks(figure, NARROW_TICK_HOURS)
             column.plotly_chart(figure, key=f"learn_mode_{label}")
 
 st.header("4 · The price of robustness")

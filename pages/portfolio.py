@@ -4,10 +4,11 @@ import streamlit as st
 
 from dashboard import fields, solving, state, widgets
 from rvpp import workbook
-from rvpp.plots import bands_figure, curve_figure
+from rvpp.plots import bands_figure, curve_figure, thin_clock_ticks
 
 KINDS = ("wind", "pv", "csp", "ed", "td")
 BAND_COLUMNS = 2
+NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 
 
 def set_csp(on_key: str) -> None:
@@ -74,4 +75,5 @@ if problem is not None:
             columns = st.columns(BAND_COLUMNS)
             for i, unit in enumerate(getattr(run, kind)):
                 with columns[i % BAND_COLUMNS]:
-                    st.plotly_chart(bands_figure(problem, unit.name), key=f"portfolio_band_{unit.name}")
+                    figure = thin_clock_ticks(bands_figure(problem, unit.name), NARROW_TICK_HOURS)
+                    st.plotly_chart(figure, key=f"portfolio_band_{unit.name}")

@@ -54,7 +54,7 @@ st.plotly_chart(dispatch_figure(result), key="results_dispatch")
 if result.case.csp:
     st.subheader("Thermal storage")
     st.caption("The margins above the minimum and below the maximum (σ) are kept free so the CSP can deliver "
-               "the up and down reserve it offers (MODEL_SPEC §8, TS9-TS11).")
+               "the up and down reserve it offers (paper constraints TS9-TS11).")
     for csp in result.case.csp:
         st.plotly_chart(storage_figure(result, csp.name), key=f"results_storage_{csp.name}")
 st.subheader("Reserve by unit kind")

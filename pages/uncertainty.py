@@ -11,7 +11,7 @@ from rvpp import Case, CaseError
 from rvpp.case import STRATEGIES
 from rvpp.history import PRICE_COLUMNS
 from rvpp.periods import delivery_periods
-from rvpp.plots import bands_figure, deviating_periods
+from rvpp.plots import bands_figure, deviating_periods, thin_clock_ticks
 from rvpp.problem import STRATEGY_BUDGETS_H, strategy_budgets
 
 BUDGETS_KEY = "uncertainty_budgets"
@@ -19,6 +19,8 @@ WINDOW_DAYS = (7, 90)
 Q_LO, Q_HI = (0.05, 0.45), (0.55, 0.95)
 Q_STEP = 0.05
 BAND_COLUMNS = 2
+NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
+TABLE_ROW_PX, TABLE_BORDER_PX = 35, 3  # st.data_editor row height and frame
 PRICE_LABELS = {"price_da": "DAM price", "price_sr_up": "SR up price", "price_sr_dn": "SR down price"}
 GROUPS = {"Prices": ("price",), "Wind": ("wind",), "PV": ("pv",), "CSP": ("csp",), "Demands": ("ed", "td")}
 MODES = {"paper": "Paper: each source deviates in its Γ largest-deviation periods",
@@ -120,7 +122,7 @@ with left:
                                                    help="Edit to override the preset; empty: the preset"),
             "hours": st.column_config.NumberColumn("Γ [h]", disabled=True, format="%.2f"),
         },
-        hide_index=True, height=min(560, 38 * (len(case.sources()) + 1)),
+        hide_index=True, height=TABLE_ROW_PX * (len(case.sources()) + 1) + TABLE_BORDER_PX,
     )
 with right:
     st.radio("Budget variant", list(MODES), format_func=MODES.get, index=list(MODES).index(case.budgets.mode),
@@ -156,4 +158,5 @@ if problem is not None:
             for i, source in enumerate(members):
                 chi = deviating_periods(result, source) if result is not None and result.has_plan else None
                 with columns[i % BAND_COLUMNS]:
-                    st.plotly_chart(bands_figure(problem, source, chi), key=f"uncertainty_band_{source}")
+                    figure = thin_clock_ticks(bands_figure(problem, source, chi), NARROW_TICK_HOURS)
+                    st.plotly_chart(figure, key=f"uncertainty_band_{source}")

@@ -17,6 +17,7 @@ from .results import Result
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # the columns of the paper's Table 10
 KIND_NAMES = {"wind": "WFs", "pv": "PVs", "csp": "CSP", "ed": "EDs"}  # the rows of the paper's Table 9
+PERCENT = 100.0
 
 
 def strategy_case(case: Case, strategy: str, markets: str | None = None) -> Case:
@@ -61,8 +62,12 @@ def flexibility_table(results: Mapping[str, Result]) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True).set_index(["Strategy", "Unit"])
 
 
-def kpi_table(results: Mapping[str, Result]) -> pd.DataFrame:
-    """One row per labelled plan: status, profit and its parts [EUR], cost [kEUR], solve time [s]."""
+def kpi_table(results: Mapping[str, Result], baseline: str | None = None) -> pd.DataFrame:
+    """One row per labelled plan: status, profit and its parts [EUR], cost [kEUR], solve time [s].
+
+    With ``baseline`` (a label of ``results`` with a plan), two more columns give each
+    plan's extra cost over the baseline's [kEUR] and [%]: what being safer costs.
+    """
     rows = []
     for label, result in results.items():
         parts = result.parts
@@ -78,4 +83,10 @@ def kpi_table(results: Mapping[str, Result]) -> pd.DataFrame:
             "Protection [EUR]": sum(result.protection_eur.values()) if result.protection_eur else None,
             "Solve time [s]": result.build_s + result.solve_s + result.extract_s,
         })
-    return pd.DataFrame(rows).set_index("Run")
+    table = pd.DataFrame(rows).set_index("Run")
+    if baseline is not None and results[baseline].has_plan:
+        base = results[baseline].cost_keur
+        extra = table["Cost [kEUR]"].astype(float) - base
+        table.insert(3, f"Extra cost vs {baseline} [kEUR]", extra)
+        table.insert(4, f"Extra cost vs {baseline} [%]", PERCENT * extra / abs(base) if base else float("nan"))
+    return table

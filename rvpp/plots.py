@@ -186,8 +186,9 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
     ``chi`` (one value per period) marks the periods where the source deviates: the
     marker sits on the adverse bound (lower for production and prices, upper for
     consumption). For the DAM price, ``chi = -1`` marks a period whose adverse price is
-    the upper one (the plan buys there). The bounds are those the model uses (clipped to
-    the nameplate for production).
+    the upper one (the plan buys there). For units, ``chi`` also draws the bound the plan
+    must respect: the nominal value, moved to the adverse bound where ``chi = 1``. The
+    bounds are those the model uses (clipped to the nameplate for production).
     """
     if source not in problem.sources:
         raise ValueError(f"unknown source {source!r}; sources are {', '.join(problem.sources)}")
@@ -213,7 +214,11 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
         marked = np.flatnonzero(chi != 0)
         for t in marked:
             fig.add_vrect(x0=t - 0.5, x1=t + 0.5, fillcolor=CHI_SHADE, line_width=0, layer="below")
-        fig.add_scatter(x=[x[t] for t in marked], y=adverse[marked], name=f"Deviates here (χ = 1, {len(marked)})",
+        if not src.is_price:
+            bound = np.where(chi != 0, adverse, src.nominal)
+            fig.add_scatter(x=x, y=bound, name="Bound the plan respects", mode="lines",
+                            line=dict(color=VERMILION, width=2, shape="hvh"), hovertemplate=f"%{{y:.2f}} {unit}")
+        fig.add_scatter(x=[x[t] for t in marked], y=adverse[marked], name=f"Deviates (χ = 1) in {len(marked)} periods",
                         mode="markers", marker=dict(color=VERMILION, size=11, symbol="x"),
                         hovertemplate=f"deviates to %{{y:.2f}} {unit}")
     title = SOURCE_TITLES[source] if src.is_price else f"{source} ({KIND_LABELS[src.unit_kind].lower()})"
@@ -333,6 +338,16 @@ def tariff_figure(problem: Problem) -> go.Figure:
     fig.add_scatter(x=problem.labels, y=problem.tariff_hpa, name="HPA tariff", mode="lines+markers",
                     line=dict(color=GREEN, width=3, shape="hvh"), hovertemplate="%{y:.1f} EUR/MWh_th")
     _style_axes(fig, problem.labels, problem.dt_h, "Heat purchase agreement tariff", "Tariff [EUR/MWh_th]")
+    return fig
+
+
+def thin_clock_ticks(fig: go.Figure, hours: int) -> go.Figure:
+    """Label only every ``hours``-th clock hour of ``fig``'s time axes (for narrow figures)."""
+    for name in fig.layout.to_plotly_json():
+        axis = fig.layout[name]
+        if name.startswith("xaxis") and axis.type == "category":
+            hourly = [label for label in axis.categoryarray if label[3:5] == "00"]
+            axis.update(tickvals=hourly[::hours], ticktext=hourly[::hours])
     return fig
 
 

@@ -42,3 +42,13 @@ def test_flexibility_and_kpi_tables(paper_solve):
     kpis = kpi_table(results)
     assert kpis.loc["deterministic", "Profit [EUR]"] == results["deterministic"].objective_eur
     assert kpis.loc["balanced", "Protection [EUR]"] == pytest.approx(sum(results["balanced"].protection_eur.values()))
+
+
+def test_kpi_table_prices_safety_against_a_baseline(paper_solve):
+    results = {"deterministic": paper_solve(strategy="deterministic"), "pessimistic": paper_solve(strategy="pessimistic")}
+    table = kpi_table(results, baseline="deterministic")
+    base = results["deterministic"].cost_keur
+    extra = results["pessimistic"].cost_keur - base
+    assert table.loc["pessimistic", "Extra cost vs deterministic [kEUR]"] == pytest.approx(extra)
+    assert table.loc["pessimistic", "Extra cost vs deterministic [%]"] == pytest.approx(100 * extra / abs(base))
+    assert table.loc["deterministic", "Extra cost vs deterministic [kEUR]"] == 0

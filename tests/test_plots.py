@@ -128,9 +128,11 @@ def test_bands_figure_marks_the_largest_deviations(result):
     hi = np.asarray(traces(fig, "Upper percentile (80th)").y)
     mid = np.asarray(traces(fig, "Median").y)
     assert (lo <= mid + 1e-9).all() and (mid <= hi + 1e-9).all()
-    marks = traces(fig, f"Deviates here (χ = 1, {source.gamma})")
+    marks = traces(fig, f"Deviates (χ = 1) in {source.gamma} periods")
     np.testing.assert_allclose(marks.y, lo[chi > 0])
     assert len(fig.layout.shapes) == source.gamma
+    rows = result.units.query("unit == 'PV1'").sort_values("t")
+    np.testing.assert_allclose(traces(fig, "Bound the plan respects").y, rows["bound_mw"], atol=1e-6)
 
 
 def test_price_chi_carries_the_protection_the_model_charged(result):
@@ -155,7 +157,9 @@ def test_quarter_hours_keep_hourly_ticks(case):
     fig = plots.bands_figure(problem, "price_da")
     axis = fig.layout.xaxis
     assert len(axis.categoryarray) == 96
-    assert list(axis.tickvals) == [label for label in problem.labels if label.endswith(":00")]
+    hourly = [label for label in problem.labels if label.endswith(":00")]
+    assert list(axis.tickvals) == hourly
+    assert list(plots.thin_clock_ticks(fig, 3).layout.xaxis.tickvals) == hourly[::3]
 
 
 def test_compare_overlays_every_plan(paper_solve, result):
