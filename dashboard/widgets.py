@@ -65,8 +65,8 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
 
 def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
     """KPI cards; money in kEUR with the exact amount in each card's help."""
-    st.caption("Money in kEUR (one decimal, as in the paper's tables); the ⓘ of each card gives the exact "
-               "amount in EUR.")
+    st.caption("Money in kEUR (one decimal, as in the paper's tables); hover the question mark of a card for "
+               "the exact amount in EUR.")
     values = kpis(result)
     names = list(only or values)
     for start in range(0, len(names), KPI_COLUMNS):
