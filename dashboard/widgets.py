@@ -143,10 +143,10 @@ def case_summary(case: Case) -> None:
         if not units:
             continue
         if kind == "td":
-            capacity = f"{sum(u.h_max_mw_th for u in units):,.0f} MW_th peak"
+            capacity = f"{sum(u.h_max_mw_th for u in units):,.0f} MW_th"
         elif kind == "csp":
-            capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW turbine, " \
-                       f"{sum(u.storage.e_max_mwh_th for u in units):,.0f} MWh_th storage"
+            storage = sum(u.storage.e_max_mwh_th for u in units)
+            capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW, TS {storage:,.0f} MWh_th"
         else:
             capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW"
         off = kind == "csp" and not state.csp_on()

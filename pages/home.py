@@ -50,7 +50,7 @@ st.markdown(
 )
 
 case = state.case()
-left, right = st.columns([3, 2], gap="large")
+left, right = st.columns([2, 1], gap="large")
 with left:
     st.subheader("The case")
     st.markdown(f"**{case.name}** · loaded from `{state.source()}`")
@@ -62,7 +62,8 @@ with left:
 with right:
     st.subheader("Explore")
     for page, title, description in LINKS:
-        st.page_link(page, label=f"**{title}** — {description}", icon=":material/arrow_forward:")
+        st.page_link(page, label=title, icon=":material/arrow_forward:")
+        st.caption(description)
 
 st.subheader("What should I bid tomorrow?")
 balanced = rvpp.with_options(state.run_case(), strategy="balanced")

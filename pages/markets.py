@@ -48,7 +48,8 @@ c1.toggle("Day-ahead market (DAM)", value=True, disabled=True, key="markets_dam"
 c2.toggle("Secondary reserve (SRM)", value=markets.srm, key="markets_srm", on_change=from_widget,
           args=("srm", "markets_srm", "markets"), help="Off: no up or down reserve band is offered.")
 c3.toggle("Heat purchase (HPA)", value=markets.hpa, key="markets_hpa", on_change=from_widget,
-          args=("hpa", "markets_hpa", "markets"), help="Heat purchase agreement. Off: thermal demands are served by the CSP alone.")
+          args=("hpa", "markets_hpa", "markets"),
+          help="Heat purchase agreement. Off: thermal demands are served by the CSP alone.")
 minutes = {v: k for k, v in PERIOD_MINUTES.items()}[case.dt_h]
 c4.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=minutes, key="markets_dt",
                      required=True, on_change=from_widget, args=("dt_h", "markets_dt", None, PERIOD_MINUTES.get),

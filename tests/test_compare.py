@@ -45,7 +45,7 @@ def test_flexibility_and_kpi_tables(paper_solve):
 
 
 def test_kpi_table_prices_safety_against_a_baseline(paper_solve):
-    results = {"deterministic": paper_solve(strategy="deterministic"), "pessimistic": paper_solve(strategy="pessimistic")}
+    results = {s: paper_solve(strategy=s) for s in ("deterministic", "pessimistic")}
     table = kpi_table(results, baseline="deterministic")
     base = results["deterministic"].cost_keur
     extra = results["pessimistic"].cost_keur - base
