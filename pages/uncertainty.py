@@ -77,20 +77,28 @@ nt = period_count(case)
 
 st.subheader("Delivery day and forecast bands")
 days = case.history.local_days(case.timezone)
-window = case.uncertainty.window_days
+if not days:
+    widgets.problems([f"{case.history.source}: the history does not cover one whole day"], "No delivery day",
+                     note="Load a case with a longer history.")
+    st.stop()
+window, q = case.uncertainty.window_days, case.uncertainty
 c1, c2, c3, c4 = st.columns(4)
 earliest = days[0] + dt.timedelta(days=window)
-c1.date_input("Delivery day", value=case.delivery_date, min_value=earliest, max_value=days[-1],
+c1.date_input("Delivery day", value=case.delivery_date, min_value=min(earliest, case.delivery_date),
+              max_value=max(days[-1], case.delivery_date),
               key="uncertainty_date", on_change=from_widget, args=(None, "delivery_date", "uncertainty_date"),
               help=f"Any day from {earliest:%d %b %Y} (the history must cover the {window}-day window before "
                    f"it) to {days[-1]:%d %b %Y}.")
-c2.slider("History window [days]", *WINDOW_DAYS, value=window, key="uncertainty_window",
+c2.slider("History window [days]", min(WINDOW_DAYS[0], window), max(WINDOW_DAYS[1], window), value=window,
+          key="uncertainty_window",
           on_change=from_widget, args=("uncertainty", "window_days", "uncertainty_window"),
           help="Days before the delivery day whose observations give the bands (paper: 30).")
-c3.slider("Lower percentile", *Q_LO, value=case.uncertainty.q_lo, step=Q_STEP, key="uncertainty_q_lo",
+c3.slider("Lower percentile", min(Q_LO[0], q.q_lo), max(Q_LO[1], q.q_lo), value=q.q_lo, step=Q_STEP,
+          key="uncertainty_q_lo",
           on_change=from_widget, args=("uncertainty", "q_lo", "uncertainty_q_lo"),
           help="Bad bound of production and prices, nominal of consumption (paper: 0.2).")
-c4.slider("Upper percentile", *Q_HI, value=case.uncertainty.q_hi, step=Q_STEP, key="uncertainty_q_hi",
+c4.slider("Upper percentile", min(Q_HI[0], q.q_hi), max(Q_HI[1], q.q_hi), value=q.q_hi, step=Q_STEP,
+          key="uncertainty_q_hi",
           on_change=from_widget, args=("uncertainty", "q_hi", "uncertainty_q_hi"),
           help="Nominal of production, bad bound of consumption (paper: 0.8).")
 if st.session_state.get("uncertainty_problems"):
