@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import importlib
 import multiprocessing
+import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -25,13 +26,14 @@ import streamlit as st
 from streamlit.runtime.scriptrunner import add_script_run_ctx, get_script_run_ctx
 
 import rvpp
-from rvpp import Case, CaseError, Problem, Result
+from rvpp import Case, CaseError, ModelError, Problem, Result, RvppError
 
 from . import widgets
 from .state import case_key
 
-WORKERS = 2            # solver processes shared by all sessions (the host has 2 cores)
-CACHE_ENTRIES = 256    # solved cases kept in memory (about 1.3 MB each)
+MAX_WORKERS = 2        # solver processes shared by all sessions; more would compete for a small server's cores
+WORKERS = max(1, min(MAX_WORKERS, os.cpu_count() or 1))
+CACHE_ENTRIES = 64     # solved cases kept in memory (about 1.3 MB each)
 POLL_S = 0.1           # how often a waiting page refreshes its progress [s]
 
 
@@ -51,7 +53,8 @@ def solve_cached(case: Case) -> Result:
         return worker_pool().submit(rvpp.solve, case).result()
     except BrokenProcessPool:
         worker_pool.clear()
-        raise
+        raise ModelError("the solver process stopped unexpectedly (out of memory?); solve again to restart it") \
+            from None
 
 
 def solve(case: Case, label: str) -> Result | None:
@@ -68,9 +71,9 @@ def solve(case: Case, label: str) -> Result | None:
             wait([future], timeout=POLL_S)
         try:
             result = future.result()
-        except CaseError as err:
+        except RvppError as err:
             status.update(label=f"{label}: the case cannot be solved", state="error")
-            widgets.problems(err.problems, "Cannot solve")
+            widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
             return None
         state = "complete" if result.has_plan else "error"
         status.update(label=f"{label}: {result.status} in {time.perf_counter() - started:.1f} s", state=state)
@@ -81,7 +84,7 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result]:
     """Solve several cases side by side in the worker processes, with a progress bar.
 
     Each case is cached on its own, so a plan solved here is instant on the Results
-    page and the other way round. Raises :class:`~rvpp.errors.CaseError` if a case
+    page and the other way round. Raises :class:`~rvpp.errors.RvppError` if a case
     cannot be solved at all.
     """
     started = time.perf_counter()

@@ -9,7 +9,7 @@ from typing import Any
 import pandas as pd
 import streamlit as st
 
-from rvpp import Case, CaseError, Result
+from rvpp import Case, CaseError, Result, RvppError
 from rvpp.bundle import case_zip_bytes
 from rvpp.export import plan_workbook_bytes
 from rvpp.workbook import case_workbook_bytes
@@ -102,6 +102,11 @@ def problems(messages: list[str], title: str = "Edit refused", note: str = "The 
     """Show the case model's messages, one per line, where the edit was made."""
     lines = "\n".join(f"- {m}" for m in messages)
     st.error(f"**{title}.** {note}\n\n{lines}", icon=":material/block:")
+
+
+def refusal(err: RvppError, title: str, note: str) -> None:
+    """Show why the library refused: the case model's problems, or the error's message."""
+    problems(err.problems if isinstance(err, CaseError) else [str(err)], title, note)
 
 
 def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[pd.DataFrame], Case],

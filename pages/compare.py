@@ -4,7 +4,7 @@ tables, and the runs saved in this session side by side."""
 import streamlit as st
 
 from dashboard import solving, state, widgets
-from rvpp import CaseError
+from rvpp import RvppError
 from rvpp.case import STRATEGIES
 from rvpp.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
 from rvpp.plots import compare_trades_figure
@@ -37,8 +37,8 @@ clicked = st.button(f"Solve {len(cases)} plans", type="primary", key="compare_so
 if cases and (clicked or ready):
     try:
         solved = solving.solve_all(list(cases.values()), "Solving the strategies")
-    except CaseError as err:
-        widgets.problems(err.problems, "Cannot solve", note="Fix the case on the other pages.")
+    except RvppError as err:
+        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
         st.stop()
     results = dict(zip(cases, solved))
     for case in cases.values():

@@ -6,7 +6,7 @@ import streamlit as st
 
 import rvpp
 from dashboard import solving, state, widgets
-from rvpp import CaseError
+from rvpp import RvppError
 from rvpp.audit import price_exposures, protection_exact
 from rvpp.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
                         thin_clock_ticks)
@@ -98,7 +98,11 @@ st.markdown(
 variants = {mode: run.replace(budgets={"mode": mode}) for mode in ("paper", "planner_chosen")}
 if all(state.is_solved(c) for c in variants.values()) or st.button(
         "Solve both variants", key="learn_modes", icon=":material/play_arrow:"):
-    paper, chosen = solving.solve_all(list(variants.values()), "Solving both variants")
+    try:
+        paper, chosen = solving.solve_all(list(variants.values()), "Solving both variants")
+    except RvppError as err:
+        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
+        st.stop()
     for case in variants.values():
         state.mark_solved(case)
     if paper.has_plan and chosen.has_plan:
@@ -125,8 +129,8 @@ if all(state.is_solved(c) for c in sweep) or st.button(f"Compute the curve ({len
                                                         key="learn_curve", icon=":material/play_arrow:"):
     try:
         results = solving.solve_all(sweep, "Solving the budgets")
-    except CaseError as err:
-        widgets.problems(err.problems, "Cannot solve", note="")
+    except RvppError as err:
+        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
         st.stop()
     for case in sweep:
         state.mark_solved(case)
