@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_CASE = ROOT / "data" / "cases" / "paper"
 CASES_DIR = ROOT / "data" / "cases"
 MAX_SAVED_RUNS = 12
+MAX_CACHED_FOLDERS = 16
 
 CASE = "case"              # the current, valid case (every edit goes through the case model)
 ORIGIN = "case_origin"     # the case as loaded: what "reset" and the tariff preset go back to
@@ -30,9 +31,16 @@ SOLVED = "solved"          # keys of the run cases this session has solved
 SAVED_RUNS = "saved_runs"  # label -> Result, kept for side-by-side comparison
 
 
-@st.cache_resource(show_spinner=False)
-def _load(folder: str) -> Case:
+@st.cache_resource(show_spinner=False, max_entries=MAX_CACHED_FOLDERS)
+def _load_cached(folder: str, stamp: tuple) -> Case:
     return rvpp.load_case(folder)
+
+
+def _load(folder: str) -> Case:
+    """Parse a case folder once per version of its files; sessions share the immutable case."""
+    path = Path(folder)
+    stamp = tuple(sorted((p.name, p.stat().st_mtime_ns) for p in path.iterdir())) if path.is_dir() else ()
+    return _load_cached(folder, stamp)
 
 
 def init() -> None:
@@ -54,7 +62,7 @@ def load(case: Case, source: str) -> None:
 
 
 def load_folder(folder: str | Path) -> Case:
-    """Load a case folder (cached: every session shares the parsed, immutable case)."""
+    """Load a case folder and make it the current case."""
     case = _load(str(Path(folder).resolve()))
     load(case, source=str(folder))
     return case

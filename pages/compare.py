@@ -12,10 +12,6 @@ from rvpp.plots import compare_trades_figure
 KEUR = st.column_config.NumberColumn(format="%.1f")
 
 
-def drop(label: str) -> None:
-    state.drop_run(label)
-
-
 def save_all(results: dict, market_set: str) -> None:
     for strategy, result in results.items():
         state.save_run(f"{strategy} · {market_set}", result)
@@ -51,12 +47,9 @@ if cases and (clicked or ready):
     st.caption("Cost = −profit, as in the paper's Tables 10 and 11; lower is better.")
     st.dataframe(cost_table(results), column_config={m: KEUR for m in market_sets})
 
-    shown = market_sets[0]
+    shown = market_sets[0] if len(market_sets) == 1 else st.segmented_control(
+        "Market set shown below", market_sets, default=market_sets[0], required=True, key="compare_shown")
     by_strategy = {s: results[(s, shown)] for s in STRATEGIES if results[(s, shown)].has_plan}
-    if len(market_sets) > 1:
-        shown = st.segmented_control("Market set shown below", market_sets, default=shown, required=True,
-                                     key="compare_shown")
-        by_strategy = {s: results[(s, shown)] for s in STRATEGIES if results[(s, shown)].has_plan}
     if by_strategy:
         st.subheader(f"Trades per strategy ({shown})")
         st.plotly_chart(compare_trades_figure(by_strategy), key="compare_trades")
@@ -84,4 +77,4 @@ else:
     if with_plan:
         st.plotly_chart(compare_trades_figure(with_plan), key="compare_saved_trades")
     remove = st.selectbox("Remove a saved run", list(runs), index=None, key="compare_remove")
-    st.button("Remove", key="compare_remove_button", on_click=drop, args=(remove,), disabled=remove is None)
+    st.button("Remove", key="compare_remove_button", on_click=state.drop_run, args=(remove,), disabled=remove is None)

@@ -141,6 +141,20 @@ def test_home_upload_of_a_broken_case_is_explained_and_a_good_one_loads(paper_ca
     assert case_of(at).name == "uploaded" and case_of(at).replace(name="paper") == paper_case
 
 
+def test_home_loads_a_case_folder(tmp_path, paper_case):
+    at = open_app()
+    at.text_input(key="home_folder").input(str(tmp_path / "missing")).run()
+    click(at, "home_load_folder")
+    assert "no case.yaml found" in errors(at)
+    assert case_of(at) == paper_case
+    mine = rvpp.with_options(paper_case, strategy="pessimistic")
+    rvpp.save_case(mine, tmp_path / "mine")
+    at.text_input(key="home_folder").input(str(tmp_path / "mine")).run()
+    click(at, "home_load_folder")
+    assert not errors(at)
+    assert case_of(at) == mine
+
+
 # ----------------------------------------------------------------------------- Portfolio
 
 
