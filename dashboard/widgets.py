@@ -157,7 +157,7 @@ def case_summary(case: Case) -> None:
         off = kind == "csp" and not state.csp_on()
         rows.append({"Kind": title + (" (switched off)" if off else ""), "Units": len(units),
                      "Names": ", ".join(u.name for u in units), "Installed": capacity})
-    st.dataframe(rows, hide_index=True, width="stretch")
+    st.table(pd.DataFrame(rows).set_index("Kind"))
 
 
 def run_label(case: Case) -> str:

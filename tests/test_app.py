@@ -107,7 +107,7 @@ def test_home_lands_on_the_default_case(paper_case):
     at = open_app()
     assert at.title[0].value.startswith("Robust day-ahead bids")
     assert case_of(at) == paper_case
-    summary = at.dataframe[0].value
+    summary = at.table[0].value
     assert list(summary["Units"]) == [2, 3, 1, 3, 2]
     assert {link.proto.page for link in at.get("page_link")} >= {"portfolio", "results", "compare", "learn"}
 
