@@ -4,8 +4,8 @@ Every builder is a pure function of a :class:`~rvpp.results.Result` or a
 :class:`~rvpp.problem.Problem` and returns a :class:`plotly.graph_objects.Figure`:
 the x axis shows the clock time of each period's start on the delivery day (local
 time), every axis title carries its unit, every trace has a legend entry and a hover
-value. Backgrounds are transparent and the palette (Okabe & Ito's colour-blind safe
-set) reads on light and dark themes alike, so the same figure serves the dashboard
+value. Backgrounds are transparent and the palette (after Okabe & Ito's colour-blind
+safe set) reads on light and dark themes alike, so the same figure serves the dashboard
 and static exports (``fig.write_image``).
 """
 
@@ -22,8 +22,8 @@ from .audit import price_exposures, protection_exact
 from .problem import Problem
 from .results import FLEX_KINDS, Result
 
-# Okabe & Ito (2008) colour-blind safe palette.
-BLUE, SKY, GREEN, YELLOW = "#0072B2", "#56B4E9", "#009E73", "#F0E442"
+# Okabe & Ito's (2008) colour-blind safe palette, its blue lightened to read on dark backgrounds too.
+BLUE, SKY, GREEN, YELLOW = "#2E86DE", "#56B4E9", "#009E73", "#F0E442"
 ORANGE, VERMILION, PURPLE, GREY = "#E69F00", "#D55E00", "#CC79A7", "#8C8C8C"
 KIND_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "hpa": GREY}
 KIND_LABELS = {"wind": "Wind", "pv": "PV", "csp": "CSP", "ed": "Electrical demand", "td": "Thermal demand"}
