@@ -37,6 +37,11 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     ``e_init`` with ``e[NT] ≥ e_init``. Reserve energy shares (TS9-TS10)
     ``Σ r_ts↑·dt/η_dis ≤ σ↑·ΔE``, ``Σ r_ts↓·η_ch·dt ≤ σ↓·ΔE`` and margins (TS11, corrected)
     ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``.
+
+    Valid tightening: the storage charges only from the solar field (while charging
+    it does not discharge and the power block takes no negative input), so
+    ``p_ch ≤ min(P̄ch, P̂sf)·u``; in periods without sun the mode is fixed to
+    discharging, which dominates there.
     """
     b = m.csp[csp.name]
     ts, dt = csp.storage, problem.dt_h
@@ -53,6 +58,12 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.sigma_up = pyo.Var(bounds=(0.0, 1.0))
     b.sigma_dn = pyo.Var(bounds=(0.0, 1.0))
 
+    field = problem.sources[csp.name].nominal
+    for t in m.T:
+        if field[t - 1] <= 0.0:
+            b.charging[t].fix(0)
+    b.charge_from_field = pyo.Constraint(m.T, rule=lambda b, t: (
+        b.p_ch[t] <= min(ts.p_ch_max_mw_th, float(field[t - 1])) * b.charging[t]))
     b.charge_floor = pyo.Constraint(m.T, rule=lambda b, t: (
         b.p_ch[t] - b.r_ch_up[t] >= ts.p_ch_min_mw_th * b.charging[t]))
     b.charge_ceiling = pyo.Constraint(m.T, rule=lambda b, t: (
