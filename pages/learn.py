@@ -44,14 +44,14 @@ def budget_demo() -> None:
     left, right = st.columns([1, 3])
     source = left.selectbox("Source", units, key="learn_source")
     src = problem.sources[source]
-    gamma = left.slider("Γ [periods]", 0, nt, value=min(src.gamma, nt), key="learn_gamma")
+    gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
+                        key="learn_gamma")
     y = top_gamma_deviation(src.deviation, gamma)
-    sign = -1.0 if src.kind == "production" else 1.0
     energy = "MWh_th" if src.unit_kind in ("csp", "td") else "MWh"
     left.metric("Energy at risk in the bound", f"{float(y.sum() * problem.dt_h):,.1f} {energy}",
                 help="Σ deviation × period length over the Γ chosen periods: how much the plan must cover.")
-    left.caption(f"Γ = 0 plans on the {'upper' if sign < 0 else 'lower'} bound everywhere; Γ = {nt} on the "
-                 f"{'lower' if sign < 0 else 'upper'} bound everywhere.")
+    nominal, adverse = ("upper", "lower") if src.kind == "production" else ("lower", "upper")
+    left.caption(f"Γ = 0 plans on the {nominal} bound everywhere; Γ = {nt} on the {adverse} bound everywhere.")
     right.plotly_chart(bands_figure(problem, source, (y > 0).astype(float)), key="learn_band")
 
 
@@ -75,8 +75,8 @@ state.mark_solved(run)
 def protection_demo() -> None:
     left, right = st.columns([1, 3])
     price = left.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price")
-    gamma = left.slider("Γ of this price [periods]", 0, nt, value=problem.sources[price].gamma,
-                        key="learn_price_gamma")
+    gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
+                        value=problem.sources[price].gamma, key="learn_price_gamma")
     exposure = price_exposures(plan.problem, plan.market)[price]
     left.metric("Protection", widgets.eur(protection_exact(exposure, gamma)),
                 help="Sum of the Γ largest losses.")
