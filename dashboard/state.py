@@ -27,7 +27,7 @@ CASE = "case"              # the current, valid case (every edit goes through th
 ORIGIN = "case_origin"     # the case as loaded: what "reset" and the tariff preset go back to
 SOURCE = "case_source"     # where the case came from, for display
 CSP_ON = "csp_on"          # False: solve without the CSP plants (paper Table 11)
-SOLVED = "solved"          # keys of the run cases this session has solved
+REQUESTED = "requested"    # keys of the run cases this session asked to solve (done or under way)
 SAVED_RUNS = "saved_runs"  # label -> Result, kept for side-by-side comparison
 
 
@@ -56,7 +56,7 @@ def load(case: Case, source: str) -> None:
     st.session_state[ORIGIN] = case
     st.session_state[SOURCE] = source
     st.session_state[CSP_ON] = bool(case.csp)
-    st.session_state[SOLVED] = set()
+    st.session_state[REQUESTED] = set()
     for key in [k for k in st.session_state if k.startswith(("portfolio_", "markets_", "uncertainty_"))]:
         del st.session_state[key]
 
@@ -106,12 +106,14 @@ def case_key(case: Case) -> str:
     return hashlib.sha256(f"{text}|{case.history.fingerprint}".encode()).hexdigest()
 
 
-def mark_solved(case: Case) -> None:
-    st.session_state[SOLVED].add(case_key(case))
+def mark_requested(case: Case) -> None:
+    """Remember that this session asked for ``case``: its pages then show the plan (from the
+    cache, or by waiting for the solve under way) without another click."""
+    st.session_state[REQUESTED].add(case_key(case))
 
 
-def is_solved(case: Case) -> bool:
-    return case_key(case) in st.session_state[SOLVED]
+def is_requested(case: Case) -> bool:
+    return case_key(case) in st.session_state[REQUESTED]
 
 
 def saved_runs() -> dict[str, Result]:

@@ -179,7 +179,7 @@ def sidebar(case: Case) -> None:
     with st.sidebar:
         st.caption("Current case")
         st.markdown(f"**{case.name}** · {case.delivery_date:%d %b %Y}  \n{run_label(state.run_case())}")
-        if state.is_solved(state.run_case()):
+        if state.is_requested(state.run_case()):
             st.caption(":material/check: solved — see Results")
 
 

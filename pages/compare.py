@@ -26,19 +26,19 @@ market_sets = st.multiselect(
     help="Each market set adds four solves. The paper's Table 10 has all four; Table 11 is the same without "
          "the CSP (switch it off on Portfolio).")
 cases = {(s, m): strategy_case(run, s, m) for m in market_sets for s in STRATEGIES}
-ready = bool(cases) and all(state.is_solved(c) for c in cases.values())
+ready = bool(cases) and all(state.is_requested(c) for c in cases.values())
 clicked = st.button(f"Solve {len(cases)} plans", type="primary", key="compare_solve", disabled=not cases,
                     icon=":material/play_arrow:")
 
 if cases and (clicked or ready):
+    for case in cases.values():
+        state.mark_requested(case)
     try:
         solved = solving.solve_all(list(cases.values()), "Solving the strategies")
     except RvppError as err:
         widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
         st.stop()
     results = dict(zip(cases, solved))
-    for case in cases.values():
-        state.mark_solved(case)
     failed = [f"{s} / {m}: {r.status} {r.message}" for (s, m), r in results.items() if not r.has_plan]
     if failed:
         st.warning("Some plans could not be made:\n\n" + "\n".join(f"- {f}" for f in failed))

@@ -68,10 +68,10 @@ with right:
 st.subheader("What should I bid tomorrow?")
 balanced = rvpp.with_options(state.run_case(), strategy="balanced")
 clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
-if clicked or state.is_solved(balanced):
+if clicked or state.is_requested(balanced):
+    state.mark_requested(balanced)
     result = solving.solve(balanced, "Solving the balanced strategy")
     if result is not None:
-        state.mark_solved(balanced)
         widgets.status_line(result)
         if result.has_plan:
             widgets.kpi_cards(result, only=HEADLINE)

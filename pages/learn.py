@@ -64,11 +64,11 @@ st.markdown(
     "band times how far its price may fall. With budget Γ the adversary takes the **Γ periods of largest "
     "loss**; their sum is the protection charged in the objective. The model finds it exactly, through the "
     "dual variables φ and ζ of Bertsimas and Sim's reformulation, while it chooses the plan.")
+state.mark_requested(run)
 plan = solving.solve(run, "Solving the current case for the examples")
 if plan is None or not plan.has_plan:
     st.warning("The current case has no plan, so the price examples are not available.")
     st.stop()
-state.mark_solved(run)
 
 
 @st.fragment
@@ -96,15 +96,15 @@ st.markdown(
     "deviation hurts least (**planner-chosen**). Both solve the same day; compare where χ lands and what "
     "the plan is worth.")
 variants = {mode: run.replace(budgets={"mode": mode}) for mode in ("paper", "planner_chosen")}
-if all(state.is_solved(c) for c in variants.values()) or st.button(
+if all(state.is_requested(c) for c in variants.values()) or st.button(
         "Solve both variants", key="learn_modes", icon=":material/play_arrow:"):
+    for case in variants.values():
+        state.mark_requested(case)
     try:
         paper, chosen = solving.solve_all(list(variants.values()), "Solving both variants")
     except RvppError as err:
         widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
         st.stop()
-    for case in variants.values():
-        state.mark_solved(case)
     if paper.has_plan and chosen.has_plan:
         source = st.selectbox("Source", units, key="learn_mode_source")
         c1, c2 = st.columns(2)
@@ -125,15 +125,15 @@ st.markdown(
     "line is the part of the cost that is price protection.")
 gammas = sorted({int(round(g)) for g in np.linspace(0, nt, CURVE_POINTS)})
 sweep = [rvpp.with_options(run, gammas={source: g for source in run.sources()}) for g in gammas]
-if all(state.is_solved(c) for c in sweep) or st.button(f"Compute the curve ({len(gammas)} solves)",
+if all(state.is_requested(c) for c in sweep) or st.button(f"Compute the curve ({len(gammas)} solves)",
                                                         key="learn_curve", icon=":material/play_arrow:"):
+    for case in sweep:
+        state.mark_requested(case)
     try:
         results = solving.solve_all(sweep, "Solving the budgets")
     except RvppError as err:
         widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
         st.stop()
-    for case in sweep:
-        state.mark_solved(case)
     points = pd.DataFrame([{"gamma": g, "cost_keur": r.cost_keur,
                             "protection_keur": sum(r.protection_eur.values()) / KEUR}
                            for g, r in zip(gammas, results) if r.has_plan])

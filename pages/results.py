@@ -24,16 +24,16 @@ st.title("Results")
 run = state.run_case()
 st.markdown(f"Plan for **{run.delivery_date:%A %d %B %Y}** · {widgets.run_label(run)}")
 clicked = st.button("Solve", type="primary", key="results_solve", icon=":material/play_arrow:")
-if not (clicked or state.is_solved(run)):
-    waiting = "The inputs changed since the last solve." if st.session_state[state.SOLVED] else ""
+if not (clicked or state.is_requested(run)):
+    waiting = "The inputs changed since the last solve." if st.session_state[state.REQUESTED] else ""
     st.info(f"{waiting} Press **Solve** to compute the plan of the current case (about a second).",
             icon=":material/info:")
     st.stop()
 
+state.mark_requested(run)
 result = solving.solve(run, "Solving the current case")
 if result is None:
     st.stop()
-state.mark_solved(run)
 widgets.status_line(result)
 if not result.has_plan:
     st.stop()

@@ -146,11 +146,10 @@ run = state.run_case()
 problem = solving.prepare(run)
 if problem is not None:
     result = None
-    if state.is_solved(run) or st.button("Solve to mark the deviating periods χ", key="uncertainty_solve",
-                                         icon=":material/play_arrow:"):
+    if state.is_requested(run) or st.button("Solve to mark the deviating periods χ", key="uncertainty_solve",
+                                            icon=":material/play_arrow:"):
+        state.mark_requested(run)
         result = solving.solve(run, "Solving the current case")
-        if result is not None:
-            state.mark_solved(run)
     if result is None or not result.has_plan:
         st.caption("Bands of the delivery day; solve to mark the periods where each source deviates.")
     else:
