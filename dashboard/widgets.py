@@ -1,5 +1,5 @@
-"""Building blocks every page draws with: KPI cards, problem lists, case summaries,
-downloads and the column settings of the unit tables."""
+"""Building blocks every page draws with: KPI cards, refusals with the case model's
+messages, table editors that go through the case model, case summaries and downloads."""
 
 from __future__ import annotations
 
@@ -30,11 +30,9 @@ def eur(value: float | None) -> str:
     return "–" if value is None else f"{value:,.0f} EUR".replace("-", "−")
 
 
-def keur(value: float | None, unit: bool = True) -> str:
-    """``−124.0 kEUR`` (one decimal, as in the paper's tables)."""
-    if value is None:
-        return "–"
-    return f"{value:,.1f}{' kEUR' if unit else ''}".replace("-", "−")
+def keur(value_eur: float | None) -> str:
+    """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables."""
+    return "–" if value_eur is None else f"{value_eur / KILO:,.1f}".replace("-", "−")
 
 
 def kpis(result: Result) -> dict[str, tuple[str, str]]:
@@ -53,7 +51,7 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
         "Protection cost": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
                                         "price (DAM, SR up, SR down)."),
     }
-    shown = {label: (keur(None if v is None else v / KILO, unit=False), f"{text} Exact: {eur(v)}.")
+    shown = {label: (keur(v), f"{text} Exact: {eur(v)}.")
              for label, (v, text) in money.items()}
     gap = "–" if result.mip_gap is None else f"{result.mip_gap * PERCENT:.3f}"
     total_s = result.build_s + result.solve_s + result.extract_s
