@@ -23,6 +23,7 @@ NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 TABLE_ROW_PX, TABLE_BORDER_PX = 35, 3  # st.data_editor row height and frame
 PRICE_LABELS = {"price_da": "DAM price", "price_sr_up": "SR up price", "price_sr_dn": "SR down price"}
 GROUPS = {"Prices": ("price",), "Wind": ("wind",), "PV": ("pv",), "CSP": ("csp",), "Demands": ("ed", "td")}
+PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
 MODES = {"paper": "Paper: each source deviates in its Γ largest-deviation periods",
          "planner_chosen": "Planner-chosen periods (teaching only; see Learn)"}
 
@@ -125,11 +126,12 @@ with left:
         column_config={
             "source": st.column_config.TextColumn("Source", disabled=True),
             "kind": st.column_config.TextColumn("Kind", disabled=True),
-            "preset": st.column_config.NumberColumn("Preset Γ [periods]", disabled=True),
-            "gamma": st.column_config.NumberColumn("Γ [periods]", min_value=0, max_value=nt, step=1,
-                                                   help="Edit to override the preset; empty: the preset"),
+            "preset": st.column_config.NumberColumn(f"Preset Γ [{PERIOD_NAMES[case.dt_h]}]", disabled=True),
+            "gamma": st.column_config.NumberColumn(f"Γ [{PERIOD_NAMES[case.dt_h]}]", min_value=0, max_value=nt,
+                                                   step=1, help="Edit to override the preset; empty: the preset"),
             "hours": st.column_config.NumberColumn("Γ [h]", disabled=True, format="%.2f"),
         },
+        column_order=["source", "kind", "preset", "gamma"] + (["hours"] if case.dt_h < 1 else []),
         hide_index=True, height=TABLE_ROW_PX * (len(case.sources()) + 1) + TABLE_BORDER_PX,
     )
 with right:
