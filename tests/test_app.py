@@ -176,7 +176,8 @@ def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_ca
     assert not at.exception
     assert 'csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100' in errors(at)
     assert case_of(at) == paper_case
-    at.session_state["portfolio_csp_0"] = {"edited_rows": {}, "added_rows": [], "deleted_rows": []}
+    click(at, "portfolio_csp_discard")
+    assert not errors(at) and "portfolio_csp_1" in {e.key for e in at.data_editor}
     at.session_state["portfolio_pv_0"] = {"edited_rows": {0: {"p_max_mw": 20.0}}, "added_rows": [],
                                           "deleted_rows": []}
     at.run()
