@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -157,3 +159,13 @@ def test_incremental_and_convex_combination_encodings_agree(paper_case):
     assert incremental.status == convex.status == "optimal"
     assert incremental.objective_eur == pytest.approx(convex.objective_eur, rel=2e-7)
     assert audit_result(convex) == []
+
+
+def test_a_conflicting_thread_count_is_reported_not_fatal(monkeypatch):
+    solve_module = importlib.import_module("rvpp.solve")  # the package re-exports the function solve
+
+    monkeypatch.setattr(solve_module, "_pool_threads", [1])
+    assert solve_module._thread_option(1) == ({"threads": 1}, "")
+    assert solve_module._thread_option(0) == ({}, "")
+    options, note = solve_module._thread_option(2)
+    assert options == {} and "already runs this process with 1 thread" in note
