@@ -162,10 +162,18 @@ def test_incremental_and_convex_combination_encodings_agree(paper_case):
 
 
 def test_a_conflicting_thread_count_is_reported_not_fatal(monkeypatch):
-    solve_module = importlib.import_module("rvpp.solve")  # the package re-exports the function solve
+    solve_module = importlib.import_module("rvpp.highs")
 
     monkeypatch.setattr(solve_module, "_pool_threads", [1])
     assert solve_module._thread_option(1) == ({"threads": 1}, "")
     assert solve_module._thread_option(0) == ({}, "")
     options, note = solve_module._thread_option(2)
     assert options == {} and "already runs this process with 1 thread" in note
+
+
+def test_an_infeasible_day_is_explained(paper_solve):
+    # Pessimistic budgets without the HPA leave the thermal demands short of heat.
+    result = paper_solve(strategy="pessimistic", markets="DAM,SRM")
+    assert result.status == "infeasible" and not result.has_plan
+    assert result.message.startswith("no feasible plan: heat balance short by up to")
+    assert "enable the HPA" in result.message
