@@ -177,3 +177,16 @@ def test_an_infeasible_day_is_explained(paper_solve):
     assert result.status == "infeasible" and not result.has_plan
     assert result.message.startswith("no feasible plan: heat balance short by up to")
     assert "enable the HPA" in result.message
+
+
+def test_startup_heat_is_drawn_in_the_startup_period_unless_a_duration_is_given(paper_case, paper_solve):
+    pb = paper_case.csp[0].power_block
+    assert pb.startup_duration_h is None
+    assert pb.startup_periods(1.0) == 1 and pb.startup_periods(0.25) == 1
+    spread = pb.model_copy(update={"startup_duration_h": 1.0})
+    assert spread.startup_periods(0.25) == 4 and spread.startup_periods(1.0) == 1
+    csp = paper_case.csp[0].model_copy(update={"power_block": spread})
+    hourly = solve(with_options(paper_case.replace(csp=[csp]), strategy="deterministic"))
+    assert hourly.status == "optimal" and audit_result(hourly) == []
+    reference = paper_solve(strategy="deterministic")
+    assert hourly.objective_eur == pytest.approx(reference.objective_eur, rel=1e-4)
