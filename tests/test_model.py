@@ -146,3 +146,15 @@ def test_markets_switched_off_fix_their_decisions_to_zero():
     failed = solve_problem(tiny_problem(no_hpa, W=(30, 30, 30), D=(10, 10, 10), H=(5, 5, 5)))
     assert failed.status == "infeasible"
     assert "no heat source" in failed.message and "H" in failed.message
+
+
+def test_impossible_requirements_are_named_before_solving():
+    case = tiny_case([wind(om=10, p_min_mw=5)], ed_units=[demand(p_min=0, p_max=100, e_min=3000)],
+                     td_units=[heat(h_max=10)], hpa=True)
+    result = solve_problem(tiny_problem(case, W=(3, 3, 3), D=(10, 10, 10), H=(12, 12, 12)))
+    assert result.status == "infeasible" and result.solve_s == 0.0
+    assert result.message.split("; ") == [
+        'ed "D": e_min_mwh=3000 exceeds p_max_mw x 24 h = 2400 MWh',
+        'td "H": required heat 12.00 MW_th at 00:00 exceeds h_max_mw_th=10',
+        'wind "W": available power 3.00 MW at 00:00 is below p_min_mw=5',
+    ]
