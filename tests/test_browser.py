@@ -86,6 +86,8 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
             page.set_default_timeout(WAIT_MS)
             page.goto(app_url)
             page.get_by_role("heading", name="Robust day-ahead bids").wait_for()
+            page.get_by_role("button", name="Solve the balanced strategy").wait_for()
+            page.get_by_role("table").first.wait_for()
             page.screenshot(path=ARTIFACTS / "home.png", full_page=True)
 
             page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()
