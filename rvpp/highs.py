@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 
 import pyomo.environ as pyo
@@ -12,6 +13,10 @@ from pyomo.contrib.solver.common.results import SolutionStatus, TerminationCondi
 # heuristics spend most of the time on these small, tight models (measured: the
 # paper case solves in about half the CPU time without them, to the same optima).
 HIGHS_OPTIONS = {"mip_heuristic_run_rins": False, "mip_heuristic_run_rens": False}
+
+# Pyomo's HiGHS interface redirects the process's output streams while it solves, so
+# two solves in threads of one process would interfere; they take turns instead.
+_solver_lock = threading.Lock()
 
 # HiGHS sizes one thread pool per process at its first solve and refuses a
 # different "threads" value afterwards; the first explicit value is kept here.
@@ -32,18 +37,22 @@ def _thread_option(requested: int) -> tuple[dict, str]:
 def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True) -> dict:
     """Run HiGHS on ``m`` with a fresh solver object; load the incumbent if there is one.
 
+    Safe to call from several threads: solves in one process take turns (use
+    processes, e.g. :func:`rvpp.batch.solve_many` with a process pool, to run in parallel).
+
     Returns ``status`` (optimal|time_limit|infeasible|error), ``termination``,
     ``objective``, ``bound``, ``gap``, ``seconds``, ``has_solution`` and ``message``.
     """
     threads, note = _thread_option(settings.threads)
     options = {"time_limit": settings.time_limit_s, "rel_gap": settings.rel_gap, **threads}
-    t0 = time.perf_counter()
     try:
-        res = SolverFactory("highs").solve(m, load_solutions=False, raise_exception_on_nonoptimal_result=False,
-                                           solver_options=dict(HIGHS_OPTIONS), **options)
+        with _solver_lock:
+            t0 = time.perf_counter()
+            res = SolverFactory("highs").solve(m, load_solutions=False, raise_exception_on_nonoptimal_result=False,
+                                               solver_options=dict(HIGHS_OPTIONS), **options)
     except Exception as exc:  # the solver library failed; report, do not crash the caller
         return {"status": "error", "termination": type(exc).__name__, "objective": None, "bound": None,
-                "gap": None, "seconds": time.perf_counter() - t0, "has_solution": False,
+                "gap": None, "seconds": 0.0, "has_solution": False,
                 "message": f"HiGHS failed: {exc}"}
     seconds = time.perf_counter() - t0
     tc = res.termination_condition

@@ -158,3 +158,20 @@ def test_impossible_requirements_are_named_before_solving():
         'td "H": required heat 12.00 MW_th at 00:00 exceeds h_max_mw_th=10',
         'wind "W": available power 3.00 MW at 00:00 is below p_min_mw=5',
     ]
+
+
+def test_solves_from_several_threads_take_turns_and_agree():
+    import threading
+
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], overrides={"price_da": 3})
+    problem = tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(50 - HOURS, 50, 50))
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(solve_problem(problem)), daemon=True)
+               for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=60)
+    assert not any(thread.is_alive() for thread in threads), "a threaded solve hung"
+    assert [r.status for r in results] == ["optimal"] * 4
+    assert {round(r.objective_eur, 6) for r in results} == {NT * 700 - 20 * 69}
