@@ -232,7 +232,7 @@ def _audit_csp(a: _Auditor, problem: Problem, unit, rows: pd.DataFrame, c: pd.Da
     a.leq("csp.sf_available", col["p_sf_mw"], col["sf_bound_mw"], n)
     a.leq("csp.sf_nonnegative", -col["p_sf_mw"], 0.0, n)
     # Power-block thermal input (STU2), with the start-up heat of the periods after a start.
-    startup_periods = problem.periods_for_hours(pb.startup_duration_h)
+    startup_periods = pb.startup_periods(problem.dt_h)
     starting = np.array([v_su[max(0, t - startup_periods + 1): t + 1].sum() for t in range(problem.nt)])
     heat_in = (col["p_sf_mw"] - col["heat_to_td_mw"] / unit.heat_efficiency + col["ts_discharge_mw"]
                - col["ts_charge_mw"] - pb.startup_fraction * pb.p_in_max_mw_th * starting)

@@ -95,8 +95,14 @@ class PowerBlock(_Frozen):
     """Steam power block and turbine (paper STU2-STU8, Appendix A).
 
     ``breakpoints`` are ``(thermal input [MW_th], efficiency [-])`` pairs; the
-    electrical output at a breakpoint is ``efficiency * input``.
+    electrical output at a breakpoint is ``efficiency * input``. The start-up heat
+    ``startup_fraction * p_in_max_mw_th`` is drawn in the start-up period, or during
+    ``startup_duration_h`` hours after a start when given.
     """
+
+    def startup_periods(self, dt_h: float) -> int:
+        """Periods during which a start draws its heat."""
+        return 1 if self.startup_duration_h is None else int(round(self.startup_duration_h / dt_h))
 
     p_in_max_mw_th: Positive
     p_in_min_mw_th: Positive
@@ -105,7 +111,7 @@ class PowerBlock(_Frozen):
     min_up_h: NonNegative = 0.0
     min_down_h: NonNegative = 0.0
     startup_fraction: NonNegative = 0.0
-    startup_duration_h: Positive = 1.0
+    startup_duration_h: Positive | None = None
     initially_on: bool = False
 
 
@@ -405,7 +411,7 @@ class Case(_Frozen):
         for csp in self.csp:
             for field in ("min_up_h", "min_down_h", "startup_duration_h"):
                 hours = getattr(csp.power_block, field)
-                if not _is_multiple(hours, self.dt_h):
+                if hours is not None and not _is_multiple(hours, self.dt_h):
                     problems.append(f'csp "{csp.name}": power_block.{field}={hours:g} must be a multiple of '
                                     f"dt_h={self.dt_h:g}")
         if problems:

@@ -183,24 +183,18 @@ def infeasibility_reasons(problem: Problem) -> list[str]:
         y = top_gamma_deviation(src.deviation, src.gamma) if paper else 0 * src.deviation
         return src.nominal + sign * y
 
-    for ed in case.ed:
-        need = bound(ed.name, +1)
-        if (over := need > ed.p_max_mw + 1e-9).any():
+    demands = [(f'ed "{d.name}"', d.name, "consumption", d.p_max_mw, "p_max_mw", d.e_min_mwh, "e_min_mwh", "MW")
+               for d in case.ed]
+    demands += [(f'td "{k.name}"', k.name, "heat", k.h_max_mw_th, "h_max_mw_th", k.q_min_mwh_th,
+                 "q_min_mwh_th", "MW_th") for k in case.td]
+    for label, name, what, cap, cap_field, energy, energy_field, unit in demands:
+        need = bound(name, +1)
+        if (over := need > cap + 1e-9).any():
             t = int(np.flatnonzero(over)[0])
-            reasons.append(f'ed "{ed.name}": required consumption {need[t]:.2f} MW at {labels[t]} exceeds '
-                           f"p_max_mw={ed.p_max_mw:g}")
-        if ed.e_min_mwh > ed.p_max_mw * hours + 1e-9:
-            reasons.append(f'ed "{ed.name}": e_min_mwh={ed.e_min_mwh:g} exceeds p_max_mw x {hours:g} h = '
-                           f"{ed.p_max_mw * hours:g} MWh")
-    for td in case.td:
-        need = bound(td.name, +1)
-        if (over := need > td.h_max_mw_th + 1e-9).any():
-            t = int(np.flatnonzero(over)[0])
-            reasons.append(f'td "{td.name}": required heat {need[t]:.2f} MW_th at {labels[t]} exceeds '
-                           f"h_max_mw_th={td.h_max_mw_th:g}")
-        if td.q_min_mwh_th > td.h_max_mw_th * hours + 1e-9:
-            reasons.append(f'td "{td.name}": q_min_mwh_th={td.q_min_mwh_th:g} exceeds h_max_mw_th x '
-                           f"{hours:g} h = {td.h_max_mw_th * hours:g} MWh_th")
+            reasons.append(f"{label}: required {what} {need[t]:.2f} {unit} at {labels[t]} exceeds {cap_field}={cap:g}")
+        if energy > cap * hours + 1e-9:
+            reasons.append(f"{label}: {energy_field}={energy:g} exceeds {cap_field} x {hours:g} h = "
+                           f"{cap * hours:g} {unit.replace('MW', 'MWh')}")
     for unit in case.ndres:
         avail = bound(unit.name, -1)
         if (short := avail < unit.p_min_mw - 1e-9).any():

@@ -100,3 +100,11 @@ def test_unwritable_output_is_reported(tmp_path, capsys):
     blocker.write_text("x")
     code, err = run(capsys, "solve", "--quiet", "--out", str(blocker / "sub"))
     assert code == 2 and err.startswith("error:") and "Traceback" not in err
+
+
+def test_data_build_regenerates_the_committed_history(tmp_path, capsys):
+    out = tmp_path / "history.csv"
+    code, err = run(capsys, "data", "build", "--out", str(out))
+    assert code == 0, err
+    assert out.read_text() == (PAPER / "history.csv").read_text()
+    assert "9504 hours" in err

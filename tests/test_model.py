@@ -146,3 +146,32 @@ def test_markets_switched_off_fix_their_decisions_to_zero():
     failed = solve_problem(tiny_problem(no_hpa, W=(30, 30, 30), D=(10, 10, 10), H=(5, 5, 5)))
     assert failed.status == "infeasible"
     assert "no heat source" in failed.message and "H" in failed.message
+
+
+def test_impossible_requirements_are_named_before_solving():
+    case = tiny_case([wind(om=10, p_min_mw=5)], ed_units=[demand(p_min=0, p_max=100, e_min=3000)],
+                     td_units=[heat(h_max=10)], hpa=True)
+    result = solve_problem(tiny_problem(case, W=(3, 3, 3), D=(10, 10, 10), H=(12, 12, 12)))
+    assert result.status == "infeasible" and result.solve_s == 0.0
+    assert result.message.split("; ") == [
+        'ed "D": e_min_mwh=3000 exceeds p_max_mw x 24 h = 2400 MWh',
+        'td "H": required heat 12.00 MW_th at 00:00 exceeds h_max_mw_th=10',
+        'wind "W": available power 3.00 MW at 00:00 is below p_min_mw=5',
+    ]
+
+
+def test_solves_from_several_threads_take_turns_and_agree():
+    import threading
+
+    case = tiny_case([wind(om=10)], ed_units=[demand(p_min=10, p_max=10)], overrides={"price_da": 3})
+    problem = tiny_problem(case, W=(30, 30, 30), D=(10, 10, 10), price_da=(50 - HOURS, 50, 50))
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(solve_problem(problem)), daemon=True)
+               for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=60)
+    assert not any(thread.is_alive() for thread in threads), "a threaded solve hung"
+    assert [r.status for r in results] == ["optimal"] * 4
+    assert {round(r.objective_eur, 6) for r in results} == {NT * 700 - 20 * 69}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -157,3 +159,34 @@ def test_incremental_and_convex_combination_encodings_agree(paper_case):
     assert incremental.status == convex.status == "optimal"
     assert incremental.objective_eur == pytest.approx(convex.objective_eur, rel=2e-7)
     assert audit_result(convex) == []
+
+
+def test_a_conflicting_thread_count_is_reported_not_fatal(monkeypatch):
+    solve_module = importlib.import_module("rvpp.highs")
+
+    monkeypatch.setattr(solve_module, "_pool_threads", [1])
+    assert solve_module._thread_option(1) == ({"threads": 1}, "")
+    assert solve_module._thread_option(0) == ({}, "")
+    options, note = solve_module._thread_option(2)
+    assert options == {} and "already runs this process with 1 thread" in note
+
+
+def test_an_infeasible_day_is_explained(paper_solve):
+    # Pessimistic budgets without the HPA leave the thermal demands short of heat.
+    result = paper_solve(strategy="pessimistic", markets="DAM,SRM")
+    assert result.status == "infeasible" and not result.has_plan
+    assert result.message.startswith("no feasible plan: heat balance short by up to")
+    assert "enable the HPA" in result.message
+
+
+def test_startup_heat_is_drawn_in_the_startup_period_unless_a_duration_is_given(paper_case, paper_solve):
+    pb = paper_case.csp[0].power_block
+    assert pb.startup_duration_h is None
+    assert pb.startup_periods(1.0) == 1 and pb.startup_periods(0.25) == 1
+    spread = pb.model_copy(update={"startup_duration_h": 1.0})
+    assert spread.startup_periods(0.25) == 4 and spread.startup_periods(1.0) == 1
+    csp = paper_case.csp[0].model_copy(update={"power_block": spread})
+    hourly = solve(with_options(paper_case.replace(csp=[csp]), strategy="deterministic"))
+    assert hourly.status == "optimal" and audit_result(hourly) == []
+    reference = paper_solve(strategy="deterministic")
+    assert hourly.objective_eur == pytest.approx(reference.objective_eur, rel=1e-4)

@@ -37,9 +37,6 @@ DEMANDS = list(CONTRACTS)
 
 SHORT_SPAN = dict(start="2025-03-01", end="2025-03-15")
 
-# pvlib 0.16 still calls a pandas accessor that pandas 3 deprecates.
-pytestmark = pytest.mark.filterwarnings("ignore:DatetimeIndex.dayofyear is deprecated")
-
 
 @pytest.fixture(scope="module")
 def history():

@@ -130,14 +130,14 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
     """Power-block heat balance, limits and conversion curve (STU2-STU5, STU_SOS).
 
     Thermal input (STU2) ``p_pb = p_sf − h/η_heat + p_dis − p_ch − K_su·P̄pb·Σ v_su``
-    where the start-up draws ``K_su·P̄pb`` during ``startup_duration_h`` after a start;
+    where a start draws ``K_su·P̄pb`` in its start-up period (or for ``startup_duration_h``);
     limits (STU3-STU4) ``p_pb + r_ts↑ ≤ P̄pb·u``, ``P̲pb·u ≤ p_pb − r_ts↓``; in every scenario
     the input ``x_s = p_pb + a_s(r_ts↑, r_ts↓)`` gives output ``e_s = f(x_s)`` on the
     breakpoint curve, capped by the turbine nameplate ``e_s ≤ Pmax_θ·u``.
     """
     b = m.csp[csp.name]
     pb = csp.power_block
-    startup_periods = problem.periods_for_hours(pb.startup_duration_h)
+    startup_periods = pb.startup_periods(problem.dt_h)
     startup_heat = pb.startup_fraction * pb.p_in_max_mw_th
     b.h = pyo.Var(m.T, domain=pyo.NonNegativeReals)
     b.p_pb = pyo.Var(m.T, bounds=(0.0, pb.p_in_max_mw_th))

@@ -1,0 +1,39 @@
+"""rvpp dashboard: ``streamlit run app.py`` (or ``make run``).
+
+Sets the shared session state once, then hands over to the page the user chose.
+New pages are one ``st.Page`` line in :func:`main`. The ``__main__`` guard matters: the
+solver worker processes import this file and must not run the app.
+"""
+
+import streamlit as st
+
+
+def main() -> None:
+    from dashboard import solving, state, widgets  # here, not above: worker processes import this file
+
+    st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
+                       layout="wide")
+    state.init()
+    solving.worker_pool()
+    pages = {
+        "Plan": [
+            st.Page("pages/home.py", title="Home", icon=":material/home:", default=True),
+            st.Page("pages/portfolio.py", title="Portfolio", icon=":material/factory:"),
+            st.Page("pages/markets.py", title="Markets & tariffs", icon=":material/euro:"),
+            st.Page("pages/uncertainty.py", title="Uncertainty", icon=":material/ssid_chart:"),
+            st.Page("pages/results.py", title="Results", icon=":material/insights:"),
+        ],
+        "Analyse": [
+            st.Page("pages/compare.py", title="Compare strategies", icon=":material/compare_arrows:"),
+        ],
+        "Learn": [
+            st.Page("pages/learn.py", title="Robust bidding explained", icon=":material/school:"),
+        ],
+    }
+    page = st.navigation(pages)
+    widgets.sidebar(state.case())
+    page.run()
+
+
+if __name__ == "__main__":
+    main()

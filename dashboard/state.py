@@ -1,0 +1,138 @@
+"""Session state shared by every page.
+
+``app.py`` calls :func:`init` once per run; pages read and change the shared state only
+through the functions here. Page-local widget keys are prefixed with the page name
+(``portfolio_``, ``markets_``, ...). Each browser tab is its own session, so two tabs
+never share or clobber each other's case or saved runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import streamlit as st
+
+import rvpp
+from rvpp import Case, Result
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_CASE = ROOT / "data" / "cases" / "paper"
+CASES_DIR = ROOT / "data" / "cases"
+MAX_SAVED_RUNS = 12
+MAX_CACHED_FOLDERS = 16
+
+CASE = "case"              # the current, valid case (every edit goes through the case model)
+ORIGIN = "case_origin"     # the case as loaded: what "reset" and the tariff preset go back to
+SOURCE = "case_source"     # where the case came from, for display
+CSP_ON = "csp_on"          # False: solve without the CSP plants (paper Table 11)
+REQUESTED = "requested"    # keys of the run cases this session asked to solve (done or under way)
+SAVED_RUNS = "saved_runs"  # label -> Result, kept for side-by-side comparison
+
+
+@st.cache_resource(show_spinner=False, max_entries=MAX_CACHED_FOLDERS)
+def _load_cached(folder: str, stamp: tuple) -> Case:
+    return rvpp.load_case(folder)
+
+
+def _load(folder: str) -> Case:
+    """Parse a case folder once per version of its files; sessions share the immutable case."""
+    path = Path(folder)
+    stamp = tuple(sorted((p.name, p.stat().st_mtime_ns) for p in path.iterdir())) if path.is_dir() else ()
+    return _load_cached(folder, stamp)
+
+
+def init() -> None:
+    """Set every shared key once per session (the default case on first load)."""
+    if CASE not in st.session_state:
+        load(_load(str(DEFAULT_CASE)), source=f"data/cases/{DEFAULT_CASE.name}")
+    st.session_state.setdefault(SAVED_RUNS, {})
+
+
+def load(case: Case, source: str) -> None:
+    """Make ``case`` the current and original case; forget what belonged to the old one."""
+    st.session_state[CASE] = case
+    st.session_state[ORIGIN] = case
+    st.session_state[SOURCE] = source
+    st.session_state[CSP_ON] = bool(case.csp)
+    st.session_state[REQUESTED] = set()
+    for key in [k for k in st.session_state if k.startswith(("portfolio_", "markets_", "uncertainty_"))]:
+        del st.session_state[key]
+
+
+def load_folder(folder: str | Path) -> Case:
+    """Load a case folder and make it the current case."""
+    case = _load(str(Path(folder).resolve()))
+    load(case, source=str(folder))
+    return case
+
+
+def case() -> Case:
+    """The current case as edited (every unit, whether switched on or not)."""
+    return st.session_state[CASE]
+
+
+def origin() -> Case:
+    return st.session_state[ORIGIN]
+
+
+def source() -> str:
+    return st.session_state[SOURCE]
+
+
+def set_case(new: Case) -> None:
+    """Replace the current case with an edited, valid one."""
+    st.session_state[CASE] = new
+
+
+def csp_on() -> bool:
+    return st.session_state[CSP_ON]
+
+
+def set_csp_on(on: bool) -> None:
+    st.session_state[CSP_ON] = on
+
+
+def run_case() -> Case:
+    """The case that gets solved: the current case with the run switches applied."""
+    current = case()
+    return current if csp_on() or not current.csp else rvpp.with_options(current, csp=False)
+
+
+def case_key(case: Case) -> str:
+    """A stable digest of everything a solve depends on (settings, units, history)."""
+    text = json.dumps(case.to_data(), sort_keys=True, default=str)
+    return hashlib.sha256(f"{text}|{case.history.fingerprint}".encode()).hexdigest()
+
+
+def mark_requested(case: Case) -> None:
+    """Remember that this session asked for ``case``: its pages then show the plan (from the
+    cache, or by waiting for the solve under way) without another click."""
+    st.session_state[REQUESTED].add(case_key(case))
+
+
+def is_requested(case: Case) -> bool:
+    return case_key(case) in st.session_state[REQUESTED]
+
+
+def saved_runs() -> dict[str, Result]:
+    return st.session_state[SAVED_RUNS]
+
+
+def save_run(label: str, result: Result) -> None:
+    """Keep ``result`` under ``label`` (the oldest run goes when the list is full)."""
+    runs = saved_runs()
+    runs.pop(label, None)
+    runs[label] = result
+    while len(runs) > MAX_SAVED_RUNS:
+        runs.pop(next(iter(runs)))
+
+
+def drop_run(label: str) -> None:
+    saved_runs().pop(label, None)
+
+
+def known_case_folders() -> list[str]:
+    """Case folders shipped with the project (``data/cases/*``)."""
+    return sorted(f"data/cases/{p.parent.name}" for p in CASES_DIR.glob("*/case.yaml"))

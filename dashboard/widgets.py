@@ -1,0 +1,210 @@
+"""Building blocks every page draws with: KPI cards, refusals with the case model's
+messages, table editors that go through the case model, case summaries and downloads."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import pandas as pd
+import streamlit as st
+
+from rvpp import Case, CaseError, Result, RvppError
+from rvpp.bundle import case_zip_bytes
+from rvpp.export import plan_workbook_bytes
+from rvpp.workbook import case_workbook_bytes
+
+from . import state
+
+KIND_TITLES = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP plants", "ed": "Electrical demands",
+               "td": "Thermal demands"}
+KPI_COLUMNS = 5
+PERCENT = 100.0
+KILO = 1000.0
+UNIT_FORMATS = {"[EUR]": "%.0f", "[kEUR]": "%.1f", "[%]": "%.1f", "[s]": "%.2f", "[MWh]": "%.1f", "[h]": "%.2f",
+                "[MW]": "%.0f"}
+
+
+def eur(value: float | None) -> str:
+    """``−124,035 EUR``: whole euros with a true minus sign."""
+    return "–" if value is None else f"{value:,.0f} EUR".replace("-", "−")
+
+
+def keur(value_eur: float | None) -> str:
+    """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables."""
+    return "–" if value_eur is None else f"{value_eur / KILO:,.1f}".replace("-", "−")
+
+
+def kpis(result: Result) -> dict[str, tuple[str, str]]:
+    """Headline numbers of a plan: label → (shown value, explanation with the exact value)."""
+    parts = result.parts
+    protection = sum(result.protection_eur.values()) if result.protection_eur else None
+    money = {
+        "Profit": (result.objective_eur, "Objective: revenues minus costs minus the price protection."),
+        "Cost": (None if result.objective_eur is None else -result.objective_eur,
+                 "The paper's cost: −profit (paper Tables 10-12)."),
+        "DAM revenue": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
+        "Reserve revenue": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
+                                                         "upper-percentile prices."),
+        "HPA cost": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
+        "Operating cost": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
+        "Protection cost": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
+                                        "price (DAM, SR up, SR down)."),
+    }
+    shown = {label: (keur(v), f"{text} Exact: {eur(v)}.")
+             for label, (v, text) in money.items()}
+    gap = "–" if result.mip_gap is None else f"{result.mip_gap * PERCENT:.3f}"
+    total_s = result.build_s + result.solve_s + result.extract_s
+    shown["MIP gap [%]"] = (gap, "Relative distance between the plan and the solver's bound.")
+    shown["Solve time [s]"] = (f"{total_s:.2f}", f"Build {result.build_s:.2f} s, HiGHS {result.solve_s:.2f} s, "
+                                                 f"tables {result.extract_s:.2f} s.")
+    return shown
+
+
+def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
+    """KPI cards; money in kEUR with the exact amount in each card's help."""
+    st.caption("Money in kEUR (one decimal, as in the paper's tables); hover the question mark of a card for "
+               "the exact amount in EUR.")
+    values = kpis(result)
+    names = list(only or values)
+    for start in range(0, len(names), KPI_COLUMNS):
+        columns = st.columns(KPI_COLUMNS)
+        for column, name in zip(columns, names[start:start + KPI_COLUMNS]):
+            value, help_text = values[name]
+            column.metric(name, value, help=help_text, border=True)
+
+
+def number_formats(frame: pd.DataFrame) -> dict:
+    """Column settings that round each number column by the unit in its name."""
+    config = {}
+    for column in frame.columns:
+        unit = next((u for u in UNIT_FORMATS if str(column).endswith(u)), None)
+        if unit:
+            config[column] = st.column_config.NumberColumn(format=UNIT_FORMATS[unit])
+    return config
+
+
+def status_line(result: Result) -> None:
+    """Say how the solve ended; infeasible or failed solves explain why."""
+    if result.status == "optimal":
+        st.success(f"Optimal plan for {result.day:%A %d %B %Y} ({result.case.budgets.strategy} strategy, "
+                   f"{result.case.markets.label}).", icon=":material/check_circle:")
+    elif result.has_plan:
+        st.warning(f"The solver stopped at its time limit; the plan below is feasible but may not be optimal. "
+                   f"{result.message}", icon=":material/timer:")
+    else:
+        st.error(f"No plan: {result.status}. {result.message}", icon=":material/error:")
+
+
+def problems(messages: list[str], title: str = "Edit refused", note: str = "The last valid case is kept.") -> None:
+    """Show the case model's messages, one per line, where the edit was made."""
+    lines = "\n".join(f"- {m}" for m in messages)
+    st.error(f"**{title}.** {note}\n\n{lines}", icon=":material/block:")
+
+
+def refusal(err: RvppError, title: str, note: str) -> None:
+    """Show why the library refused: the case model's problems, or the error's message."""
+    problems(err.problems if isinstance(err, CaseError) else [str(err)], title, note)
+
+
+def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[pd.DataFrame], Case],
+                 **editor: Any) -> None:
+    """An editable table whose every edit goes through the case model.
+
+    ``build`` lays the current case out as a table; ``apply`` reads an edited table
+    back into a case (raising :class:`~rvpp.errors.CaseError` when a value breaks a
+    rule). A valid edit becomes the current case at once; an invalid one is refused
+    with the model's message under the table, and the last valid case is kept.
+    """
+    generation = st.session_state.setdefault(f"{key}_generation", 0)
+    widget, base = f"{key}_{generation}", f"{key}_base"
+    if widget not in st.session_state or base not in st.session_state:
+        st.session_state[base] = build()
+    edited = st.data_editor(st.session_state[base], key=widget, **editor)
+    try:
+        new = apply(edited)
+    except CaseError as err:
+        problems(err.problems)
+        st.button("Discard these edits", key=f"{key}_discard", on_click=reset_editor, args=(key,),
+                  icon=":material/undo:")
+        return
+    if new != state.case():
+        state.set_case(new)
+
+
+def reset_editor(key: str) -> None:
+    """Start the table ``key`` afresh from the current case (its pending edits are dropped)."""
+    st.session_state[f"{key}_generation"] = st.session_state.get(f"{key}_generation", 0) + 1
+    st.session_state.pop(f"{key}_base", None)
+
+
+def case_summary(case: Case) -> None:
+    """The case at a glance: units per kind with installed capacity."""
+    rows = []
+    for kind, title in KIND_TITLES.items():
+        units = getattr(case, kind)
+        if not units:
+            continue
+        if kind == "td":
+            capacity = f"{sum(u.h_max_mw_th for u in units):,.0f} MW_th"
+        elif kind == "csp":
+            storage = sum(u.storage.e_max_mwh_th for u in units)
+            capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW, TS {storage:,.0f} MWh_th"
+        else:
+            capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW"
+        off = kind == "csp" and not state.csp_on()
+        rows.append({"Kind": title + (" (switched off)" if off else ""), "Units": len(units),
+                     "Names": ", ".join(u.name for u in units), "Installed": capacity})
+    st.table(pd.DataFrame(rows).set_index("Kind"))
+
+
+def run_label(case: Case) -> str:
+    """Short description of a run: strategy, markets, CSP, budget mode, period length."""
+    parts = [case.budgets.strategy, case.markets.label]
+    if case.budgets.overrides:
+        parts.append(f"{len(case.budgets.overrides)} Γ edited")
+    if not case.csp:
+        parts.append("no CSP")
+    if case.budgets.mode != "paper":
+        parts.append("planner-chosen Γ")
+    if case.dt_h != 1.0:
+        parts.append(f"{case.dt_h * 60:g}-min periods")
+    return ", ".join(parts)
+
+
+def sidebar(case: Case) -> None:
+    """Where am I: the case, its day and strategy, on every page."""
+    with st.sidebar:
+        st.caption("Current case")
+        st.markdown(f"**{case.name}** · {case.delivery_date:%d %b %Y}  \n{run_label(state.run_case())}")
+        if state.is_requested(state.run_case()):
+            st.caption(":material/check: solved — see Results")
+
+
+def plan_downloads(result: Result, case: Case, key: str) -> None:
+    """Bids CSV, full plan workbook and the case as edited (zip and workbook)."""
+    stem = f"{case.name}_{result.day:%Y%m%d}_{case.budgets.strategy}"
+    c1, c2, c3, c4 = st.columns(4)
+    c1.download_button("Bids (CSV)", result.market.to_csv(index=False, float_format="%.6f"),
+                       file_name=f"{stem}_bids.csv", mime="text/csv", on_click="ignore", key=f"{key}_bids",
+                       icon=":material/download:", help="market.csv: one row per period with the DAM, SR "
+                                                       "and HPA bids and the price bands")
+    c2.download_button("Full plan (Excel)", lambda: plan_workbook_bytes(result), file_name=f"{stem}_plan.xlsx",
+                       mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
+                       on_click="ignore", key=f"{key}_plan", icon=":material/download:",
+                       help="summary, market, units, csp and flexibility sheets")
+    case_downloads(case, key, (c3, c4))
+
+
+def case_downloads(case: Case, key: str, columns=None) -> None:
+    """The case as edited: a zip (case.yaml + history.csv) and an Excel case workbook."""
+    first, second = columns or st.columns(2)
+    first.download_button("Case as edited (zip)", lambda: case_zip_bytes(case), file_name=f"{case.name}.zip",
+                          mime="application/zip", on_click="ignore", key=f"{key}_case_zip",
+                          icon=":material/folder_zip:", help="case.yaml and history.csv; load it again on Home")
+    second.download_button("Case as edited (Excel)", lambda: case_workbook_bytes(case),
+                           file_name=f"{case.name}_case.xlsx",
+                           mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
+                           on_click="ignore", key=f"{key}_case_xlsx", icon=":material/table:",
+                           help="settings, units, curves and history as sheets; load it again on Home")
+

@@ -1,0 +1,105 @@
+"""Home: what the tool does, the case at a glance, a one-click balanced plan, loading cases."""
+
+import streamlit as st
+
+import rvpp
+from dashboard import solving, state, widgets
+from rvpp.bundle import read_case_files
+from rvpp.plots import trades_figure
+
+UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
+HEADLINE = ("Profit", "Cost", "DAM revenue", "Reserve revenue", "Protection cost")
+LINKS = (
+    ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
+    ("pages/markets.py", "Markets & tariffs", "DAM and reserve price bands, market switches, the HPA tariff"),
+    ("pages/uncertainty.py", "Uncertainty", "delivery date, history window, budgets Γ and strategy presets"),
+    ("pages/results.py", "Results", "solve; KPIs, bids, heat, dispatch, storage and reserve charts; downloads"),
+    ("pages/compare.py", "Compare strategies", "deterministic to pessimistic side by side; the paper's tables"),
+    ("pages/learn.py", "Robust bidding explained", "what Γ means and what robustness costs, with live charts"),
+)
+
+
+def load_upload() -> None:
+    files = st.session_state.get("home_upload") or []
+    try:
+        case = read_case_files({f.name: f.getvalue() for f in files})
+    except rvpp.CaseError as err:
+        st.session_state["home_load_problems"] = err.problems
+        return
+    state.load(case, source="upload: " + ", ".join(f.name for f in files))
+    st.session_state["home_load_problems"] = []
+
+
+def load_folder(folder: str) -> None:
+    try:
+        state.load_folder(folder)
+    except rvpp.CaseError as err:
+        st.session_state["home_load_problems"] = err.problems
+        return
+    st.session_state["home_load_problems"] = []
+
+
+st.title("Robust day-ahead bids for a renewable virtual power plant")
+st.markdown(
+    "**rvpp** plans tomorrow's bids of a virtual power plant made of a concentrated solar power plant "
+    "with thermal storage, wind farms, PV plants and flexible electrical and thermal demands: energy in the "
+    "day-ahead market, up and down secondary reserve, and heat bought through a heat purchase agreement. "
+    "Prices, production and consumption are uncertain; a budget Γ per source sets in how many periods each "
+    "may go against you, so a plan can be optimistic, balanced or pessimistic. "
+    "The plan is the solution of a robust mixed-integer program, solved in about a second."
+)
+
+case = state.case()
+left, right = st.columns([2, 1], gap="large")
+with left:
+    st.subheader("The case")
+    st.markdown(f"**{case.name}** · loaded from `{state.source()}`")
+    if case.description:
+        st.caption(case.description)
+    st.markdown(f":material/calendar_today: **{case.delivery_date:%A %d %B %Y}** · strategy "
+                f"**{case.budgets.strategy}** · markets **{case.markets.label}** · {case.dt_h * 60:g}-minute periods")
+    widgets.case_summary(case)
+with right:
+    st.subheader("Explore")
+    for page, title, description in LINKS:
+        st.page_link(page, label=title, icon=":material/arrow_forward:")
+        st.caption(description)
+
+st.subheader("What should I bid tomorrow?")
+balanced = rvpp.with_options(state.run_case(), strategy="balanced")
+clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
+if clicked or state.is_requested(balanced):
+    state.mark_requested(balanced)
+    result = solving.solve(balanced, "Solving the balanced strategy")
+    if result is not None:
+        widgets.status_line(result)
+        if result.has_plan:
+            widgets.kpi_cards(result, only=HEADLINE)
+            st.plotly_chart(trades_figure(result), key="home_trades")
+            st.markdown("The protection cost is what the balanced strategy sets aside against adverse prices. "
+                        "**What does it cost to be safer?**")
+            st.page_link("pages/compare.py", label="Compare the four strategies side by side",
+                         icon=":material/compare_arrows:")
+            st.page_link("pages/results.py", label="Every chart and download of the current case",
+                         icon=":material/insights:")
+else:
+    st.caption("One click solves the current case with the balanced budgets of the paper's Table 7.")
+
+st.subheader("Load another case")
+shipped, folder_tab, upload_tab, download_tab = st.tabs(["Shipped cases", "Folder", "Upload", "Download"])
+with shipped:
+    choice = st.selectbox("Case", state.known_case_folders(), key="home_shipped")
+    st.button("Load", key="home_load_shipped", on_click=load_folder, args=(choice,))
+with folder_tab:
+    folder = st.text_input("Case folder on this machine (holding case.yaml)", key="home_folder")
+    st.button("Load folder", key="home_load_folder", on_click=load_folder, args=(folder,), disabled=not folder)
+with upload_tab:
+    st.file_uploader("A zip of a case folder, case.yaml with its history CSV, or an Excel case workbook",
+                     type=UPLOAD_TYPES, accept_multiple_files=True, key="home_upload")
+    st.button("Load the uploaded case", key="home_load_upload", on_click=load_upload,
+              disabled=not st.session_state.get("home_upload"))
+with download_tab:
+    st.caption("The current case with every edit, to keep or to load again later.")
+    widgets.case_downloads(case, key="home")
+if st.session_state.get("home_load_problems"):
+    widgets.problems(st.session_state["home_load_problems"], "Case not loaded", note="The current case is unchanged.")

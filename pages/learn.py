@@ -1,0 +1,158 @@
+"""Learn: robust bidding explained with live charts of the current case."""
+
+import numpy as np
+import pandas as pd
+import streamlit as st
+
+import rvpp
+from dashboard import solving, state, widgets
+from rvpp import RvppError
+from rvpp.audit import price_exposures, protection_exact
+from rvpp.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
+                        thin_clock_ticks)
+from rvpp.problem import top_gamma_deviation
+
+CURVE_POINTS = 9  # budgets 0, NT/8, ..., NT on the price-of-robustness curve
+KEUR = 1000.0
+NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
+
+st.title("Robust bidding explained")
+st.markdown(
+    "Tomorrow's prices, wind, sun and demand are not known when the bids are sent. Planning on the forecast "
+    "alone is cheap until the day goes wrong; planning for everything going wrong at once is ruinous. "
+    "Robust optimisation (Bertsimas & Sim, 2004) sits in between: for each uncertain source you choose a "
+    "**budget Γ**, the number of periods in which it may take its bad value, and the plan must stay feasible "
+    "and is valued as if an adversary spent every budget in the worst way. This page uses the current case.")
+
+run = state.run_case()
+problem = solving.prepare(run)
+if problem is None:
+    st.stop()
+nt = problem.nt
+units = [u.name for _, u in run.units() if problem.sources[u.name].deviation.max() > 0]
+
+st.header("1 · What a budget means")
+st.markdown(
+    f"Each source has a band from the history: production is planned on its upper bound and may fall to the "
+    f"lower one; consumption the other way round. With budget Γ the source is assumed to take its bad bound "
+    f"in Γ of the {nt} periods. In the paper's method these are the Γ periods where the band is **widest** "
+    "(the largest deviation in MW). Move Γ and watch the periods move.")
+
+
+@st.fragment
+def budget_demo() -> None:
+    left, right = st.columns([1, 3])
+    source = left.selectbox("Source", units, key="learn_source")
+    src = problem.sources[source]
+    gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
+                        key="learn_gamma")
+    y = top_gamma_deviation(src.deviation, gamma)
+    energy = "MWh_th" if src.unit_kind in ("csp", "td") else "MWh"
+    left.metric("Energy at risk in the bound", f"{float(y.sum() * problem.dt_h):,.1f} {energy}",
+                help="Σ deviation × period length over the Γ chosen periods: how much the plan must cover.")
+    nominal, adverse = ("upper", "lower") if src.kind == "production" else ("lower", "upper")
+    left.caption(f"Γ = 0 plans on the {nominal} bound everywhere; Γ = {nt} on the {adverse} bound everywhere.")
+    right.plotly_chart(bands_figure(problem, source, (y > 0).astype(float)), key="learn_band")
+
+
+budget_demo()
+
+st.header("2 · Price protection: the adversary picks the worst periods")
+st.markdown(
+    "Prices enter the profit, not the constraints. For a fixed plan, each period has a possible loss: the "
+    "energy sold times how far the price may fall (or bought times how far it may rise), and each reserve "
+    "band times how far its price may fall. With budget Γ the adversary takes the **Γ periods of largest "
+    "loss**; their sum is the protection charged in the objective. The model finds it exactly, through the "
+    "dual variables φ and ζ of Bertsimas and Sim's reformulation, while it chooses the plan.")
+state.mark_requested(run)
+plan = solving.solve(run, "Solving the current case for the examples")
+if plan is None or not plan.has_plan:
+    st.warning("The current case has no plan, so the price examples are not available.")
+    st.stop()
+
+
+@st.fragment
+def protection_demo() -> None:
+    left, right = st.columns([1, 3])
+    price = left.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price")
+    gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
+                        value=problem.sources[price].gamma, key="learn_price_gamma")
+    exposure = price_exposures(plan.problem, plan.market)[price]
+    left.metric("Protection", widgets.eur(protection_exact(exposure, gamma)),
+                help="Sum of the Γ largest losses.")
+    left.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma}; the model charged "
+                 f"{widgets.eur(plan.protection_eur[price])}. Here the plan stays fixed and only the "
+                 "adversary's budget moves; a new solve would also change the plan.")
+    right.plotly_chart(exposure_figure(plan, price, gamma), key="learn_exposure")
+
+
+protection_demo()
+
+st.header("3 · Constraint budgets: paper mode and planner-chosen periods")
+st.markdown(
+    "For units the model uses binaries χ (one per period) with Σχ = Γ. The published implementation adds two "
+    "bounds that force χ onto the largest deviations (**paper mode**, the default). As printed in the paper "
+    "they are missing, and then the optimiser itself picks the Γ periods — naturally those where a "
+    "deviation hurts least (**planner-chosen**). Both solve the same day; compare where χ lands and what "
+    "the plan is worth.")
+variants = {mode: run.replace(budgets={"mode": mode}) for mode in ("paper", "planner_chosen")}
+if all(state.is_requested(c) for c in variants.values()) or st.button(
+        "Solve both variants", key="learn_modes", icon=":material/play_arrow:"):
+    for case in variants.values():
+        state.mark_requested(case)
+    try:
+        paper, chosen = solving.solve_all(list(variants.values()), "Solving both variants")
+    except RvppError as err:
+        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
+        st.stop()
+    if paper.has_plan and chosen.has_plan:
+        source = st.selectbox("Source", units, key="learn_mode_source")
+        c1, c2 = st.columns(2)
+        c1.metric("Profit, paper mode", widgets.eur(paper.objective_eur))
+        c2.metric("Profit, planner-chosen", widgets.eur(chosen.objective_eur),
+                  delta=widgets.eur(chosen.objective_eur - paper.objective_eur).replace(" EUR", ""),
+                  help="Never lower than paper mode: the planner picks the periods that suit it.")
+        for column, (label, result) in zip(st.columns(2), (("paper mode", paper), ("planner-chosen", chosen))):
+            figure = bands_figure(result.problem, source, deviating_periods(result, source))
+            figure.update_layout(title_text=f"{source}, {label}")
+            thin_clock_ticks(figure, NARROW_TICK_HOURS)
+            column.plotly_chart(figure, key=f"learn_mode_{label}")
+
+st.header("4 · The price of robustness")
+st.markdown(
+    f"Give every source the same budget Γ and solve for Γ = 0 to {nt}: the cost rises with Γ because the plan "
+    "buys more, sells less and offers less reserve to stay feasible when more periods go wrong. The dashed "
+    "line is the part of the cost that is price protection.")
+gammas = sorted({int(round(g)) for g in np.linspace(0, nt, CURVE_POINTS)})
+sweep = [rvpp.with_options(run, gammas={source: g for source in run.sources()}) for g in gammas]
+if all(state.is_requested(c) for c in sweep) or st.button(f"Compute the curve ({len(gammas)} solves)",
+                                                        key="learn_curve", icon=":material/play_arrow:"):
+    for case in sweep:
+        state.mark_requested(case)
+    try:
+        results = solving.solve_all(sweep, "Solving the budgets")
+    except RvppError as err:
+        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
+        st.stop()
+    points = pd.DataFrame([{"gamma": g, "cost_keur": r.cost_keur,
+                            "protection_keur": sum(r.protection_eur.values()) / KEUR}
+                           for g, r in zip(gammas, results) if r.has_plan])
+    st.plotly_chart(robustness_figure(points), key="learn_curve_chart")
+    skipped = [g for g, r in zip(gammas, results) if not r.has_plan]
+    if skipped:
+        st.caption(f"No feasible plan for Γ = {', '.join(map(str, skipped))}: the demands cannot be met when "
+                   "that many periods go wrong.")
+
+st.header("5 · What paper mode does not protect against")
+st.markdown(
+    "- **Not the worst day for your profit.** Units deviate in their largest-deviation periods, which need not "
+    "be the periods where a shortfall costs most; the adversary of the constraints is not searching your "
+    "profit. A stress test that searches those hours gives a lower (worse) profit.\n"
+    "- **Not beyond the band.** Bands are percentiles of recent history (by default the 20th and 80th of 30 "
+    "days): one day in five is outside them by construction, and a regime change is not in the history.\n"
+    "- **Not joint patterns.** Each source spends its own budget; the model does not know that a cloudy day "
+    "lowers all PV plants and the CSP together and raises prices at the same time.\n"
+    "- **Not the real-time settlement.** The plan is valued at the bands; what it earns on the day depends on "
+    "the realised prices and on imbalance penalties, which an out-of-sample test measures.\n"
+    "- **Γ is a dial, not a probability.** Bertsimas & Sim give probability bounds for independent, "
+    "symmetric deviations; market data are neither, so read Γ as how many bad periods you plan for.")

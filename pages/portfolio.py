@@ -1,0 +1,79 @@
+"""Portfolio: every unit's parameters in editable tables, and each unit's forecast band."""
+
+import streamlit as st
+
+from dashboard import fields, solving, state, widgets
+from rvpp import workbook
+from rvpp.plots import bands_figure, curve_figure, thin_clock_ticks
+
+KINDS = ("wind", "pv", "csp", "ed", "td")
+BAND_COLUMNS = 2
+NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
+
+
+def set_csp(on_key: str) -> None:
+    state.set_csp_on(st.session_state[on_key])
+
+
+st.title("Portfolio")
+st.markdown("Edit any cell, add a row at the bottom of a table or select rows and delete them. Every edit is "
+            "checked by the case model: a value that breaks a rule is refused with the reason under its table "
+            "and the last valid case is kept.")
+
+case = state.case()
+if case.csp:
+    st.toggle("Include the CSP plant(s) in the plan", value=state.csp_on(), key="portfolio_csp_on",
+              on_change=set_csp, args=("portfolio_csp_on",),
+              help="Off: the plan is made without any CSP, as in the paper's Table 11. The CSP's parameters "
+                   "are kept and come back when you switch it on again.")
+
+for kind in KINDS:
+    st.subheader(widgets.KIND_TITLES[kind])
+    if kind == "csp" and not state.csp_on():
+        st.info("Switched off: the plan is made without the CSP plants. Their parameters are kept below.",
+                icon=":material/power_off:")
+    widgets.table_editor(
+        f"portfolio_{kind}",
+        build=lambda kind=kind: workbook.unit_table(state.case(), kind),
+        apply=lambda table, kind=kind: workbook.with_unit_table(state.case(), kind, table),
+        column_config=fields.column_config(state.case(), kind), num_rows="dynamic", hide_index=True,
+    )
+
+case = state.case()
+if case.csp:
+    st.subheader("Power-block conversion curve")
+    st.caption("Electrical output = thermal input × efficiency at each breakpoint, linear in between "
+               "(paper Figure 5). Inputs must increase and the output must not fall.")
+    name = st.selectbox("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp") \
+        if len(case.csp) > 1 else case.csp[0].name
+    left, right = st.columns([2, 3])
+    with left:
+        widgets.table_editor(
+            f"portfolio_curve_{name}",
+            build=lambda: workbook.breakpoint_table(state.case(), name),
+            apply=lambda table: workbook.with_breakpoints(state.case(), name, table),
+            column_config={"input_mw_th": st.column_config.NumberColumn("Thermal input [MW_th]"),
+                           "efficiency": st.column_config.NumberColumn("Efficiency [-]")},
+            num_rows="dynamic", hide_index=True,
+        )
+    with right:
+        unit = next(c for c in state.case().csp if c.name == name)
+        st.plotly_chart(curve_figure(unit.power_block.breakpoints, unit.p_max_mw), key="portfolio_curve_chart")
+
+st.subheader("Forecast bands of the delivery day")
+run = state.run_case()
+q = run.uncertainty
+st.caption(f"Per clock hour over the {q.window_days} days before {run.delivery_date:%d %b %Y}: the "
+           f"{q.q_lo * 100:g}th percentile, the median and the {q.q_hi * 100:g}th percentile of each unit's "
+           "history. Production is planned on the upper bound and may fall to the lower one; consumption is "
+           "planned on the lower bound and may rise to the upper one.")
+problem = solving.prepare(run)
+if problem is not None:
+    kinds = [k for k in KINDS if getattr(run, k)]
+    for tab, kind in zip(st.tabs([widgets.KIND_TITLES[k] for k in kinds]), kinds):
+        with tab:
+            columns = st.columns(BAND_COLUMNS)
+            for i, unit in enumerate(getattr(run, kind)):
+                with columns[i % BAND_COLUMNS]:
+                    figure = thin_clock_ticks(bands_figure(problem, unit.name), NARROW_TICK_HOURS)
+                    st.plotly_chart(figure, key=f"portfolio_band_{unit.name}")

@@ -1,0 +1,171 @@
+"""Uncertainty: delivery day, history window and percentiles, budgets Γ, and where each
+source deviates in the plan."""
+
+import datetime as dt
+
+import pandas as pd
+import streamlit as st
+
+from dashboard import solving, state, widgets
+from rvpp import Case, CaseError
+from rvpp.case import STRATEGIES
+from rvpp.history import PRICE_COLUMNS
+from rvpp.periods import delivery_periods
+from rvpp.plots import bands_figure, deviating_periods, thin_clock_ticks
+from rvpp.problem import STRATEGY_BUDGETS_H, strategy_budgets
+
+BUDGETS_KEY = "uncertainty_budgets"
+WINDOW_DAYS = (7, 90)
+Q_LO, Q_HI = (0.05, 0.45), (0.55, 0.95)
+Q_STEP = 0.05
+BAND_COLUMNS = 2
+NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
+TABLE_ROW_PX, TABLE_BORDER_PX = 35, 3  # st.data_editor row height and frame
+PRICE_LABELS = {"price_da": "DAM price", "price_sr_up": "SR up price", "price_sr_dn": "SR down price"}
+GROUPS = {"Prices": ("price",), "Wind": ("wind",), "PV": ("pv",), "CSP": ("csp",), "Demands": ("ed", "td")}
+PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
+MODES = {"paper": "Paper: each source deviates in its Γ largest-deviation periods",
+         "planner_chosen": "Planner-chosen periods (teaching only; see Learn)"}
+
+
+def apply(**changes) -> None:
+    try:
+        state.set_case(state.case().replace(**changes))
+        st.session_state["uncertainty_problems"] = []
+    except CaseError as err:
+        st.session_state["uncertainty_problems"] = err.problems
+
+
+def from_widget(section: str | None, field: str, key: str) -> None:
+    value = st.session_state[key]
+    apply(**({section: {field: value}} if section else {field: value}))
+
+
+def set_strategy(key: str) -> None:
+    apply(budgets={"strategy": st.session_state[key], "overrides": {}})
+    widgets.reset_editor(BUDGETS_KEY)
+
+
+def period_count(case: Case) -> int:
+    return len(delivery_periods(case.delivery_date, case.timezone, case.dt_h))
+
+
+def budget_table(case: Case) -> pd.DataFrame:
+    nt = period_count(case)
+    preset = strategy_budgets(case.replace(budgets={"overrides": {}}), nt)
+    gammas = {**preset, **case.budgets.override_map}
+    kinds = {unit.name: widgets.KIND_TITLES[kind] for kind, unit in case.units()}
+    return pd.DataFrame({"source": list(gammas),
+                         "kind": [PRICE_LABELS.get(s) or kinds[s] for s in gammas],
+                         "preset": [preset[s] for s in gammas],
+                         "gamma": [float(gammas[s]) for s in gammas],
+                         "hours": [gammas[s] * case.dt_h for s in gammas]})
+
+
+def with_budgets(case: Case, table: pd.DataFrame) -> Case:
+    """Γ that differ from the strategy preset become overrides; an empty cell means the preset."""
+    preset = strategy_budgets(case.replace(budgets={"overrides": {}}), period_count(case))
+    overrides = {row.source: int(row.gamma) for row in table.itertuples()
+                 if pd.notna(row.gamma) and int(row.gamma) != preset[row.source]}
+    edited = case.replace(budgets={"overrides": overrides})
+    strategy_budgets(edited, period_count(edited))
+    return edited
+
+
+st.title("Uncertainty")
+case = state.case()
+nt = period_count(case)
+
+st.subheader("Delivery day and forecast bands")
+days = case.history.local_days(case.timezone)
+if not days:
+    widgets.problems([f"{case.history.source}: the history does not cover one whole day"], "No delivery day",
+                     note="Load a case with a longer history.")
+    st.stop()
+window, q = case.uncertainty.window_days, case.uncertainty
+c1, c2, c3, c4 = st.columns(4)
+earliest = days[0] + dt.timedelta(days=window)
+c1.date_input("Delivery day", value=case.delivery_date, min_value=min(earliest, case.delivery_date),
+              max_value=max(days[-1], case.delivery_date),
+              key="uncertainty_date", on_change=from_widget, args=(None, "delivery_date", "uncertainty_date"),
+              help=f"Any day from {earliest:%d %b %Y} (the history must cover the {window}-day window before "
+                   f"it) to {days[-1]:%d %b %Y}.")
+c2.slider("History window [days]", min(WINDOW_DAYS[0], window), max(WINDOW_DAYS[1], window), value=window,
+          key="uncertainty_window",
+          on_change=from_widget, args=("uncertainty", "window_days", "uncertainty_window"),
+          help="Days before the delivery day whose observations give the bands (paper: 30).")
+c3.slider("Lower percentile", min(Q_LO[0], q.q_lo), max(Q_LO[1], q.q_lo), value=q.q_lo, step=Q_STEP,
+          key="uncertainty_q_lo",
+          on_change=from_widget, args=("uncertainty", "q_lo", "uncertainty_q_lo"),
+          help="Bad bound of production and prices, nominal of consumption (paper: 0.2).")
+c4.slider("Upper percentile", min(Q_HI[0], q.q_hi), max(Q_HI[1], q.q_hi), value=q.q_hi, step=Q_STEP,
+          key="uncertainty_q_hi",
+          on_change=from_widget, args=("uncertainty", "q_hi", "uncertainty_q_hi"),
+          help="Nominal of production, bad bound of consumption (paper: 0.8).")
+if st.session_state.get("uncertainty_problems"):
+    widgets.problems(st.session_state["uncertainty_problems"])
+
+st.subheader("Budgets Γ")
+st.markdown(f"A budget Γ is the number of **periods** in which a source may deviate to its bad bound. "
+            f"This day has **{nt} periods of {case.dt_h * 60:g} minutes**"
+            + (f", so Γ = {round(1 / case.dt_h)} is one hour" if case.dt_h < 1 else "") + ". "
+            "The strategy presets are the paper's Table 7, given in hours and scaled to periods.")
+st.segmented_control("Strategy preset", STRATEGIES, default=case.budgets.strategy, key="uncertainty_strategy",
+                     required=True, format_func=str.capitalize, on_change=set_strategy,
+                     args=("uncertainty_strategy",),
+                     help="One click sets every Γ to the preset and drops the individual edits.")
+st.caption("Presets in hours — " + "; ".join(
+    f"{s}: prices {b['price']}, wind {b['wind']}, PV {b['pv']}, CSP {b['csp']}, demands {b['ed']}"
+    for s, b in STRATEGY_BUDGETS_H.items()))
+left, right = st.columns([3, 2])
+with left:
+    widgets.table_editor(
+        BUDGETS_KEY,
+        build=lambda: budget_table(state.case()),
+        apply=lambda table: with_budgets(state.case(), table),
+        column_config={
+            "source": st.column_config.TextColumn("Source", disabled=True),
+            "kind": st.column_config.TextColumn("Kind", disabled=True),
+            "preset": st.column_config.NumberColumn(f"Preset Γ [{PERIOD_NAMES[case.dt_h]}]", disabled=True),
+            "gamma": st.column_config.NumberColumn(f"Γ [{PERIOD_NAMES[case.dt_h]}]", min_value=0, max_value=nt,
+                                                   step=1, help="Edit to override the preset; empty: the preset"),
+            "hours": st.column_config.NumberColumn("Γ [h]", disabled=True, format="%.2f"),
+        },
+        column_order=["source", "kind", "preset", "gamma"] + (["hours"] if case.dt_h < 1 else []),
+        hide_index=True, height=TABLE_ROW_PX * (len(case.sources()) + 1) + TABLE_BORDER_PX,
+    )
+with right:
+    st.radio("Budget variant", list(MODES), format_func=MODES.get, index=list(MODES).index(case.budgets.mode),
+             key="uncertainty_mode", on_change=from_widget, args=("budgets", "mode", "uncertainty_mode"))
+    st.caption("Paper mode is the published method and the default. In the planner-chosen variant the "
+               "optimiser may pick the Γ periods where a deviation hurts least: useful to show why the "
+               "published constraints matter, not for bidding.")
+    st.caption("Prices deviate where the plan loses most (exact); units deviate in their largest-deviation "
+               "periods (paper mode). Neither searches the hours that hurt the profit most.")
+
+st.subheader("Where each source deviates")
+run = state.run_case()
+problem = solving.prepare(run)
+if problem is not None:
+    result = None
+    if state.is_requested(run) or st.button("Solve to mark the deviating periods χ", key="uncertainty_solve",
+                                            icon=":material/play_arrow:"):
+        state.mark_requested(run)
+        result = solving.solve(run, "Solving the current case")
+    if result is None or not result.has_plan:
+        st.caption("Bands of the delivery day; solve to mark the periods where each source deviates.")
+    else:
+        st.caption("Shaded, with a cross on the bad bound: the periods where the plan assumes the source "
+                   "deviates (χ = 1). Prices: the Γ periods of largest loss for this plan.")
+    sources = list(PRICE_COLUMNS) + [u.name for _, u in run.units()]
+    kinds = {u.name: k for k, u in run.units()}
+    groups = {g: [s for s in sources if (kinds.get(s) or "price") in members] for g, members in GROUPS.items()}
+    groups = {g: members for g, members in groups.items() if members}
+    for tab, (group, members) in zip(st.tabs(list(groups)), groups.items()):
+        with tab:
+            columns = st.columns(BAND_COLUMNS)
+            for i, source in enumerate(members):
+                chi = deviating_periods(result, source) if result is not None and result.has_plan else None
+                with columns[i % BAND_COLUMNS]:
+                    figure = thin_clock_ticks(bands_figure(problem, source, chi), NARROW_TICK_HOURS)
+                    st.plotly_chart(figure, key=f"uncertainty_band_{source}")

@@ -1,0 +1,92 @@
+"""Plans side by side: the run variants of a comparison and the paper's comparison tables.
+
+* :func:`strategy_case` — a case with a strategy preset and a market set applied;
+* :func:`cost_table` — cost [kEUR] per strategy and market set (paper Table 10 layout);
+* :func:`flexibility_table` — reserve energy per strategy and unit kind (paper Table 9 layout);
+* :func:`kpi_table` — headline numbers of any labelled plans.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import pandas as pd
+
+from .case import STRATEGIES, Case, with_options
+from .results import Result
+
+MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # the columns of the paper's Table 10
+KIND_NAMES = {"wind": "WFs", "pv": "PVs", "csp": "CSP", "ed": "EDs"}  # the rows of the paper's Table 9
+PERCENT = 100.0
+
+
+def strategy_case(case: Case, strategy: str, markets: str | None = None) -> Case:
+    """``case`` with the budgets of ``strategy`` (individual Γ edits dropped) and, if given,
+    the market set ``markets`` such as ``"DAM+SRM"``."""
+    changed = with_options(case, markets=markets.replace("+", ",")) if markets else case
+    return changed.replace(budgets={"strategy": strategy, "overrides": {}})
+
+
+def cost_table(results: Mapping[tuple[str, str], Result]) -> pd.DataFrame:
+    """Cost [kEUR] (−profit) with one row per strategy and one column per market set.
+
+    ``results`` maps ``(strategy, market set)`` to a result; plans that were not solved
+    to a plan are NaN.
+    """
+    strategies = [s for s in STRATEGIES if any(k[0] == s for k in results)]
+    sets = [m for m in MARKET_SETS if any(k[1] == m for k in results)]
+    table = pd.DataFrame(index=pd.Index([s.capitalize() for s in strategies], name="Strategy"),
+                         columns=pd.Index(sets, name="Market (contract)"), dtype=float)
+    for (strategy, market_set), result in results.items():
+        table.loc[strategy.capitalize(), market_set] = result.cost_keur if result.has_plan else float("nan")
+    return table
+
+
+def flexibility_table(results: Mapping[str, Result]) -> pd.DataFrame:
+    """Reserve energy [MWh] and reserve-to-capacity ratio [h] per plan and unit kind."""
+    frames = []
+    for label, result in results.items():
+        if not result.has_plan:
+            continue
+        flex = result.flexibility
+        frames.append(pd.DataFrame({
+            "Strategy": label.capitalize() if label in STRATEGIES else label,
+            "Unit": flex["kind"].map(KIND_NAMES),
+            "Upward reserve [MWh]": flex["r_up_mwh"],
+            "Downward reserve [MWh]": flex["r_dn_mwh"],
+            "Upward reserve to capacity [h]": flex["r_up_h"],
+            "Downward reserve to capacity [h]": flex["r_dn_h"],
+        }))
+    if not frames:
+        return pd.DataFrame()
+    return pd.concat(frames, ignore_index=True).set_index(["Strategy", "Unit"])
+
+
+def kpi_table(results: Mapping[str, Result], baseline: str | None = None) -> pd.DataFrame:
+    """One row per labelled plan: status, profit and its parts [EUR], cost [kEUR], solve time [s].
+
+    With ``baseline`` (a label of ``results`` with a plan), two more columns give each
+    plan's extra cost over the baseline's [kEUR] and [%]: what being safer costs.
+    """
+    rows = []
+    for label, result in results.items():
+        parts = result.parts
+        rows.append({
+            "Run": label,
+            "Status": result.status,
+            "Profit [EUR]": result.objective_eur,
+            "Cost [kEUR]": result.cost_keur,
+            "DAM revenue [EUR]": parts.get("revenue_dam_eur"),
+            "Reserve revenue [EUR]": parts.get("revenue_sr_eur"),
+            "HPA cost [EUR]": parts.get("cost_hpa_eur"),
+            "Operating cost [EUR]": parts.get("cost_opex_eur"),
+            "Protection [EUR]": sum(result.protection_eur.values()) if result.protection_eur else None,
+            "Solve time [s]": result.build_s + result.solve_s + result.extract_s,
+        })
+    table = pd.DataFrame(rows).set_index("Run")
+    if baseline is not None and results[baseline].has_plan:
+        base = results[baseline].cost_keur
+        extra = table["Cost [kEUR]"].astype(float) - base
+        table.insert(3, f"Extra cost vs {baseline} [kEUR]", extra)
+        table.insert(4, f"Extra cost vs {baseline} [%]", PERCENT * extra / abs(base) if base else float("nan"))
+    return table

@@ -1,0 +1,350 @@
+"""A case as tables: one row per unit, for table editors and Excel workbooks.
+
+:func:`unit_table` lays the units of one kind out flat (nested CSP sections become
+dotted columns such as ``storage.e_min_mwh_th``; the power-block breakpoints have their
+own :func:`breakpoint_table`). :func:`with_unit_table` reads such a table back through
+the case model, so an invalid value raises :class:`~rvpp.errors.CaseError` naming the
+unit, the field, the value and the rule.
+
+The case workbook follows the layout of the plan export (``plan.xlsx``): a ``case``
+sheet of ``field``/``value`` rows, then one sheet per table with one header row:
+
+=============  ==================================================================
+sheet          content
+=============  ==================================================================
+``case``       name, description, delivery date, time zone, period length and the
+               ``markets.``, ``uncertainty.``, ``budgets.`` and ``solver.`` settings
+``hpa_tariff`` ``hour`` 0..23, ``tariff_eur_per_mwh``
+``budgets``    ``source``, ``gamma`` [periods]: per-source overrides of the strategy
+``wind`` ...   one sheet per unit kind (``wind``, ``pv``, ``csp``, ``ed``, ``td``)
+``breakpoints`` ``unit``, ``input_mw_th``, ``efficiency`` of every CSP power block
+``history``    ``timestamp`` (ISO 8601 with UTC offset) and one column per series
+=============  ==================================================================
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import io
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .case import UNIT_KINDS, Case, parse_case
+from .errors import CaseError
+from .history import History
+
+BREAKPOINTS = "power_block.breakpoints"
+BREAKPOINT_COLUMNS = ("input_mw_th", "efficiency")
+SERIES_FIELDS = {"wind": "series", "pv": "series", "csp": "solar_field.series", "ed": "series", "td": "series"}
+NAME_PREFIXES = {"wind": "WF", "pv": "PV", "csp": "CSP", "ed": "ED", "td": "TD"}
+SETTING_SECTIONS = ("markets", "uncertainty", "budgets", "solver")
+TOP_SETTINGS = ("name", "description", "delivery_date", "timezone", "dt_h")
+HOURS_PER_DAY = 24
+SHEET_WIDTH = (10, 40)  # [characters] narrowest and widest column of a written sheet
+
+# A typical unit of each kind, from the paper's case (MODEL_SPEC §12, paper Tables 3-6):
+# the values a new row starts from.
+UNIT_TEMPLATES: dict[str, dict[str, Any]] = {
+    "wind": {"p_max_mw": 50.0, "p_min_mw": 0.0, "om_eur_per_mwh": 15.0, "ramp_up_mw_per_min": 15.0,
+             "ramp_dn_mw_per_min": 25.0, "reserve_share": 0.1, "series_scale": 1.0},
+    "pv": {"p_max_mw": 50.0, "p_min_mw": 0.0, "om_eur_per_mwh": 7.5, "ramp_up_mw_per_min": 10.0,
+           "ramp_dn_mw_per_min": 25.0, "reserve_share": 0.1, "series_scale": 1.0},
+    "csp": {"om_eur_per_mwh": 25.0, "heat_efficiency": 0.9, "ramp_mw_per_min": 25.0, "reserve_share": 0.5,
+            "solar_field": {"p_max_mw_th": 300.0, "series_scale": 1.0},
+            "storage": {"e_min_mwh_th": 110.0, "e_max_mwh_th": 1100.0, "p_ch_max_mw_th": 140.0,
+                        "p_ch_min_mw_th": 0.0, "p_dis_max_mw_th": 115.0, "p_dis_min_mw_th": 0.0,
+                        "eta_ch": 0.95, "eta_dis": 0.95},
+            "power_block": {"p_in_max_mw_th": 140.0, "p_in_min_mw_th": 19.0, "p_el_max_mw": 55.0,
+                            "breakpoints": [[0.0, 0.0], [18.99, 0.0], [19.0, 0.27], [40.0, 0.34],
+                                            [70.0, 0.38], [140.0, 0.395]],
+                            "min_up_h": 6.0, "min_down_h": 6.0, "startup_fraction": 1.0,
+                            "startup_duration_h": 1.0, "initially_on": False}},
+    "ed": {"p_min_mw": 5.0, "p_max_mw": 60.0, "e_min_mwh": 600.0, "ramp_up_mw_per_min": 10.0,
+           "ramp_dn_mw_per_min": 10.0, "flex_up": 0.1, "flex_dn": 0.1, "series_scale": 1.0},
+    "td": {"h_min_mw_th": 5.0, "h_max_mw_th": 70.0, "q_min_mwh_th": 700.0, "series_scale": 1.0},
+}
+
+
+# ----------------------------------------------------------------------------- unit tables
+
+
+def unit_table(case: Case, kind: str) -> pd.DataFrame:
+    """The units of ``kind`` as one flat row each.
+
+    The series column shows the history column that backs each unit (its own name
+    unless the unit names another series).
+    """
+    _check_kind(kind)
+    rows = []
+    for unit, data in zip(getattr(case, kind), case.to_data()["units"][kind]):
+        row = _flatten(data)
+        row.pop(BREAKPOINTS, None)
+        row[SERIES_FIELDS[kind]] = unit.column
+        rows.append(row)
+    table = pd.DataFrame(rows, columns=unit_columns(kind))
+    empty = [c for c in table.columns if c != "name" and table[c].isna().all()]
+    return table.astype({c: float for c in empty})
+
+
+def unit_columns(kind: str) -> list[str]:
+    """Column names of :func:`unit_table` for ``kind`` (template order, then optional fields)."""
+    _check_kind(kind)
+    columns = ["name", *(c for c in _flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
+    optional = {"wind": [], "pv": [], "csp": ["storage.e_init_mwh_th"], "ed": ["p_init_mw"], "td": ["h_init_mw_th"]}
+    series = SERIES_FIELDS[kind]
+    scale_at = columns.index(series.replace("series", "series_scale"))
+    columns.insert(scale_at, series)
+    return columns + optional[kind]
+
+
+def new_unit_row(case: Case, kind: str) -> dict[str, Any]:
+    """Values a new unit of ``kind`` starts from: a free name, the template and the series
+    of the first unit of that kind (or its own name when there is none)."""
+    row = _flatten(UNIT_TEMPLATES[kind])
+    row.pop(BREAKPOINTS, None)
+    existing = [u for k, u in case.units() if k == kind]
+    row["name"] = next_unit_name(case, kind)
+    row[SERIES_FIELDS[kind]] = existing[0].column if existing else row["name"]
+    return row
+
+
+def next_unit_name(case: Case, kind: str) -> str:
+    """The first free name ``<prefix><n>`` for a new unit of ``kind`` (e.g. ``WF3``)."""
+    taken = set(case.unit_names())
+    n = 1
+    while f"{NAME_PREFIXES[kind]}{n}" in taken:
+        n += 1
+    return f"{NAME_PREFIXES[kind]}{n}"
+
+
+def with_unit_table(case: Case, kind: str, table: pd.DataFrame,
+                    breakpoints: Mapping[str, Any] | None = None) -> Case:
+    """``case`` with its units of ``kind`` replaced by the rows of ``table``.
+
+    Empty cells fall back to the model's defaults (or are reported as required). A CSP
+    keeps the breakpoints of the CSP of the same name, else those in ``breakpoints``
+    (name → list of ``(input, efficiency)``), else the template's.
+    Raises :class:`CaseError` when a value breaks a rule.
+    """
+    _check_kind(kind)
+    units = _units_from_table(kind, table)
+    if kind == "csp":
+        known = {c.name: [list(p) for p in c.power_block.breakpoints] for c in case.csp}
+        known.update({name: [list(p) for p in points] for name, points in (breakpoints or {}).items()})
+        for unit in units:
+            block = unit.setdefault("power_block", {})
+            block.setdefault("breakpoints", known.get(unit.get("name"),
+                                                      UNIT_TEMPLATES["csp"]["power_block"]["breakpoints"]))
+    data = case.to_data()
+    data["units"][kind] = units
+    removed = {u.name for u in getattr(case, kind)} - {u.get("name") for u in units}
+    data["budgets"]["overrides"] = {k: v for k, v in data["budgets"]["overrides"].items() if k not in removed}
+    return parse_case(data, case.history)
+
+
+def breakpoint_table(case: Case, csp: str) -> pd.DataFrame:
+    """The power-block curve of CSP ``csp``: thermal input [MW_th] and efficiency [-] per point."""
+    unit = _csp(case, csp)
+    return pd.DataFrame(list(unit.power_block.breakpoints), columns=list(BREAKPOINT_COLUMNS))
+
+
+def with_breakpoints(case: Case, csp: str, table: pd.DataFrame) -> Case:
+    """``case`` with the power-block curve of ``csp`` replaced by the rows of ``table``."""
+    _csp(case, csp)
+    points = [[_number(row[c]) for c in BREAKPOINT_COLUMNS] for row in table.to_dict(orient="records")
+              if not all(_is_empty(row[c]) for c in BREAKPOINT_COLUMNS)]
+    missing = [i for i, p in enumerate(points, start=1) if any(v is None for v in p)]
+    if missing:
+        raise CaseError(f'csp "{csp}": power_block.breakpoints point {missing[0]} needs both an input and '
+                        "an efficiency")
+    data = case.to_data()
+    for unit in data["units"]["csp"]:
+        if unit["name"] == csp:
+            unit["power_block"]["breakpoints"] = points
+    return parse_case(data, case.history)
+
+
+# ----------------------------------------------------------------------------- workbook
+
+
+def write_case_workbook(case: Case, target: str | Path | io.BytesIO) -> str | Path | io.BytesIO:
+    """Write ``case`` (settings, units, curves, history) as an Excel workbook."""
+    data = case.to_data()
+    settings = {key: data[key] for key in TOP_SETTINGS}
+    settings["delivery_date"] = case.delivery_date.isoformat()
+    for section in SETTING_SECTIONS:
+        for key, value in data[section].items():
+            if key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam"):
+                settings[f"{section}.{key}"] = value
+    tariff = pd.DataFrame({"hour": range(HOURS_PER_DAY),
+                           "tariff_eur_per_mwh": list(case.markets.hpa_tariff_eur_per_mwh)})
+    budgets = pd.DataFrame(list(case.budgets.overrides), columns=["source", "gamma"])
+    curves = pd.DataFrame([(c.name, p, eta) for c in case.csp for p, eta in c.power_block.breakpoints],
+                          columns=["unit", *BREAKPOINT_COLUMNS])
+    history = case.history.frame
+    history.insert(0, "timestamp", [t.isoformat() for t in history.index.tz_convert(case.timezone)])
+    with pd.ExcelWriter(target, engine="openpyxl") as writer:
+        pd.DataFrame({"field": list(settings), "value": list(settings.values())}).to_excel(
+            writer, sheet_name="case", index=False)
+        tariff.to_excel(writer, sheet_name="hpa_tariff", index=False)
+        budgets.to_excel(writer, sheet_name="budgets", index=False)
+        for kind in UNIT_KINDS:
+            unit_table(case, kind).to_excel(writer, sheet_name=kind, index=False)
+        curves.to_excel(writer, sheet_name="breakpoints", index=False)
+        history.to_excel(writer, sheet_name="history", index=False)
+        for sheet in writer.sheets.values():
+            sheet.freeze_panes = "A2"
+            for column in sheet.columns:
+                width = max(len(str(c.value)) if c.value is not None else 0 for c in column[:50])
+                sheet.column_dimensions[column[0].column_letter].width = min(max(SHEET_WIDTH[0], width + 2),
+                                                                             SHEET_WIDTH[1])
+    return target
+
+
+def case_workbook_bytes(case: Case) -> bytes:
+    """The case workbook as bytes (for downloads)."""
+    buffer = io.BytesIO()
+    write_case_workbook(case, buffer)
+    return buffer.getvalue()
+
+
+def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "workbook") -> Case:
+    """Read a case workbook written by :func:`write_case_workbook` (or filled in by hand)."""
+    if isinstance(source, bytes):
+        source = io.BytesIO(source)
+    try:
+        sheets = pd.read_excel(source, sheet_name=None, dtype=object)
+    except Exception as exc:  # openpyxl raises many types for a file that is not a workbook
+        raise CaseError(f"{label}: cannot be read as an Excel workbook ({exc})") from None
+    required = ("case", "hpa_tariff", "history")
+    missing = [name for name in required if name not in sheets]
+    if missing:
+        raise CaseError(f"{label}: sheet {missing[0]!r} is missing (a case workbook has the sheets case, "
+                        f"hpa_tariff, budgets, {', '.join(UNIT_KINDS)}, breakpoints and history)")
+    data = _settings(sheets["case"], label)
+    data.setdefault("markets", {})["hpa_tariff_eur_per_mwh"] = _tariff(sheets["hpa_tariff"], label)
+    budgets = sheets.get("budgets", pd.DataFrame(columns=["source", "gamma"]))
+    data.setdefault("budgets", {})["overrides"] = {
+        str(row["source"]): _plain(row["gamma"]) for row in budgets.to_dict(orient="records")
+        if not _is_empty(row.get("source"))}
+    curves = sheets.get("breakpoints", pd.DataFrame(columns=["unit", *BREAKPOINT_COLUMNS]))
+    points: dict[str, list] = {}
+    for row in curves.to_dict(orient="records"):
+        points.setdefault(str(row["unit"]), []).append([_plain(row[c]) for c in BREAKPOINT_COLUMNS])
+    data["units"] = {}
+    for kind in UNIT_KINDS:
+        for unit in _units_from_table(kind, sheets.get(kind, pd.DataFrame(columns=["name"]))):
+            if kind == "csp":
+                unit.setdefault("power_block", {})["breakpoints"] = points.get(unit.get("name"), [])
+            data["units"].setdefault(kind, []).append(unit)
+    history = History(sheets["history"].astype({"timestamp": str}) if "timestamp" in sheets["history"]
+                      else sheets["history"], source=f"{label}, sheet history")
+    return parse_case(data, history)
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _check_kind(kind: str) -> None:
+    if kind not in UNIT_KINDS:
+        raise ValueError(f"unknown unit kind {kind!r}; kinds are {', '.join(UNIT_KINDS)}")
+
+
+def _csp(case: Case, name: str):
+    for unit in case.csp:
+        if unit.name == name:
+            return unit
+    raise CaseError(f"no CSP named {name!r} (the case has {', '.join(c.name for c in case.csp) or 'none'})")
+
+
+def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    flat: dict[str, Any] = {}
+    for key, value in data.items():
+        if isinstance(value, Mapping):
+            flat.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def _unflatten(flat: Mapping[str, Any]) -> dict[str, Any]:
+    nested: dict[str, Any] = {}
+    for key, value in flat.items():
+        *parents, leaf = key.split(".")
+        node = nested
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return nested
+
+
+def _is_empty(value: Any) -> bool:
+    if value is None or value is pd.NA or value is pd.NaT:
+        return True
+    if isinstance(value, float) and math.isnan(value):
+        return True
+    return isinstance(value, str) and not value.strip()
+
+
+def _plain(value: Any) -> Any:
+    """Python scalars from numpy/pandas cells; empty cells become ``None``."""
+    if _is_empty(value):
+        return None
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, pd.Timestamp):
+        value = value.to_pydatetime()
+    if isinstance(value, dt.datetime):
+        return value.date() if value.time() == dt.time(0) else value
+    return value.strip() if isinstance(value, str) else value
+
+
+def _number(value: Any) -> Any:
+    value = _plain(value)
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
+
+
+def _units_from_table(kind: str, table: pd.DataFrame) -> list[dict[str, Any]]:
+    """Nested unit data from table rows; empty cells are left out so model defaults apply,
+    and a series equal to the unit's own name is left implicit."""
+    units = []
+    for row in table.to_dict(orient="records"):
+        unit = _unflatten({key: _plain(value) for key, value in row.items() if not _is_empty(value)})
+        if not unit:
+            continue
+        node = unit
+        for part in SERIES_FIELDS[kind].split(".")[:-1]:
+            node = node.setdefault(part, {})
+        if node.get("series") is not None and node["series"] == unit.get("name"):
+            node["series"] = None
+        units.append(unit)
+    return units
+
+
+def _settings(sheet: pd.DataFrame, label: str) -> dict[str, Any]:
+    if not {"field", "value"} <= set(sheet.columns):
+        raise CaseError(f"{label}: sheet 'case' needs the columns field and value")
+    flat = {str(row["field"]).strip(): _plain(row["value"]) for row in sheet.to_dict(orient="records")
+            if not _is_empty(row["field"])}
+    flat = {key: value for key, value in flat.items() if value is not None or key == "description"}
+    if isinstance(flat.get("delivery_date"), dt.date):
+        flat["delivery_date"] = flat["delivery_date"].isoformat()
+    if flat.get("description") is None:
+        flat["description"] = ""
+    return _unflatten(flat)
+
+
+def _tariff(sheet: pd.DataFrame, label: str) -> list[Any]:
+    if "tariff_eur_per_mwh" not in sheet.columns:
+        raise CaseError(f"{label}: sheet 'hpa_tariff' needs a column tariff_eur_per_mwh (one row per hour 0..23)")
+    return [_number(v) for v in sheet["tariff_eur_per_mwh"].tolist()]

@@ -1,0 +1,358 @@
+"""The dashboard, page by page, driven through Streamlit's AppTest.
+
+Every number the app shows is checked against the library's own result for the same
+input (``rvpp.solve`` in this process, while the app solves in its worker processes).
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import re
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from streamlit.testing.v1 import AppTest
+
+import rvpp
+from rvpp.audit import price_exposures, protection_exact
+from rvpp.bundle import case_zip_bytes
+from rvpp.case import STRATEGIES
+from rvpp.compare import strategy_case
+
+ROOT = Path(__file__).resolve().parent.parent
+APP = str(ROOT / "app.py")
+TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
+KPI_MONEY = ("Profit", "Cost", "DAM revenue", "Reserve revenue", "HPA cost", "Operating cost", "Protection cost")
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def open_app(page: str | None = None) -> AppTest:
+    at = AppTest.from_file(APP, default_timeout=TIMEOUT_S).run()
+    if page:
+        at.switch_page(f"pages/{page}.py").run()
+    assert not at.exception, at.exception
+    return at
+
+
+def click(at: AppTest, key: str) -> AppTest:
+    at.button(key=key).click().run()
+    assert not at.exception, at.exception
+    return at
+
+
+def number(text: str) -> float:
+    return float(text.replace("−", "-").replace(",", "").split()[0])
+
+
+def shown_kpis(at: AppTest) -> dict[str, tuple[str, str]]:
+    return {m.label: (m.value, m.proto.help) for m in at.metric}
+
+
+def expected_kpis(result: rvpp.Result) -> dict[str, float]:
+    """The library's numbers [EUR] under the app's card labels."""
+    parts = result.parts
+    return {"Profit": result.objective_eur, "Cost": -result.objective_eur,
+            "DAM revenue": parts["revenue_dam_eur"], "Reserve revenue": parts["revenue_sr_eur"],
+            "HPA cost": parts["cost_hpa_eur"], "Operating cost": parts["cost_opex_eur"],
+            "Protection cost": sum(result.protection_eur.values())}
+
+
+def assert_kpis_match(at: AppTest, result: rvpp.Result, labels=KPI_MONEY) -> None:
+    """Cards show kEUR to one decimal and the exact EUR amount in their help."""
+    shown, expected = shown_kpis(at), expected_kpis(result)
+    for label in labels:
+        value, help_text = shown[label]
+        assert number(value) == pytest.approx(expected[label] / 1000, abs=0.051), label
+        exact = re.search(r"Exact: (\S+) EUR", help_text).group(1)
+        assert number(exact) == pytest.approx(expected[label], abs=0.51), label
+
+
+def figures(at: AppTest) -> dict[str, dict]:
+    """Plotly specs of the page by title."""
+    specs = [json.loads(chart.proto.spec) for chart in at.get("plotly_chart")]
+    return {spec["layout"]["title"]["text"]: spec for spec in specs}
+
+
+def trace(spec: dict, name: str) -> dict:
+    found = [t for t in spec["data"] if t.get("name") == name]
+    assert found, f"no trace {name!r} in {[t.get('name') for t in spec['data']]}"
+    return found[0]
+
+
+def values(data) -> np.ndarray:
+    """Trace values as numbers (Plotly may ship arrays as typed base64 buffers)."""
+    if isinstance(data, dict) and "bdata" in data:
+        return np.frombuffer(base64.b64decode(data["bdata"]), dtype=np.dtype(data["dtype"])).astype(float)
+    return np.asarray(data, dtype=float)
+
+
+def errors(at: AppTest) -> str:
+    return "\n".join(e.value for e in at.error)
+
+
+def case_of(at: AppTest) -> rvpp.Case:
+    return at.session_state["case"]
+
+
+# ----------------------------------------------------------------------------- Home
+
+
+def test_home_lands_on_the_default_case(paper_case):
+    at = open_app()
+    assert at.title[0].value.startswith("Robust day-ahead bids")
+    assert case_of(at) == paper_case
+    summary = at.table[0].value
+    assert list(summary["Units"]) == [2, 3, 1, 3, 2]
+    assert {link.proto.page for link in at.get("page_link")} >= {"portfolio", "results", "compare", "learn"}
+
+
+def test_home_balanced_solve_shows_the_library_numbers(paper_solve):
+    at = click(open_app(), "home_solve")
+    expected = paper_solve(strategy="balanced")
+    assert expected.status == "optimal"
+    assert_kpis_match(at, expected, labels=("Profit", "Cost", "DAM revenue", "Reserve revenue", "Protection cost"))
+    spec = figures(at)["Day-ahead energy and secondary-reserve bands"]
+    np.testing.assert_allclose(values(trace(spec, "DAM energy (+ sell, − buy)")["y"]), expected.market["p_da_mw"])
+
+
+def test_home_upload_of_a_broken_case_is_explained_and_a_good_one_loads(paper_case):
+    at = open_app()
+    data = case_zip_bytes(paper_case)
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        text = archive.read("paper/case.yaml").decode()
+        history = archive.read("paper/history.csv")
+    broken = text.replace("e_max_mwh_th: 1100.0", "e_max_mwh_th: 100.0")
+    at.file_uploader(key="home_upload").set_value([("case.yaml", broken.encode(), "text/yaml"),
+                                                   ("history.csv", history, "text/csv")]).run()
+    click(at, "home_load_upload")
+    assert 'csp "CSP1": storage.e_min_mwh_th=110 must be < storage.e_max_mwh_th=100' in errors(at)
+    assert case_of(at) == paper_case
+    renamed = text.replace("name: paper", "name: uploaded", 1)
+    at.file_uploader(key="home_upload").set_value([("case.yaml", renamed.encode(), "text/yaml"),
+                                                   ("history.csv", history, "text/csv")]).run()
+    click(at, "home_load_upload")
+    assert not errors(at)
+    assert case_of(at).name == "uploaded" and case_of(at).replace(name="paper") == paper_case
+
+
+def test_home_loads_a_case_folder(tmp_path, paper_case):
+    at = open_app()
+    at.text_input(key="home_folder").input(str(tmp_path / "missing")).run()
+    click(at, "home_load_folder")
+    assert "no case.yaml found" in errors(at)
+    assert case_of(at) == paper_case
+    mine = rvpp.with_options(paper_case, strategy="pessimistic")
+    rvpp.save_case(mine, tmp_path / "mine")
+    at.text_input(key="home_folder").input(str(tmp_path / "mine")).run()
+    click(at, "home_load_folder")
+    assert not errors(at)
+    assert case_of(at) == mine
+
+
+# ----------------------------------------------------------------------------- Portfolio
+
+
+def test_portfolio_renders_tables_and_every_band(paper_case):
+    at = open_app("portfolio")
+    editors = {e.key for e in at.data_editor}
+    assert {f"portfolio_{kind}_0" for kind in ("wind", "pv", "csp", "ed", "td")} <= editors
+    titles = figures(at)
+    for _, unit in paper_case.units():
+        assert any(t.startswith(f"{unit.name} (") for t in titles), unit.name
+    assert "Power-block conversion curve" in titles
+
+
+def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_case):
+    at = open_app("portfolio")
+    at.session_state["portfolio_csp_0"] = {"edited_rows": {0: {"storage.e_min_mwh_th": 1200.0}},
+                                           "added_rows": [], "deleted_rows": []}
+    at.run()
+    assert not at.exception
+    assert 'csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100' in errors(at)
+    assert case_of(at) == paper_case
+    click(at, "portfolio_csp_discard")
+    assert not errors(at) and "portfolio_csp_1" in {e.key for e in at.data_editor}
+    at.session_state["portfolio_pv_0"] = {"edited_rows": {0: {"p_max_mw": 20.0}}, "added_rows": [],
+                                          "deleted_rows": []}
+    at.run()
+    assert not errors(at)
+    edited = case_of(at)
+    assert edited.pv[0].p_max_mw == 20.0 and edited.replace(pv=paper_case.pv) == paper_case
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    expected = rvpp.solve(edited)
+    assert expected.status == "optimal"
+    assert_kpis_match(at, expected)
+    assert number(shown_kpis(at)["Profit"][0]) != pytest.approx(
+        rvpp.solve(paper_case).objective_eur / 1000, abs=0.05)
+
+
+def test_portfolio_adds_a_unit_and_switches_the_csp_off(paper_case, paper_solve):
+    at = open_app("portfolio")
+    at.session_state["portfolio_wind_0"] = {
+        "edited_rows": {}, "deleted_rows": [],
+        "added_rows": [{"name": "WF3", "p_max_mw": 30.0, "ramp_up_mw_per_min": 15.0, "ramp_dn_mw_per_min": 25.0,
+                        "series": "WF2"}]}
+    at.run()
+    assert not errors(at)
+    assert [u.name for u in case_of(at).wind] == ["WF1", "WF2", "WF3"]
+    assert case_of(at).wind[2].column == "WF2"
+    at.toggle(key="portfolio_csp_on").set_value(False).run()
+    assert at.session_state["csp_on"] is False
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    expected = rvpp.solve(rvpp.with_options(case_of(at), csp=False))
+    assert_kpis_match(at, expected)
+    assert not any(title.endswith("thermal storage") for title in figures(at))
+
+
+# ----------------------------------------------------------------------------- Markets & tariffs
+
+
+def test_markets_flat_tariff_preset_and_an_invalid_tariff(paper_case, paper_solve):
+    at = open_app("markets")
+    titles = figures(at)
+    assert {"Day-ahead price: forecast band", "Heat purchase agreement tariff"} <= set(titles)
+    click(at, "markets_flat_70")
+    assert case_of(at).markets.hpa_tariff_eur_per_mwh == (70.0,) * 24
+    np.testing.assert_allclose(values(figures(at)["Heat purchase agreement tariff"]["data"][0]["y"]), 70.0)
+    at.session_state["markets_tariff_1"] = {"edited_rows": {3: {"tariff_eur_per_mwh": -5.0}}, "added_rows": [],
+                                            "deleted_rows": []}
+    at.run()
+    assert "hpa_tariff_eur_per_mwh.3=-5 must be >= 0" in errors(at)
+    assert case_of(at).markets.hpa_tariff_eur_per_mwh == (70.0,) * 24
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    assert_kpis_match(at, paper_solve(hpa_flat=70.0))
+
+
+def test_markets_switches_go_into_the_case():
+    at = open_app("markets")
+    at.toggle(key="markets_srm").set_value(False).run()
+    assert case_of(at).markets.label == "DAM+HPA"
+    at.button_group(key="markets_dt").set_value(15).run()
+    assert not at.exception and case_of(at).dt_h == 0.25
+
+
+# ----------------------------------------------------------------------------- Uncertainty
+
+
+def test_uncertainty_presets_budgets_and_deviating_periods(paper_case, paper_solve):
+    at = open_app("uncertainty")
+    assert len(figures(at)) == len(paper_case.sources())
+    at.button_group(key="uncertainty_strategy").set_value("pessimistic").run()
+    assert case_of(at).budgets.strategy == "pessimistic"
+    table = at.data_editor(key="uncertainty_budgets_1").value
+    wf1 = int(np.flatnonzero(table["source"] == "WF1")[0])
+    at.session_state["uncertainty_budgets_1"] = {"edited_rows": {wf1: {"gamma": 30}}, "added_rows": [],
+                                                 "deleted_rows": []}
+    at.run()
+    assert "exceeds the 24 periods" in errors(at)
+    assert case_of(at).budgets.overrides == ()
+    at.session_state["uncertainty_budgets_1"] = {"edited_rows": {wf1: {"gamma": 2}}, "added_rows": [],
+                                                 "deleted_rows": []}
+    at.run()
+    assert case_of(at).budgets.override_map == {"WF1": 2}
+    click(at, "uncertainty_solve")
+    expected = rvpp.solve(case_of(at))
+    chi = expected.units.query("unit == 'PV1'").sort_values("t")["chi"].to_numpy()
+    spec = figures(at)["PV1 (pv): forecast band"]
+    marks = trace(spec, f"Deviates (χ = 1) in {int(chi.sum())} periods")
+    assert marks["x"] == [label for label, c in zip(expected.problem.labels, chi) if c]
+    wf1_spec = figures(at)["WF1 (wind): forecast band"]
+    assert trace(wf1_spec, "Deviates (χ = 1) in 2 periods")
+
+
+# ----------------------------------------------------------------------------- Results
+
+
+def test_results_charts_and_kpis_match_the_library(paper_solve):
+    at = open_app("results")
+    assert not at.get("plotly_chart")
+    click(at, "results_solve")
+    expected = paper_solve()
+    assert_kpis_match(at, expected)
+    specs = figures(at)
+    assert set(specs) == {"Day-ahead energy and secondary-reserve bands", "Heat supply against thermal demand",
+                          "Electrical dispatch by unit (consumption negative)", "CSP1: thermal storage",
+                          "Reserve by unit kind"}
+    market = expected.market
+    trades = specs["Day-ahead energy and secondary-reserve bands"]
+    np.testing.assert_allclose(values(trace(trades, "SR up band")["y"]), market["r_sr_up_mw"])
+    heat = specs["Heat supply against thermal demand"]
+    np.testing.assert_allclose(values(trace(heat, "HPA purchase")["y"]), market["h_hpa_mw"])
+    storage = specs["CSP1: thermal storage"]
+    np.testing.assert_allclose(values(trace(storage, "Stored energy (end of period)")["y"]),
+                               expected.csp["ts_energy_mwh"])
+    assert len(trace(storage, "Charge")["x"]) == expected.problem.nt
+    flexibility = at.dataframe[-1].value
+    np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
+    assert [b.label for b in at.get("download_button")] == ["Bids (CSV)", "Full plan (Excel)",
+                                                           "Case as edited (zip)", "Case as edited (Excel)"]
+    at.text_input(key="results_run_label").input("my balanced plan").run()
+    click(at, "results_save")
+    assert list(at.session_state["saved_runs"]) == ["my balanced plan"]
+
+
+def test_results_come_back_from_the_cache_without_a_click():
+    at = click(open_app("results"), "results_solve")
+    at.switch_page("pages/markets.py").run()
+    at.switch_page("pages/results.py").run()
+    assert len(at.get("plotly_chart")) == 5
+
+
+# ----------------------------------------------------------------------------- Compare
+
+
+def test_compare_costs_and_flexibility_match_the_library(paper_case, paper_solve):
+    at = click(open_app("compare"), "compare_solve")
+    cost = at.dataframe[0].value
+    assert all(strategy_case(paper_case, s, "DAM+SRM+HPA") == rvpp.with_options(paper_case, strategy=s)
+               for s in STRATEGIES)
+    expected = {s: paper_solve(strategy=s) for s in STRATEGIES}
+    for strategy, result in expected.items():
+        assert result.status == "optimal"
+        assert cost.loc[strategy.capitalize(), "DAM+SRM+HPA"] == pytest.approx(result.cost_keur)
+    spec = figures(at)["Trades of each plan"]
+    for strategy, result in expected.items():
+        lines = [t for t in spec["data"] if t["name"] == strategy]
+        np.testing.assert_allclose(values(lines[0]["y"]), result.market["p_da_mw"])
+    flexibility = at.dataframe[2].value
+    assert len(flexibility) == 4 * len(STRATEGIES)
+    click(at, "compare_save")
+    assert len(at.session_state["saved_runs"]) == len(STRATEGIES)
+    assert "Trades of each plan" in figures(at)
+
+
+# ----------------------------------------------------------------------------- Learn
+
+
+def test_learn_moves_the_adversary_live(paper_solve):
+    at = open_app("learn")
+    plan = paper_solve()
+    exposure = price_exposures(plan.problem, plan.market)["price_da"]
+    protection = [m for m in at.metric if m.label == "Protection"][0]
+    assert number(protection.value) == pytest.approx(plan.protection_eur["price_da"], abs=0.51)
+    at.slider(key="learn_price_gamma").set_value(3).run()
+    protection = [m for m in at.metric if m.label == "Protection"][0]
+    assert number(protection.value) == pytest.approx(protection_exact(exposure, 3), abs=0.51)
+    at.slider(key="learn_gamma").set_value(9).run()
+    band = next(spec for title, spec in figures(at).items() if title.startswith("WF1 ("))
+    assert trace(band, "Deviates (χ = 1) in 9 periods")
+
+
+# ----------------------------------------------------------------------------- sessions
+
+
+def test_two_sessions_keep_their_own_case():
+    first, second = open_app("uncertainty"), open_app("uncertainty")
+    first.button_group(key="uncertainty_strategy").set_value("optimistic").run()
+    second.run()
+    assert case_of(first).budgets.strategy == "optimistic"
+    assert case_of(second).budgets.strategy == "balanced"

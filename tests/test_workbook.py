@@ -1,0 +1,138 @@
+"""Cases as tables and files: unit tables, case workbooks and uploads round-trip exactly."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+
+import pandas as pd
+import pytest
+
+import rvpp
+from rvpp import bundle, workbook
+from rvpp.history import History
+
+CASE = "data/cases/paper"
+
+
+@pytest.fixture(scope="module")
+def case():
+    """The paper case on a history just long enough for its delivery day (fast to write)."""
+    full = rvpp.load_case(CASE)
+    frame = full.history.frame.loc["2025-02-10":"2025-03-20"]
+    return full.replace(history=History(frame, source="history.csv"))
+
+
+@pytest.mark.parametrize("kind", ["wind", "pv", "csp", "ed", "td"])
+def test_unit_table_round_trips(case, kind):
+    table = workbook.unit_table(case, kind)
+    assert list(table["name"]) == [u.name for u in getattr(case, kind)]
+    assert list(table.columns) == workbook.unit_columns(kind)
+    assert workbook.with_unit_table(case, kind, table) == case
+
+
+def test_unit_table_shows_the_history_column_of_each_unit(case):
+    renamed = workbook.unit_table(case, "wind")
+    assert list(renamed["series"]) == ["WF1", "WF2"]
+    renamed.loc[0, "name"] = "North"
+    edited = workbook.with_unit_table(case, "wind", renamed)
+    assert edited.wind[0].name == "North" and edited.wind[0].column == "WF1"
+    assert case.wind[0].series is None and edited.wind[1].series is None
+
+
+def test_an_edit_changes_the_case_and_an_invalid_one_names_the_rule(case):
+    table = workbook.unit_table(case, "csp")
+    table.loc[0, "storage.e_min_mwh_th"] = 1200.0
+    with pytest.raises(rvpp.CaseError) as err:
+        workbook.with_unit_table(case, "csp", table)
+    assert err.value.problems == ['csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100']
+    table.loc[0, "storage.e_min_mwh_th"] = 200.0
+    assert workbook.with_unit_table(case, "csp", table).csp[0].storage.e_min_mwh_th == 200.0
+
+
+def test_added_and_removed_rows(case):
+    table = workbook.unit_table(case, "pv")
+    row = workbook.new_unit_row(case, "pv")
+    assert row["name"] == "PV4" and row["series"] == "PV1"
+    grown = workbook.with_unit_table(case, "pv", pd.concat([table, pd.DataFrame([row])], ignore_index=True))
+    assert [u.name for u in grown.pv] == ["PV1", "PV2", "PV3", "PV4"]
+    assert grown.pv[3].column == "PV1" and grown.pv[3].p_max_mw == 50.0
+    with_override = rvpp.with_options(case, gammas={"PV3": 7})
+    shrunk = workbook.with_unit_table(with_override, "pv", table.iloc[:2])
+    assert [u.name for u in shrunk.pv] == ["PV1", "PV2"]
+    assert "PV3" not in shrunk.budgets.override_map
+
+
+def test_a_new_csp_gets_a_curve_and_an_empty_required_cell_is_reported(case):
+    table = workbook.unit_table(case, "csp")
+    row = workbook.new_unit_row(case, "csp")
+    grown = workbook.with_unit_table(case, "csp", pd.concat([table, pd.DataFrame([row])], ignore_index=True))
+    assert grown.csp[1].name == "CSP2"
+    assert grown.csp[1].power_block.breakpoints == case.csp[0].power_block.breakpoints
+    table.loc[0, "power_block.p_el_max_mw"] = None
+    with pytest.raises(rvpp.CaseError, match=r'csp "CSP1": power_block.p_el_max_mw is required'):
+        workbook.with_unit_table(case, "csp", table)
+
+
+def test_breakpoints_are_edited_through_the_case_model(case):
+    table = workbook.breakpoint_table(case, "CSP1")
+    assert len(table) == len(case.csp[0].power_block.breakpoints)
+    table.loc[3, "efficiency"] = 0.36
+    assert workbook.with_breakpoints(case, "CSP1", table).csp[0].power_block.breakpoints[3] == (40.0, 0.36)
+    table.loc[3, "input_mw_th"] = 10.0
+    with pytest.raises(rvpp.CaseError, match="strictly increasing"):
+        workbook.with_breakpoints(case, "CSP1", table)
+
+
+def test_case_workbook_round_trips(case):
+    data = workbook.case_workbook_bytes(case)
+    sheets = pd.read_excel(io.BytesIO(data), sheet_name=None)
+    assert list(sheets) == ["case", "hpa_tariff", "budgets", "wind", "pv", "csp", "ed", "td", "breakpoints",
+                            "history"]
+    assert list(sheets["case"].columns) == ["field", "value"]
+    edited = rvpp.with_options(case, gammas={"WF1": 5}, markets="DAM,HPA", strategy="pessimistic")
+    back = workbook.read_case_workbook(workbook.case_workbook_bytes(edited))
+    assert back == edited
+    assert back.history.fingerprint == case.history.fingerprint
+
+
+def test_a_broken_workbook_is_explained(case):
+    with pytest.raises(rvpp.CaseError, match="cannot be read as an Excel workbook"):
+        workbook.read_case_workbook(b"not a workbook", label="plan.xlsx")
+    buffer = io.BytesIO()
+    with pd.ExcelWriter(buffer, engine="openpyxl") as writer:
+        pd.DataFrame({"field": ["name"], "value": ["x"]}).to_excel(writer, sheet_name="case", index=False)
+    with pytest.raises(rvpp.CaseError, match="sheet 'hpa_tariff' is missing"):
+        workbook.read_case_workbook(buffer.getvalue())
+
+
+def test_zip_upload_round_trips(case):
+    data = bundle.case_zip_bytes(case)
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        assert sorted(archive.namelist()) == ["paper/case.yaml", "paper/history.csv"]
+    assert bundle.read_case_files({"paper.zip": data}) == case
+
+
+def test_yaml_and_csv_upload(case):
+    with zipfile.ZipFile(io.BytesIO(bundle.case_zip_bytes(case))) as archive:
+        files = {name.split("/")[-1]: archive.read(name) for name in archive.namelist()}
+    assert bundle.read_case_files(files) == case
+    with pytest.raises(rvpp.CaseError) as err:
+        bundle.read_case_files({"case.yaml": files["case.yaml"]})
+    assert 'history file "history.csv" does not exist' in err.value.problems[0]
+    assert err.value.problems[-1] == "the files uploaded are: case.yaml"
+
+
+def test_broken_uploads_are_explained(case):
+    with pytest.raises(rvpp.CaseError, match="not a valid zip archive"):
+        bundle.read_case_files({"case.zip": b"PK-not-really"})
+    with pytest.raises(rvpp.CaseError, match="no case found in notes.txt"):
+        bundle.read_case_files({"notes.txt": b"hello"})
+    with zipfile.ZipFile(io.BytesIO(bundle.case_zip_bytes(case))) as archive:
+        text = archive.read("paper/case.yaml").decode().replace("p_max_mw: 50", "p_max_mw: -50", 1)
+        history = archive.read("paper/history.csv")
+    with pytest.raises(rvpp.CaseError) as err:
+        bundle.read_case_files({"case.yaml": text.encode(), "history.csv": history})
+    assert err.value.problems == ['wind "WF1": p_max_mw=-50 must be > 0']
+    with pytest.raises(rvpp.CaseError, match="not valid YAML"):
+        bundle.read_case_files({"case.yaml": b"name: [unclosed", "history.csv": history})
