@@ -40,7 +40,7 @@ from .model import add_units
 from .model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
 from .periods import delivery_periods, period_labels
 from .problem import Problem, Source, source_columns
-from .solve import run_highs
+from .highs import run_highs
 from .uncertainty import realized_values
 
 FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")

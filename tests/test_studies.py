@@ -116,7 +116,7 @@ def test_reproduce_runs_end_to_end(tmp_path):
         assert (tables / f"{name}.csv").is_file() and (tables / f"{name}.md").is_file()
     assert (out / "tables.xlsx").is_file()
     figures = sorted(p.stem for p in (out / "figures").glob("*.html"))
-    assert "sensitivity_trades" in figures and "out_of_sample_cost" in figures
+    assert {"case1_trades", "case1_heat", "case1_storage_CSP1", "sensitivity_trades", "out_of_sample_cost"} <= set(figures)
     if png:
         assert (out / "figures" / "sensitivity_trades.png").stat().st_size > 0
     assert list(pd.read_csv(tables / "table10_markets.csv").columns) == ["strategy", "DAM", "DAM+SRM+HPA"]

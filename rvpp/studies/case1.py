@@ -7,21 +7,22 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
+from .. import plots
 from ..case import Case
 from ..solve import solve
 from .runner import Config, Progress, StudyOutput, plan_row, stage
 from .settings import StudySettings
 
 TITLE = "Deterministic plan (paper Case 1)"
-FIGURES = {"case1_trades": "trades_figure", "case1_heat": "heat_figure", "case1_storage": "storage_figure",
-           "case1_reserve_share": "reserve_share_figure"}
+FIGURES = {  # paper Figure 9 (trades and units), Figure 10 (heat supply), reserve shares by unit kind
+    "case1_trades": plots.trades_figure, "case1_dispatch": plots.dispatch_figure, "case1_heat": plots.heat_figure,
+    "case1_reserve_share": plots.reserve_share_figure,
+}
 
 
-def plan_figures(result) -> dict:
-    """Trades, heat supply, storage and reserve shares of a plan (:mod:`rvpp.plots`)."""
-    from .. import plots
-
-    return {name: getattr(plots, function)(result) for name, function in FIGURES.items()}
+def storage_figures(result) -> dict:
+    """Paper Figure 11: the thermal storage of every CSP of the plan."""
+    return {f"case1_storage_{c.name}": plots.storage_figure(result, c.name) for c in result.case.csp}
 
 
 def run(case: Case, settings: StudySettings, executor: Executor | None = None,
@@ -36,11 +37,8 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     if result.has_plan:
         out.tables.update(case1_market=result.market, case1_units=result.units, case1_csp=result.csp,
                           case1_flexibility=result.flexibility)
-        try:
-            out.figures.update(plan_figures(result))
-        except ImportError:
-            out.notes.append("Case 1 figures need rvpp.plots (trades, heat, storage, reserve share), "
-                             "which this installation does not have; the tables are complete.")
+        out.figures.update({name: draw(result) for name, draw in FIGURES.items()})
+        out.figures.update(storage_figures(result))
     out.facts.update(result=result)
     out.seconds = time.perf_counter() - started
     return out
