@@ -74,6 +74,7 @@ class Penalties:
         return HEAT_PRICE_FACTOR * max(case.markets.hpa_tariff_eur_per_mwh)
 
     def describe(self, case: Case) -> dict[str, float]:
+        """The settings in force for ``case`` (``c_heat`` resolved) [-], [EUR/MWh_th]."""
         return {"m_def": self.m_def, "m_sur": self.m_sur, "m_sr": self.m_sr,
                 "c_heat_eur_per_mwh": self.heat_price(case)}
 

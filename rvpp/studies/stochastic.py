@@ -16,7 +16,7 @@ from ..batch import run_many
 from ..case import Case, with_options
 from ..recourse import StochasticPlan, set_fingerprint, solve_stochastic
 from . import figures
-from .evaluation import evaluate_methods, realizations, sample_days, summarize, training_days
+from .evaluation import EUR_PER_KEUR, evaluate_methods, realizations, sample_days, summarize, training_days
 from .out_of_sample import shared_realizations
 from .runner import Progress, StudyOutput, stage
 from .settings import StudySettings
@@ -48,7 +48,8 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
                                               stage(progress, "stochastic solves"))))
     plans = pd.DataFrame([{
         "method": method_name(n), "approach": "SP", "n_scenarios": n, "status": solved[n].status,
-        "plan_cost_keur": None if solved[n].expected_profit_eur is None else -solved[n].expected_profit_eur / 1e3,
+        "plan_cost_keur": None if solved[n].expected_profit_eur is None
+        else -solved[n].expected_profit_eur / EUR_PER_KEUR,
         "mip_gap": solved[n].mip_gap, "solve_s": solved[n].solve_s, "time_limit_s": settings.sp_time_limit_s,
         "scenario_set": set_fingerprint(task[1]), "scenario_days": " ".join(d.isoformat() for d in samples[n]),
     } for n, task in zip(largest_first, tasks)]).sort_values("n_scenarios", ignore_index=True)

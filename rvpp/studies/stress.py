@@ -30,7 +30,7 @@ from ..batch import run_many
 from ..case import Case, with_options
 from ..problem import Problem, top_gamma_deviation
 from ..recourse import Realization, first_stage, nominal_realization
-from .evaluation import evaluate_task
+from .evaluation import EUR_PER_KEUR, evaluate_task
 from .runner import Config, Progress, StudyOutput, solve_configs, stage
 from .settings import StudySettings
 
@@ -127,8 +127,8 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
                         executor, stage(progress, "stress patterns"))
     table = pd.DataFrame([{
         "strategy": s, "pattern": label, "status": rec["status"], "deviations": sum(map(len, pattern.values())),
-        "market_cost_keur": rec["market_cost_eur"] / 1e3, "penalty_keur": rec["penalty_eur"] / 1e3,
-        "net_cost_keur": rec["net_cost_eur"] / 1e3, "plan_cost_keur": plans[s].cost_keur,
+        "market_cost_keur": rec["market_cost_eur"] / EUR_PER_KEUR, "penalty_keur": rec["penalty_eur"] / EUR_PER_KEUR,
+        "net_cost_keur": rec["net_cost_eur"] / EUR_PER_KEUR, "plan_cost_keur": plans[s].cost_keur,
         "periods": "; ".join(f"{name}: {','.join(map(str, ts))}" for name, ts in pattern.items()),
     } for (s, label, pattern), rec in zip(final, outcomes)])
     out = StudyOutput("stress", TITLE, tables={"stress": table, "stress_screening": screening})
