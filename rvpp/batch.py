@@ -12,7 +12,7 @@ from concurrent.futures import Executor, as_completed
 
 from .case import Case
 from .results import Result
-from .solve import solve
+from .solving import solve
 
 Progress = Callable[[int, int], None]
 

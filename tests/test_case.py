@@ -199,3 +199,12 @@ def test_markets_option_requires_the_dam(paper_case):
         with_options(paper_case, markets="SRM,HPA")
     with pytest.raises(CaseError, match="unknown market 'IDM'"):
         with_options(paper_case, markets="DAM,IDM")
+
+
+def test_a_case_survives_pickling_for_worker_processes(paper_case):
+    import pickle
+
+    again = pickle.loads(pickle.dumps(paper_case))
+    assert again == paper_case and hash(again) == hash(paper_case)
+    assert again.history.frame.equals(paper_case.history.frame)
+    assert again.history.source == paper_case.history.source

@@ -9,7 +9,7 @@ import pytest
 
 from rvpp import solve, with_options
 from rvpp.audit import audit_result
-from rvpp.model.piecewise import curve_output
+from rvpp.curve import curve_output
 from rvpp.problem import STRATEGY_BUDGETS_H
 
 STRATEGIES = tuple(STRATEGY_BUDGETS_H)

@@ -13,7 +13,8 @@ import pyomo.environ as pyo
 from ..case import CSP
 from ..problem import Problem
 from .market import activation
-from .piecewise import add_convex_combination, add_incremental, on_curve
+from ..curve import on_curve
+from .piecewise import add_convex_combination, add_incremental
 from .units import reserve_cap
 
 
