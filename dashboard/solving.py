@@ -42,7 +42,7 @@ def worker_pool() -> ProcessPoolExecutor:
     """The shared solver processes, started once and warmed up (imports done)."""
     pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=multiprocessing.get_context("spawn"))
     for _ in range(WORKERS):
-        pool.submit(importlib.import_module, "rvpp.solve")
+        pool.submit(importlib.import_module, "rvpp.solving")
     return pool
 
 

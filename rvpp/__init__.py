@@ -7,18 +7,34 @@ Typical use::
     result = rvpp.solve(rvpp.with_options(case, strategy="pessimistic"))
     print(result.status, result.objective_eur)
     rvpp.write_plan(result, "out")
+
+Names are imported on first use, so ``import rvpp`` stays light: the case model and
+its validation load without the optimisation stack (Pyomo, HiGHS).
 """
 
-from .audit import audit_export, audit_result
-from .case import Case, load_case, save_case, with_options
-from .errors import CaseError, ModelError, RvppError
-from .export import write_plan
-from .problem import Problem, prepare
-from .results import Result
-from .solve import solve, solve_problem
+from importlib import import_module
 
-__all__ = [
-    "Case", "CaseError", "ModelError", "Problem", "Result", "RvppError", "audit_export", "audit_result",
-    "load_case", "prepare", "save_case", "solve", "solve_problem", "with_options", "write_plan",
-]
+_EXPORTS = {
+    "Case": "case", "load_case": "case", "save_case": "case", "with_options": "case",
+    "CaseError": "errors", "ModelError": "errors", "RvppError": "errors",
+    "Problem": "problem", "prepare": "problem",
+    "Result": "results",
+    "audit_export": "audit", "audit_result": "audit",
+    "write_plan": "export",
+    "solve": "solving", "solve_problem": "solving",
+}
+
+__all__ = sorted(_EXPORTS)
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'rvpp' has no attribute {name!r}")
+    value = getattr(import_module(f".{_EXPORTS[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))

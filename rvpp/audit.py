@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from .case import Case
-from .model.piecewise import on_curve
+from .curve import on_curve
 from .problem import Problem, prepare
 
 TOLERANCE = 1e-4  # [MW], [MWh]: exported values carry 6 decimals

@@ -14,7 +14,7 @@ from typing import Any, TypeVar
 
 from .case import Case
 from .results import Result
-from .solve import solve
+from .solving import solve
 
 Progress = Callable[[int, int], None]
 Task = TypeVar("Task")

@@ -91,7 +91,7 @@ def _parse_gammas(items: list[str]) -> dict[str, int]:
 
 def _run_solve(args: argparse.Namespace) -> int:
     from .export import write_plan
-    from .solve import solve, write_mps
+    from .solving import solve, write_mps
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(f"  {m}", file=sys.stderr))
     case = load_case(args.case)

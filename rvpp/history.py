@@ -116,11 +116,14 @@ class History:
                 f"columns={list(self._frame.columns)})")
 
     def __reduce__(self):
-        return (_rebuild, (self._frame.reset_index(names="timestamp"), self.source))
+        return (_restore, (self._frame, self.source, self.fingerprint))
 
 
-def _rebuild(frame: pd.DataFrame, source: str) -> History:
-    return History(frame, source)
+def _restore(frame: pd.DataFrame, source: str, fingerprint: str) -> History:
+    """Unpickle without validating again: the table was validated when first built."""
+    history = History.__new__(History)
+    history.source, history._frame, history.fingerprint = source, frame, fingerprint
+    return history
 
 
 def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:

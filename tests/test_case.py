@@ -121,7 +121,7 @@ def test_every_problem_is_reported_at_once(raw, paper_case):
 
 
 def test_budget_above_the_number_of_periods_is_refused(paper_case):
-    with pytest.raises(CaseError, match=r"Γ for 'WF1'=30 exceeds the 24 periods of 2025-03-18"):
+    with pytest.raises(CaseError, match=r"Γ for 'WF1'=30 exceeds the 24 periods of 2025-05-05"):
         prepare(with_options(paper_case, gammas={"WF1": 30}))
     with pytest.raises(CaseError, match=r"exceeds the 23 periods"):
         prepare(with_options(paper_case, date="2025-03-30", gammas={"price_da": 24}))
@@ -199,3 +199,12 @@ def test_markets_option_requires_the_dam(paper_case):
         with_options(paper_case, markets="SRM,HPA")
     with pytest.raises(CaseError, match="unknown market 'IDM'"):
         with_options(paper_case, markets="DAM,IDM")
+
+
+def test_a_case_survives_pickling_for_worker_processes(paper_case):
+    import pickle
+
+    again = pickle.loads(pickle.dumps(paper_case))
+    assert again == paper_case and hash(again) == hash(paper_case)
+    assert again.history.frame.equals(paper_case.history.frame)
+    assert again.history.source == paper_case.history.source

@@ -12,7 +12,7 @@ from rvpp import solve_problem
 from rvpp.audit import audit_result, protection_exact
 from rvpp.case import SolverSettings
 from rvpp.robust import add_price_protection
-from rvpp.solve import run_highs
+from rvpp.highs import run_highs
 
 from tests.factories import demand, heat, tiny_case, tiny_problem, wind
 

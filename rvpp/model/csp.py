@@ -13,7 +13,8 @@ import pyomo.environ as pyo
 from ..case import CSP
 from ..problem import Problem
 from .market import activation
-from .piecewise import add_convex_combination, add_incremental, on_curve
+from ..curve import on_curve
+from .piecewise import add_convex_combination, add_incremental
 from .units import reserve_cap
 
 
@@ -40,8 +41,9 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
 
     Valid tightening: the storage charges only from the solar field (while charging
     it does not discharge and the power block takes no negative input), so
-    ``p_ch ≤ min(P̄ch, P̂sf)·u``; in periods without sun the mode is fixed to
-    discharging, which dominates there.
+    ``p_ch ≤ min(P̄ch, P̂sf)·u``. In periods without sun charging mode can only idle,
+    so the mode is fixed to discharging there whenever discharging mode can idle too
+    (``P̲dis = 0``) or charging mode cannot (``P̲ch > 0``).
     """
     b = m.csp[csp.name]
     ts, dt = csp.storage, problem.dt_h
@@ -59,8 +61,9 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.sigma_dn = pyo.Var(bounds=(0.0, 1.0))
 
     field = problem.sources[csp.name].nominal
+    idle_when_discharging = ts.p_dis_min_mw_th == 0.0 or ts.p_ch_min_mw_th > 0.0
     for t in m.T:
-        if field[t - 1] <= 0.0:
+        if field[t - 1] <= 0.0 and idle_when_discharging:
             b.charging[t].fix(0)
     b.charge_from_field = pyo.Constraint(m.T, rule=lambda b, t: (
         b.p_ch[t] <= min(ts.p_ch_max_mw_th, float(field[t - 1])) * b.charging[t]))

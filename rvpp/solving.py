@@ -15,7 +15,8 @@ from .diagnose import explain_infeasibility
 from .highs import run_highs
 from .model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
-from .results import Result, extract
+from .extract import extract
+from .results import Result
 
 Progress = Callable[[str], None]
 

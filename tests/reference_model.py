@@ -1,0 +1,467 @@
+"""Independent reference implementation of the RVPP robust bidding MILP (test oracle).
+
+Builds MODEL_SPEC §3-§9 for one delivery day directly with HiGHS through highspy's
+modelling API and returns its optimal objective [EUR]. It shares no code with the
+model package: unit parameters come from the :class:`rvpp.case.Case`, and the data
+that depend on the uncertainty characterization (§6) and on the budget placement (§5)
+come from a plan's exported tables (``docs/exports.md``):
+
+* ``market``: price bands per period (``price_da_mid``, ``price_da_pos``,
+  ``price_da_neg``, ``price_sr_up_hi``, ``price_sr_up_neg``, ``price_sr_dn_hi``,
+  ``price_sr_dn_neg``) and the HPA tariff ``tariff_hpa``;
+* ``units``: ``bound_mw`` per unit and period, the robust availability (wind, pv) or
+  requirement (ed, td) that already includes the budgeted deviations;
+* ``csp``: ``sf_bound_mw``, the robust solar-field availability;
+* ``summary``: ``dt_h``, ``periods`` and the price budgets ``budgets[price_*]``.
+
+Only data are read from the tables, never decisions (unless a caller asks to fix the
+first-stage bid, see :func:`reference_optimum`). The price protection (§4) is the
+Bertsimas-Sim dual written here from scratch; the power-block curve (STU5) is encoded
+with one binary per segment in multiple-choice form; the turbine's minimum up and
+down times follow the paper's Appendix A. A few valid inequalities, each justified
+where it is added, speed up the solve without changing the optimum.
+
+Symbols in docstrings follow MODEL_SPEC; labels such as (TS7) or (MILP-STU1) are the
+paper's equation labels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import highspy
+import numpy as np
+import pandas as pd
+
+SCENARIOS = ("none", "up", "dn")
+MIP_REL_GAP = 1e-7
+PRICE_COLUMNS = ("price_da_mid", "price_da_pos", "price_da_neg", "price_sr_up_hi", "price_sr_up_neg",
+                 "price_sr_dn_hi", "price_sr_dn_neg", "tariff_hpa")
+BINARY = highspy.HighsVarType.kInteger
+
+
+@dataclass(frozen=True)
+class DayData:
+    """Data of one delivery day taken from a plan's exported tables.
+
+    ``price``: market.csv price columns per period [EUR/MWh or EUR/MW per h];
+    ``gamma``: price budgets Γ [periods]; ``bound``: robust bound per unit name
+    (wind/pv/ed/td ``bound_mw``, CSP solar field ``sf_bound_mw``) [MW or MW_th].
+    """
+
+    nt: int
+    dt: float
+    price: dict[str, np.ndarray]
+    gamma: dict[str, int]
+    bound: dict[str, np.ndarray]
+
+
+class ReferenceNotOptimal(RuntimeError):
+    """The reference model ended without a proven optimum; the message is HiGHS' status."""
+
+
+def day_data(tables: Mapping[str, Any]) -> DayData:
+    """Read the data (never the decisions) of ``tables`` (keys market, units, csp, summary)."""
+    summary = tables["summary"]
+    market = tables["market"].sort_values("t")
+    nt = len(market)
+    if nt != int(summary["periods"]):
+        raise ValueError(f"market table has {nt} rows but summary says {summary['periods']} periods")
+    price = {col: market[col].to_numpy(dtype=float) for col in PRICE_COLUMNS}
+    gamma = {name: int(summary["budgets"][name]) for name in ("price_da", "price_sr_up", "price_sr_dn")}
+    bound = {}
+    units = tables["units"]
+    for name, rows in units[units["kind"].isin(["wind", "pv", "ed", "td"])].groupby("unit"):
+        bound[name] = rows.sort_values("t")["bound_mw"].to_numpy(dtype=float)
+    csp = tables.get("csp")
+    if csp is not None and len(csp):
+        for name, rows in csp.groupby("unit"):
+            bound[name] = rows.sort_values("t")["sf_bound_mw"].to_numpy(dtype=float)
+    return DayData(nt=nt, dt=float(summary["dt_h"]), price=price, gamma=gamma, bound=bound)
+
+
+def reference_optimum(case, tables: Mapping[str, Any], *, fix_market: bool = False) -> float:
+    """Optimal objective [EUR] of MODEL_SPEC §3-§9 for ``case`` with the data of ``tables``.
+
+    With ``fix_market`` the first-stage decisions ``p_da``, ``r_sr_up``, ``r_sr_dn`` and
+    ``h_hpa`` are fixed to the plan's values in ``tables["market"]``: the result is then
+    the best profit the reference physics allows for that bid (it raises if the bid is
+    infeasible for the reference model).
+    """
+    model = ReferenceModel(case, day_data(tables))
+    if fix_market:
+        model.fix_market(tables["market"].sort_values("t"))
+    return model.solve()
+
+
+def _act(scenario: str, up, dn):
+    """Activation of a reserve pair in a scenario: ``up``, ``-dn`` or nothing (§7)."""
+    return {"none": 0.0, "up": up, "dn": -dn}[scenario]
+
+
+class ReferenceModel:
+    """The MILP of MODEL_SPEC §3-§9, one method per constraint family."""
+
+    def __init__(self, case, data: DayData):
+        self.case, self.d = case, data
+        self.h = highspy.Highs()
+        self.h.silent()
+        self.T = range(data.nt)
+        self.srm, self.hpa = case.markets.srm, case.markets.hpa
+        self.t_sr_min = case.markets.reserve_duration_min  # T_sr [min]
+        # Per scenario and period: electrical injection of the units [MW] (§7).
+        self.injection = {s: [[] for _ in self.T] for s in SCENARIOS}
+        self.heat_supply = [[] for _ in self.T]   # [MW_th]
+        self.heat_demand = [[] for _ in self.T]   # [MW_th]
+        self.profit = []                           # terms of (MILP-Obj) [EUR]
+        self._market()
+        self._price_protection()
+        for unit in case.ndres:
+            self._ndres(unit)
+        for unit in case.ed:
+            self._electrical_demand(unit)
+        for unit in case.td:
+            self._thermal_demand(unit)
+        for unit in case.csp:
+            self._csp(unit)
+        self._balances()
+
+    # ----------------------------------------------------------------- helpers
+
+    def _series(self, lb, ub, binary: bool = False) -> list:
+        """One variable per period with bounds ``lb``, ``ub`` (scalars or arrays)."""
+        lbs = np.broadcast_to(np.asarray(lb, dtype=float), (self.d.nt,))
+        ubs = np.broadcast_to(np.asarray(ub, dtype=float), (self.d.nt,))
+        kind = BINARY if binary else highspy.HighsVarType.kContinuous
+        return [self.h.addVariable(lb=float(lbs[t]), ub=float(ubs[t]), type=kind) for t in self.T]
+
+    def _reserve_series(self, cap: float) -> list:
+        """Reserve variables in [0, cap] [MW]; fixed to 0 when the SRM is off (§2)."""
+        return self._series(0.0, cap if self.srm else 0.0)
+
+    def _sum(self, items):
+        return self.h.qsum(list(items))
+
+    # ----------------------------------------------------------------- markets
+
+    def _market(self) -> None:
+        """First-stage bids, market limits (Power-Traded1-4) and market terms of (MILP-Obj) (§2, §3, §7)."""
+        case, d, dt = self.case, self.d, self.d.dt
+        gen_cap = sum(u.p_max_mw for u in case.ndres) + sum(c.p_max_mw for c in case.csp)  # [MW]
+        dem_cap = sum(u.p_max_mw for u in case.ed)                                          # [MW]
+        band_cap = case.markets.kappa * max(0.0, gen_cap - dem_cap)                         # [MW]
+        self.p_da = self._series(-np.inf, np.inf)
+        self.r_sr_up = self._reserve_series(band_cap)
+        self.r_sr_dn = self._reserve_series(band_cap)
+        self.h_hpa = self._series(0.0, np.inf if self.hpa else 0.0)
+        for t in self.T:
+            self.h.addConstr(self.p_da[t] + self.r_sr_up[t] <= gen_cap)
+            self.h.addConstr(self.p_da[t] - self.r_sr_dn[t] >= -dem_cap)
+            self.profit.append(d.price["price_da_mid"][t] * dt * self.p_da[t]
+                               + d.price["price_sr_up_hi"][t] * dt * self.r_sr_up[t]
+                               + d.price["price_sr_dn_hi"][t] * dt * self.r_sr_dn[t]
+                               - d.price["tariff_hpa"][t] * dt * self.h_hpa[t])
+
+    def fix_market(self, market: pd.DataFrame) -> None:
+        """Fix the first-stage decisions to a plan's ``p_da_mw``, ``r_sr_*_mw``, ``h_hpa_mw``."""
+        for var, col in ((self.p_da, "p_da_mw"), (self.r_sr_up, "r_sr_up_mw"),
+                         (self.r_sr_dn, "r_sr_dn_mw"), (self.h_hpa, "h_hpa_mw")):
+            for t, value in enumerate(market[col].to_numpy(dtype=float)):
+                self.h.changeColBounds(var[t].index, value, value)
+
+    def _price_protection(self) -> None:
+        """Bertsimas-Sim protection of the price terms (§4, MILP-DAMprice, MILP-up/downSRMprice).
+
+        For budget Γ and exposures ``x_t`` the worst loss ``max Σ x_t z_t`` over
+        ``Σ z_t ≤ Γ, 0 ≤ z_t ≤ 1`` equals by LP duality ``min Γ·φ + Σ ζ_t`` with
+        ``φ + ζ_t ≥ x_t``, ``φ, ζ_t ≥ 0``. DAM exposure [EUR]: selling loses
+        ``λda_neg·p·dt``, buying loses ``λda_pos·(-p)·dt``; SR exposure ``λ_neg·r·dt``.
+        """
+        d, dt = self.d, self.d.dt
+        da_exposures = [[d.price["price_da_neg"][t] * dt * self.p_da[t],
+                         -d.price["price_da_pos"][t] * dt * self.p_da[t]] for t in self.T]
+        up_exposures = [[d.price["price_sr_up_neg"][t] * dt * self.r_sr_up[t]] for t in self.T]
+        dn_exposures = [[d.price["price_sr_dn_neg"][t] * dt * self.r_sr_dn[t]] for t in self.T]
+        for name, exposures in (("price_da", da_exposures), ("price_sr_up", up_exposures),
+                                ("price_sr_dn", dn_exposures)):
+            gamma = min(d.gamma[name], d.nt)
+            phi = self.h.addVariable(lb=0.0)
+            zeta = self._series(0.0, np.inf)
+            for t in self.T:
+                for exposure in exposures[t]:
+                    self.h.addConstr(phi + zeta[t] >= exposure)
+            self.profit.append(-(gamma * phi + self._sum(zeta)))
+
+    # ----------------------------------------------------------------- ND-RES and demands
+
+    def _ndres(self, unit) -> None:
+        """Wind farm or PV plant (§9; MILP-NDRES1, NDRES2-4 with the share cap).
+
+        ``p + r_up ≤ P_robust[t]``, ``P_min ≤ p - r_dn``, ``r_up ≤ min(T_sr·ramp_up, share·P_max)``,
+        ``r_dn ≤ min(T_sr·ramp_dn, share·P_max)`` [MW]; O&M ``C_r·p·dt`` [EUR].
+        """
+        avail = self.d.bound[unit.name]
+        share_cap = unit.reserve_share * unit.p_max_mw
+        p = self._series(0.0, np.inf)
+        r_up = self._reserve_series(min(self.t_sr_min * unit.ramp_up_mw_per_min, share_cap))
+        r_dn = self._reserve_series(min(self.t_sr_min * unit.ramp_dn_mw_per_min, share_cap))
+        for t in self.T:
+            self.h.addConstr(p[t] + r_up[t] <= avail[t])
+            self.h.addConstr(p[t] - r_dn[t] >= unit.p_min_mw)
+            for s in SCENARIOS:
+                self.injection[s][t].append(p[t] + _act(s, r_up[t], r_dn[t]))
+        self.profit.append(-unit.om_eur_per_mwh * self.d.dt * self._sum(p))
+
+    def _electrical_demand(self, unit) -> None:
+        """Flexible electrical demand (§9; MILP-Demand1, Demand2-8).
+
+        ``p ≥ Pd_robust[t]``, ``P_min ≤ p - r_up``, ``p + r_dn ≤ P_max``, ``r ≤ β·p``,
+        ``r ≤ T_sr·ramp`` [MW]; ``E_min ≤ Σt (p - r_up)·dt`` [MWh] (Demand8 with dt on r_up).
+        Up reserve is a consumption decrease.
+        """
+        dt = self.d.dt
+        p = self._series(self.d.bound[unit.name], np.inf)
+        r_up = self._reserve_series(self.t_sr_min * unit.ramp_up_mw_per_min)
+        r_dn = self._reserve_series(self.t_sr_min * unit.ramp_dn_mw_per_min)
+        for t in self.T:
+            self.h.addConstr(p[t] - r_up[t] >= unit.p_min_mw)
+            self.h.addConstr(p[t] + r_dn[t] <= unit.p_max_mw)
+            self.h.addConstr(r_up[t] <= unit.flex_up * p[t])
+            self.h.addConstr(r_dn[t] <= unit.flex_dn * p[t])
+            for s in SCENARIOS:
+                self.injection[s][t].append(-(p[t] - _act(s, r_up[t], r_dn[t])))
+        self.h.addConstr(self._sum(dt * (p[t] - r_up[t]) for t in self.T) >= unit.e_min_mwh)
+
+    def _thermal_demand(self, unit) -> None:
+        """Thermal demand (§9; MILP-Demand_Heat1, Demand_Heat2-3).
+
+        ``max(H_robust[t], H_min) ≤ h ≤ H_max`` [MW_th]; ``Q_min ≤ Σt h·dt`` [MWh_th].
+        """
+        h = self._series(np.maximum(self.d.bound[unit.name], unit.h_min_mw_th), unit.h_max_mw_th)
+        for t in self.T:
+            self.heat_demand[t].append(h[t])
+        self.h.addConstr(self._sum(self.d.dt * h[t] for t in self.T) >= unit.q_min_mwh_th)
+
+    # ----------------------------------------------------------------- CSP
+
+    def _csp(self, unit) -> None:
+        """CSP plant: solar field, storage, power block, turbine commitment (§8)."""
+        pb, ts = unit.power_block, unit.storage
+        c = {
+            "p_sf": self._series(0.0, self.d.bound[unit.name]),  # (MILP-STU1) [MW_th]
+            "h": self._series(0.0, np.inf),                       # heat to thermal demands [MW_th]
+            "p_ch": self._series(0.0, np.inf),
+            "p_dis": self._series(0.0, np.inf),
+            "u_ch": self._series(0, 1, binary=True),              # 1 = charging (TS12)
+            "r_ch_up": self._reserve_series(np.inf),
+            "r_ch_dn": self._reserve_series(np.inf),
+            "r_dis_up": self._reserve_series(np.inf),
+            "r_dis_dn": self._reserve_series(np.inf),
+            "u": self._series(0, 1, binary=True),
+            "v_su": self._series(0, 1, binary=True),
+            "v_sd": self._series(0, 1, binary=True),
+        }
+        c["r_ts_up"] = [c["r_ch_up"][t] + c["r_dis_up"][t] for t in self.T]  # (TS5)
+        c["r_ts_dn"] = [c["r_ch_dn"][t] + c["r_dis_dn"][t] for t in self.T]  # (TS6)
+        self._commitment(pb, c)
+        self._power_block(unit, c)
+        curves = {s: self._conversion(pb, c, s) for s in SCENARIOS}
+        e = {s: curves[s][0] for s in SCENARIOS}
+        self._segment_order({s: curves[s][1] for s in SCENARIOS})
+        self._turbine_output(unit, c, e)
+        self._storage(ts, c)
+        self._charge_from_field(c, self.d.bound[unit.name])
+        for t in self.T:
+            self.heat_supply[t].append(c["h"][t])
+        dt = self.d.dt
+        self.profit.append(-unit.om_eur_per_mwh * dt * self._sum(e["none"][t] + c["h"][t] for t in self.T))
+
+    def _commitment(self, pb, c) -> None:
+        """Turbine commitment with minimum up and down times (paper Appendix A, STU10-17).
+
+        ``u[t] - u[t-1] = v_su - v_sd`` with ``u[0]`` = ``initially_on`` and no time carried
+        over from the previous day (``N_ON = N_OFF = 0``). Durations [h] become periods.
+        """
+        u, v_su, v_sd = c["u"], c["v_su"], c["v_sd"]
+        nt = self.d.nt
+        u0 = 1.0 if pb.initially_on else 0.0
+
+        def prev(t):
+            return u[t - 1] if t > 0 else u0
+
+        for t in self.T:
+            self.h.addConstr(u[t] - prev(t) == v_su[t] - v_sd[t])   # (STU10)
+            self.h.addConstr(v_su[t] + v_sd[t] <= 1)                  # (STU11)
+        up = int(round(pb.min_up_h / self.d.dt))
+        down = int(round(pb.min_down_h / self.d.dt))
+        if up > 1:
+            for t in range(0, nt - up + 1):                           # (STU13)
+                self.h.addConstr(up * (u[t] - prev(t)) <= self._sum(u[t:t + up]))
+            for t in range(max(0, nt - up + 1), nt):                  # (STU14)
+                self.h.addConstr(self._sum(u[k] - (u[t] - prev(t)) for k in range(t, nt)) >= 0)
+        if down > 1:
+            for t in range(0, nt - down + 1):                         # (STU16)
+                self.h.addConstr(down * (prev(t) - u[t]) <= self._sum(1 - u[k] for k in range(t, t + down)))
+            for t in range(max(0, nt - down + 1), nt):                # (STU17)
+                self.h.addConstr(self._sum(1 - u[k] - (prev(t) - u[t]) for k in range(t, nt)) >= 0)
+
+    def _power_block(self, unit, c) -> None:
+        """Power-block thermal input and its limits (STU2-4) [MW_th].
+
+        ``p_pb = p_sf - h/η_heat + p_dis - p_ch - K_su·Ppb_max·(starts within the start-up
+        duration)``; ``p_pb + r_ts_up ≤ Ppb_max·u``; ``Ppb_min·u ≤ p_pb - r_ts_dn``.
+        The start-up heat is drawn in the start-up period, or during
+        ``startup_duration_h`` after the start when given.
+        """
+        pb = unit.power_block
+        startup_len = pb.startup_periods(self.d.dt)
+        startup_heat = pb.startup_fraction * pb.p_in_max_mw_th
+        c["p_pb"] = []
+        for t in self.T:
+            starts = self._sum(c["v_su"][k] for k in range(max(0, t - startup_len + 1), t + 1))
+            p_pb = (c["p_sf"][t] - (1.0 / unit.heat_efficiency) * c["h"][t] + c["p_dis"][t] - c["p_ch"][t]
+                    - startup_heat * starts)
+            c["p_pb"].append(p_pb)
+            self.h.addConstr(p_pb + c["r_ts_up"][t] <= pb.p_in_max_mw_th * c["u"][t])
+            self.h.addConstr(p_pb - c["r_ts_dn"][t] >= pb.p_in_min_mw_th * c["u"][t])
+
+    def _conversion(self, pb, c, scenario: str) -> tuple[list, list]:
+        """Piecewise thermal-to-electric curve in one activation scenario (STU5, STU_SOS).
+
+        Exact MILP encoding with one binary ``z_k`` per segment ``k`` (between breakpoints
+        ``P_k`` and ``P_{k+1}``, outputs ``O_k = η_k·P_k``), in multiple-choice form: the
+        input share ``w_k`` of the selected segment lies in ``[P_k·z_k, P_{k+1}·z_k]``,
+        ``Σk z_k = 1``, input ``p_pb + act_s(r_ts_up, r_ts_dn) = Σk w_k`` and output
+        ``e_s = Σk [(O_k - m_k·P_k)·z_k + m_k·w_k]`` with slope ``m_k``.
+
+        Tightening, valid because an offline turbine has input 0 (STU3-4) and an online
+        one at least ``Ppb_min``: when the first segment ends below ``Ppb_min``, it is
+        selected exactly when the turbine is off (``z_0 = 1 - u``) and the other segments
+        ending below ``Ppb_min`` are never needed. Returns ``e_s`` [MW] and the segment
+        binaries per period.
+        """
+        inputs = [p for p, _ in pb.breakpoints]
+        outputs = [p * eta for p, eta in pb.breakpoints]
+        n_segments = len(inputs) - 1
+        slopes = [(outputs[k + 1] - outputs[k]) / (inputs[k + 1] - inputs[k]) for k in range(n_segments)]
+        off_segment_only = inputs[1] < pb.p_in_min_mw_th
+        out = self._series(0.0, np.inf)
+        segments = []
+        for t in self.T:
+            z = [self.h.addVariable(lb=0, ub=1, type=BINARY) for _ in range(n_segments)]
+            w = [self.h.addVariable(lb=0.0, ub=inputs[k + 1]) for k in range(n_segments)]
+            for k in range(n_segments):
+                self.h.addConstr(w[k] >= inputs[k] * z[k])
+                self.h.addConstr(w[k] <= inputs[k + 1] * z[k])
+            self.h.addConstr(self._sum(z) == 1)
+            flow = c["p_pb"][t] + _act(scenario, c["r_ts_up"][t], c["r_ts_dn"][t])
+            self.h.addConstr(flow == self._sum(w))
+            self.h.addConstr(out[t] == self._sum((outputs[k] - slopes[k] * inputs[k]) * z[k] + slopes[k] * w[k]
+                                                 for k in range(n_segments)))
+            if off_segment_only:
+                self.h.addConstr(z[0] == 1 - c["u"][t])
+                for k in range(1, n_segments):
+                    if inputs[k + 1] < pb.p_in_min_mw_th:
+                        self.h.changeColBounds(z[k].index, 0, 0)
+            segments.append(z)
+        return out, segments
+
+    def _segment_order(self, segments) -> None:
+        """Valid ordering of the selected segments across scenarios [-].
+
+        Inputs satisfy ``in_dn ≤ in_none ≤ in_up``, so choosing for each input the
+        leftmost segment containing it gives ``seg_dn ≤ seg_none ≤ seg_up``; in
+        cumulative form ``Σ_{k≤j} z_up ≤ Σ_{k≤j} z_none ≤ Σ_{k≤j} z_dn`` for every ``j``.
+        """
+        for t in self.T:
+            n_segments = len(segments["none"][t])
+            for j in range(n_segments - 1):
+                below = {s: self._sum(segments[s][t][: j + 1]) for s in SCENARIOS}
+                self.h.addConstr(below["up"] <= below["none"])
+                self.h.addConstr(below["none"] <= below["dn"])
+
+    def _turbine_output(self, unit, c, e) -> None:
+        """Turbine cap, CSP electrical reserves and injection (§8, STU6-7).
+
+        ``e_s ≤ Pmax_θ·u`` in every scenario; ``p_θ = e_none``, ``r_up = e_up - e_none``,
+        ``r_dn = e_none - e_dn``, both ``≤ min(T_sr·ramp, share·Pmax_θ)`` (0 without SRM) [MW].
+        """
+        cap = min(self.t_sr_min * unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
+        cap = cap if self.srm else 0.0
+        for t in self.T:
+            for s in SCENARIOS:
+                self.h.addConstr(e[s][t] <= unit.p_max_mw * c["u"][t])
+                self.injection[s][t].append(e[s][t])
+            self.h.addConstr(e["up"][t] - e["none"][t] >= 0)
+            self.h.addConstr(e["up"][t] - e["none"][t] <= cap)
+            self.h.addConstr(e["none"][t] - e["dn"][t] >= 0)
+            self.h.addConstr(e["none"][t] - e["dn"][t] <= cap)
+
+    def _storage(self, ts, c) -> None:
+        """Two-tank thermal storage (TS1-TS11, §8).
+
+        Mode limits (TS1-4); energy ``e[t] = e[t-1] + η_ch·p_ch·dt - p_dis·dt/η_dis`` [MWh_th]
+        for every t, cyclic ``e[0] = e[NT]`` or fixed ``e[0] = e_init`` with ``e[NT] ≥ e_init``;
+        reserve energy shares (TS9-10) and margins (TS11 corrected: ``E_min + σ_up·span ≤ e ≤
+        E_max - σ_dn·span``), ``σ ∈ [0, 1]``.
+        """
+        dt, span = self.d.dt, ts.e_max_mwh_th - ts.e_min_mwh_th
+        u_ch = c["u_ch"]
+        for t in self.T:
+            self.h.addConstr(c["p_ch"][t] - c["r_ch_up"][t] >= ts.p_ch_min_mw_th * u_ch[t])            # (TS1)
+            self.h.addConstr(c["p_ch"][t] + c["r_ch_dn"][t] <= ts.p_ch_max_mw_th * u_ch[t])            # (TS2)
+            self.h.addConstr(c["p_dis"][t] + c["r_dis_up"][t] <= ts.p_dis_max_mw_th * (1 - u_ch[t]))  # (TS3)
+            self.h.addConstr(c["p_dis"][t] - c["r_dis_dn"][t] >= ts.p_dis_min_mw_th * (1 - u_ch[t]))  # (TS4)
+        energy = self._series(ts.e_min_mwh_th, ts.e_max_mwh_th)
+        for t in self.T:
+            before = energy[t - 1] if t > 0 else (energy[-1] if ts.cyclic else ts.e_init_mwh_th)
+            self.h.addConstr(energy[t] == before + ts.eta_ch * dt * c["p_ch"][t]
+                             - (dt / ts.eta_dis) * c["p_dis"][t])                                       # (TS7)
+        if not ts.cyclic:
+            self.h.addConstr(energy[-1] >= ts.e_init_mwh_th)
+        sigma_up = self.h.addVariable(lb=0.0, ub=1.0)
+        sigma_dn = self.h.addVariable(lb=0.0, ub=1.0)
+        self.h.addConstr(self._sum((dt / ts.eta_dis) * r for r in c["r_ts_up"]) <= span * sigma_up)   # (TS9)
+        self.h.addConstr(self._sum(ts.eta_ch * dt * r for r in c["r_ts_dn"]) <= span * sigma_dn)      # (TS10)
+        for t in self.T:
+            self.h.addConstr(energy[t] >= ts.e_min_mwh_th + span * sigma_up)                           # (TS11)
+            self.h.addConstr(energy[t] <= ts.e_max_mwh_th - span * sigma_dn)
+
+    def _charge_from_field(self, c, avail) -> None:
+        """Valid tightening: the storage charges only from the solar field [MW_th].
+
+        ``p_pb ≥ r_ts_dn + Ppb_min·u ≥ 0`` (STU4), and in charging mode ``p_dis = 0`` (TS3),
+        so (STU2) gives ``p_ch ≤ p_sf``; in discharging mode ``p_ch = 0`` (TS2). Hence
+        ``p_ch ≤ p_sf`` and ``p_ch ≤ Psf_robust[t]·u_ch`` hold in every feasible point.
+        """
+        for t in self.T:
+            self.h.addConstr(c["p_ch"][t] <= c["p_sf"][t])
+            self.h.addConstr(c["p_ch"][t] <= avail[t] * c["u_ch"][t])
+
+    # ----------------------------------------------------------------- balances and solve
+
+    def _balances(self) -> None:
+        """Electrical balance in the scenarios none/up/dn and heat balance (§7, Supply-Demand1)."""
+        for t in self.T:
+            for s in SCENARIOS:
+                market = self.p_da[t] + _act(s, self.r_sr_up[t], self.r_sr_dn[t])
+                self.h.addConstr(self._sum(self.injection[s][t]) - market == 0)
+            supply = self._sum(self.heat_supply[t]) + self.h_hpa[t]
+            self.h.addConstr(supply - self._sum(self.heat_demand[t]) == 0)
+
+    def solve(self) -> float:
+        """Maximize (MILP-Obj) to a relative gap of 1e-7; return the optimal profit [EUR].
+
+        The RINS and RENS sub-MIP heuristics are off: on these small models they cost
+        more time than they save. Raises :class:`ReferenceNotOptimal` otherwise.
+        """
+        self.h.setOptionValue("mip_rel_gap", MIP_REL_GAP)
+        self.h.setOptionValue("mip_heuristic_run_rins", False)
+        self.h.setOptionValue("mip_heuristic_run_rens", False)
+        self.h.maximize(self._sum(self.profit))
+        status = self.h.getModelStatus()
+        if status != highspy.HighsModelStatus.kOptimal:
+            raise ReferenceNotOptimal(self.h.modelStatusToString(status))
+        return float(self.h.getInfo().objective_function_value)
