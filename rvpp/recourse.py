@@ -95,7 +95,8 @@ class FirstStage:
 
 
 def first_stage(result, fix_commitment: bool = False) -> FirstStage:
-    """The bids of a solved plan (``fix_commitment``: also its CSP turbine schedule)."""
+    """The bids of a solved plan (``fix_commitment``: also its CSP turbine schedule, see
+    :func:`fix_commitment`)."""
     if not result.has_plan:
         raise RvppError(f"the plan has no solution to evaluate ({result.status}: {result.message})")
     market = result.market
@@ -241,10 +242,16 @@ def add_scenario(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalties
 
 
 def fix_commitment(b: pyo.Block, bids: FirstStage) -> None:
-    """Keep the CSP turbine schedule ``u[t]`` of the plan (option of MODEL_SPEC §10)."""
+    """Keep the CSP turbine schedule of the plan (option of MODEL_SPEC §10): ``u[t] ≤ u_plan[t]``.
+
+    The turbine never starts where the plan has it off; where the plan has it on it may
+    still stop (trip), since a realized day may not bring the heat for its minimum input.
+    Staying off is always possible, so the settlement never becomes infeasible.
+    """
     for name, online in bids.online.items():
         for t in b.T:
-            b.csp[name].online[t].fix(round(float(online[t - 1])))
+            if round(float(online[t - 1])) == 0:
+                b.csp[name].online[t].fix(0)
 
 
 def add_slacks(m: pyo.ConcreteModel, b: pyo.Block) -> None:

@@ -11,7 +11,7 @@ import rvpp
 from rvpp.errors import RvppError
 from rvpp.recourse import (Penalties, Realization, evaluate, first_stage, nominal_realization, realization,
                            realized_problem, set_fingerprint, solve_stochastic, values_fingerprint)
-from rvpp.solve import solve_problem
+from rvpp.solving import solve_problem
 
 CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 REL = 1e-6  # relative tolerance on EUR figures of LP-sized recourse problems
@@ -163,3 +163,13 @@ def test_realization_of_a_day_of_another_length_is_refused(paper):
 def test_penalty_settings_are_validated():
     with pytest.raises(RvppError, match="m_def"):
         Penalties(m_def=-1.0)
+
+
+def test_kept_commitment_settles_a_day_without_sun(paper):
+    plan = rvpp.solve(paper)
+    assert plan.csp["online"].sum() > 0  # the deterministic plan runs the turbine
+    dark = nominal_realization(plan.problem)
+    dark.values["CSP1"] = 0.0
+    record = evaluate(paper, first_stage(plan, fix_commitment=True), dark)
+    assert record["status"] == "optimal"
+    assert record["deficit_mwh"] > 0

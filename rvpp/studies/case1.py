@@ -9,7 +9,7 @@ import pandas as pd
 
 from .. import plots
 from ..case import Case
-from ..solve import solve
+from ..solving import solve
 from .runner import Config, Progress, StudyOutput, plan_row, stage
 from .settings import StudySettings
 

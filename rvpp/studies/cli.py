@@ -57,7 +57,7 @@ def add_study_commands(commands) -> None:
     study.add_argument("--c-heat", type=float, metavar="EUR_PER_MWH",
                        help="price of unserved heat (default: twice the highest HPA tariff)")
     study.add_argument("--fix-commitment", action="store_true",
-                       help="settle with the plan's CSP turbine schedule fixed")
+                       help="settle with the plan's CSP turbine schedule: no start where the plan is off")
     study.add_argument("--no-png", action="store_true", help="write interactive HTML figures only")
     study.add_argument("--quiet", action="store_true", help="no progress bars")
     study.set_defaults(run=run_study_command)

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from ..case import Case
-from ..results import SOLVER_ZERO
+from ..extract import SOLVER_ZERO
 from .findings import findings
 from .runner import StudyOutput
 from .settings import StudySettings
