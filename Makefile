@@ -24,6 +24,10 @@ test: install
 
 bench: install
 	$(BIN)/python benchmarks/solve_times.py
+	$(BIN)/python benchmarks/studies.py
+
+reproduce: install
+	$(BIN)/python -m rvpp study reproduce --out out/reproduce
 
 data: install
 	$(BIN)/python -m rvpp data build

@@ -1,4 +1,4 @@
-"""Command line: ``python -m rvpp solve|data ...``.
+"""Command line: ``python -m rvpp solve|data|study ...``.
 
 Bad input ends with a one-line message and exit code 2, never a traceback; a solve
 without a plan (infeasible, solver error) exits with 1.
@@ -66,6 +66,10 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--seed", type=int, help="random seed (default: the published one)")
     build.add_argument("--out", type=Path, default=DEFAULT_CASE / "history.csv", help="CSV to write")
     build.set_defaults(run=_run_data_build)
+
+    from .studies.cli import add_study_commands
+
+    add_study_commands(commands)
     return parser
 
 

@@ -17,7 +17,7 @@ from .market import (SCENARIOS, activation, add_electric_balance, add_heat_balan
                      add_market_limits, add_objective, add_time)
 from .units import add_electrical_demand, add_ndres, add_thermal_demand
 
-__all__ = ["build_model", "SCENARIOS", "activation"]
+__all__ = ["build_model", "add_units", "SCENARIOS", "activation"]
 
 
 def build_model(problem: Problem) -> pyo.ConcreteModel:
@@ -26,7 +26,22 @@ def build_model(problem: Problem) -> pyo.ConcreteModel:
     m = pyo.ConcreteModel(name=f"rvpp {case.name} {problem.day}")
     add_time(m, problem)
     add_market_bids(m, problem)
+    add_units(m, problem)
+    add_market_limits(m, problem)
+    add_electric_balance(m, problem)
+    add_heat_balance(m, problem)
+    add_robustness(m, problem)
+    add_objective(m, problem)
+    return m
 
+
+def add_units(m: pyo.Block, problem: Problem) -> None:
+    """One block per unit on the periods ``m.T`` and scenarios ``m.S`` of ``m`` (MODEL_SPEC §8-§9).
+
+    ``m`` is the model itself or any block carrying its own ``T`` and ``S``, such as
+    one scenario of the stochastic benchmark (:mod:`rvpp.recourse`).
+    """
+    case = problem.case
     m.ndres = pyo.Block([u.name for u in case.ndres])
     for unit in case.ndres:
         add_ndres(m, unit, problem)
@@ -45,10 +60,3 @@ def build_model(problem: Problem) -> pyo.ConcreteModel:
     m.td = pyo.Block([k.name for k in case.td])
     for td in case.td:
         add_thermal_demand(m, td, problem)
-
-    add_market_limits(m, problem)
-    add_electric_balance(m, problem)
-    add_heat_balance(m, problem)
-    add_robustness(m, problem)
-    add_objective(m, problem)
-    return m

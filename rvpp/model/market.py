@@ -68,16 +68,29 @@ def add_electric_balance(m: pyo.ConcreteModel, problem: Problem) -> None:
     ``Σr (p_r + a_s(r↑_r, r↓_r)) + Σθ e_θ,s − Σd (p_d − a_s(r↑_d, r↓_d)) = p_da + a_s(r↑_SR, r↓_SR)``
     """
     case = problem.case
+    m.electric_balance = pyo.Constraint(m.S, m.T, rule=lambda m, s, t: (
+        net_injection(m, case, s, t) == m.p_da[t] + activation(s, m.r_sr_up[t], m.r_sr_dn[t])))
 
-    def balance(m, s, t):
-        supply = sum(m.ndres[u.name].p[t] + activation(s, m.ndres[u.name].r_up[t], m.ndres[u.name].r_dn[t])
-                     for u in case.ndres)
-        supply += sum(m.csp[c.name].e[s, t] for c in case.csp)
-        demand = sum(m.ed[d.name].p[t] - activation(s, m.ed[d.name].r_up[t], m.ed[d.name].r_dn[t])
-                     for d in case.ed)
-        return supply - demand == m.p_da[t] + activation(s, m.r_sr_up[t], m.r_sr_dn[t])
 
-    m.electric_balance = pyo.Constraint(m.S, m.T, rule=balance)
+def net_injection(m: pyo.Block, case, s: str, t: int):
+    """Units' supply minus demand in scenario ``s`` (left side of Supply-Demand1) [MW].
+
+    ``Σr (p_r + a_s(r↑_r, r↓_r)) + Σθ e_θ,s − Σd (p_d − a_s(r↑_d, r↓_d))``; ``m`` holds the
+    unit blocks (the model, or one scenario block of :mod:`rvpp.recourse`).
+    """
+    supply = sum(m.ndres[u.name].p[t] + activation(s, m.ndres[u.name].r_up[t], m.ndres[u.name].r_dn[t])
+                 for u in case.ndres)
+    supply += sum(m.csp[c.name].e[s, t] for c in case.csp)
+    demand = sum(m.ed[d.name].p[t] - activation(s, m.ed[d.name].r_up[t], m.ed[d.name].r_dn[t])
+                 for d in case.ed)
+    return supply - demand
+
+
+def operating_cost(m: pyo.Block, case, dt: float):
+    """``Σt Σr C_r·p_r·dt + Σt Σθ C_θ·(p_θ + h_θ)·dt`` over the unit blocks of ``m`` [EUR]."""
+    return sum(u.om_eur_per_mwh * m.ndres[u.name].p[t] * dt for u in case.ndres for t in m.T) + sum(
+        c.om_eur_per_mwh * (m.csp[c.name].e["none", t] + m.csp[c.name].h[t]) * dt
+        for c in case.csp for t in m.T)
 
 
 def add_heat_balance(m: pyo.ConcreteModel, problem: Problem) -> None:
@@ -100,10 +113,7 @@ def add_objective(m: pyo.ConcreteModel, problem: Problem) -> None:
     m.revenue_sr = pyo.Expression(expr=sum(
         (float(up[t - 1]) * m.r_sr_up[t] + float(dn[t - 1]) * m.r_sr_dn[t]) * dt for t in m.T))
     m.cost_hpa = pyo.Expression(expr=sum(float(hpa[t - 1]) * m.h_hpa[t] * dt for t in m.T))
-    m.cost_opex = pyo.Expression(expr=sum(
-        u.om_eur_per_mwh * m.ndres[u.name].p[t] * dt for u in case.ndres for t in m.T) + sum(
-        c.om_eur_per_mwh * (m.csp[c.name].e["none", t] + m.csp[c.name].h[t]) * dt
-        for c in case.csp for t in m.T))
+    m.cost_opex = pyo.Expression(expr=operating_cost(m, case, dt))
     m.profit = pyo.Objective(
         expr=m.revenue_dam + m.revenue_sr - m.cost_hpa - m.cost_opex - sum(m.protection[n] for n in PRICE_COLUMNS),
         sense=pyo.maximize)

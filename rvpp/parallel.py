@@ -1,0 +1,72 @@
+"""Where many solves run: serially, on a local process pool or on a Dask cluster.
+
+:func:`open_executor` turns the ``--scheduler`` setting of the command line into a
+``concurrent.futures.Executor`` (or ``None`` for serial runs) and shuts it down
+afterwards:
+
+* ``processes`` (default): a local pool of worker processes;
+* ``serial``: no executor, every solve in the calling process;
+* ``local``: a Dask ``LocalCluster`` of worker processes started for the run;
+* any other value: the address of a running Dask scheduler, e.g.
+  ``tcp://10.0.0.5:8786``; the work then runs on that cluster's workers.
+
+Workers build and solve in their own process and return plain data.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Iterator
+from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import contextmanager
+
+from .errors import RvppError
+
+SCHEDULERS = ("processes", "serial", "local")
+
+
+def default_workers() -> int:
+    """Worker processes of a local pool: the cores this process may use."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+@contextmanager
+def open_executor(scheduler: str = "processes", workers: int | None = None) -> Iterator[Executor | None]:
+    """The executor for ``scheduler`` (see the module docstring), closed on exit."""
+    workers = workers or default_workers()
+    if workers < 1:
+        raise RvppError(f"--workers={workers} must be at least 1")
+    if scheduler == "serial":
+        yield None
+    elif scheduler == "processes":
+        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            yield pool
+    elif scheduler == "local":
+        with _dask_local(workers) as executor:
+            yield executor
+    else:
+        with _dask_remote(scheduler) as executor:
+            yield executor
+
+
+@contextmanager
+def _dask_local(workers: int) -> Iterator[Executor]:
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=workers, processes=True, threads_per_worker=1,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client.get_executor()
+
+
+@contextmanager
+def _dask_remote(address: str) -> Iterator[Executor]:
+    from dask.distributed import Client
+
+    try:
+        client = Client(address, timeout="20s")
+    except (OSError, TimeoutError) as exc:
+        raise RvppError(f"--scheduler {address!r}: cannot reach a Dask scheduler there ({exc}); "
+                        f"use one of {', '.join(SCHEDULERS)} or a scheduler address") from None
+    with client:
+        yield client.get_executor()

@@ -1,0 +1,382 @@
+"""Evaluation after the fact: the recourse model (MODEL_SPEC §10; paper Case 4).
+
+Given first-stage bids ``p_da``, ``r_sr_up``, ``r_sr_dn``, ``h_hpa`` (optionally the CSP
+commitment too) and one *realization* of every uncertain series, the recourse model
+re-dispatches every unit with the physics of MODEL_SPEC §7-§9 at the realized values
+(no budgets) and may fall short through slacks:
+
+====================  =====================================================  ===========
+slack                 meaning                                                unit
+====================  =====================================================  ===========
+``s_neg``             energy deficit against ``p_da``                        [MW]
+``s_pos``             energy surplus against ``p_da``                        [MW]
+``q_up``, ``q_dn``    reserve band that could not be delivered               [MW]
+``g``                 unserved heat                                          [MW_th]
+====================  =====================================================  ===========
+
+Settlement at realized prices: market cost ``= −(DAM revenue + SR revenue) + HPA cost
++ operating cost``; penalty ``= Σt dt·[m_def·λda·s_neg − m_sur·λda·s_pos
++ m_sr·(λup·q_up + λdn·q_dn) + c_heat·g]``; net cost = market cost + penalty, which the
+recourse minimizes. The same builder with several realizations and free first-stage
+bids is the scenario-based stochastic benchmark (expected net cost over the scenarios).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+import pyomo.environ as pyo
+
+from .case import Case
+from .errors import RvppError
+from .history import PRICE_COLUMNS
+from .model import add_units
+from .model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
+from .periods import delivery_periods, period_labels
+from .problem import Problem, Source, source_columns
+from .highs import run_highs
+from .uncertainty import realized_values
+
+FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
+HEAT_PRICE_FACTOR = 2.0  # default c_heat = 2 × the highest HPA tariff (MODEL_SPEC §10)
+
+
+@dataclass(frozen=True)
+class Penalties:
+    """Penalty settings of the settlement (MODEL_SPEC §10), all editable.
+
+    ``m_def``, ``m_sur``, ``m_sr`` multiply the realized DAM / SR prices [-];
+    ``c_heat_eur_per_mwh`` prices unserved heat [EUR/MWh_th] (``None``: twice the
+    highest HPA tariff of the case).
+    """
+
+    m_def: float = 2.0
+    m_sur: float = 0.5
+    m_sr: float = 2.0
+    c_heat_eur_per_mwh: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("m_def", "m_sur", "m_sr", "c_heat_eur_per_mwh"):
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and value >= 0):
+                raise RvppError(f"penalties: {name}={value} must be a finite number >= 0")
+
+    def heat_price(self, case: Case) -> float:
+        """``c_heat`` [EUR/MWh_th]."""
+        if self.c_heat_eur_per_mwh is not None:
+            return float(self.c_heat_eur_per_mwh)
+        return HEAT_PRICE_FACTOR * max(case.markets.hpa_tariff_eur_per_mwh)
+
+    def describe(self, case: Case) -> dict[str, float]:
+        """The settings in force for ``case`` (``c_heat`` resolved) [-], [EUR/MWh_th]."""
+        return {"m_def": self.m_def, "m_sur": self.m_sur, "m_sr": self.m_sr,
+                "c_heat_eur_per_mwh": self.heat_price(case)}
+
+
+@dataclass(frozen=True, eq=False)
+class FirstStage:
+    """Market bids per period [MW], [MW_th]; optionally the CSP commitment to keep fixed."""
+
+    p_da: np.ndarray
+    r_sr_up: np.ndarray
+    r_sr_dn: np.ndarray
+    h_hpa: np.ndarray
+    online: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def nt(self) -> int:
+        return len(self.p_da)
+
+
+def first_stage(result, fix_commitment: bool = False) -> FirstStage:
+    """The bids of a solved plan (``fix_commitment``: also its CSP turbine schedule, see
+    :func:`fix_commitment`)."""
+    if not result.has_plan:
+        raise RvppError(f"the plan has no solution to evaluate ({result.status}: {result.message})")
+    market = result.market
+    online = {}
+    if fix_commitment and not result.csp.empty:
+        online = {name: part["online"].to_numpy(float) for name, part in result.csp.groupby("unit")}
+    return FirstStage(*(market[f"{name}_mw"].to_numpy(float) for name in FIRST_STAGE), online=online)
+
+
+@dataclass(frozen=True, eq=False)
+class Realization:
+    """Observed values of one day per period [t = 1..NT; one column per source]."""
+
+    day: dt.date
+    values: pd.DataFrame
+
+    @property
+    def fingerprint(self) -> str:
+        """sha256 of the values (sources in sorted order), 16 hex digits."""
+        return values_fingerprint(self.values)
+
+
+def values_fingerprint(values: pd.DataFrame) -> str:
+    """Content fingerprint of a realization's values (independent of the column order)."""
+    ordered = values[sorted(values.columns)]
+    digest = hashlib.sha256(",".join(ordered.columns).encode())
+    digest.update(np.ascontiguousarray(ordered.to_numpy(dtype=float)).tobytes())
+    return digest.hexdigest()[:16]
+
+
+def set_fingerprint(realizations: Sequence[Realization]) -> str:
+    """Fingerprint of an ordered set of realizations (16 hex digits)."""
+    digest = hashlib.sha256()
+    for r in realizations:
+        digest.update(f"{r.day.isoformat()}:{r.fingerprint};".encode())
+    return digest.hexdigest()[:16]
+
+
+def realization(case: Case, day: dt.date) -> Realization:
+    """What the history observed on ``day`` for every source of ``case``."""
+    periods = delivery_periods(day, case.timezone, case.dt_h)
+    values = realized_values(case.history, day, periods, source_columns(case), case.timezone)
+    return Realization(day=day, values=values)
+
+
+def nominal_realization(problem: Problem) -> Realization:
+    """A realization equal to the nominal values a plan was made with."""
+    values = pd.DataFrame({name: src.nominal for name, src in problem.sources.items()},
+                          index=pd.RangeIndex(1, problem.nt + 1, name="t"))
+    return Realization(day=problem.day, values=values)
+
+
+def realized_problem(case: Case, real: Realization) -> Problem:
+    """A :class:`Problem` of the delivery day of ``case`` whose sources carry the realized values.
+
+    Budgets are 0 and deviations 0, so the unit builders see the realization as the
+    nominal bound. Availabilities are clipped to ``[0, nameplate]`` (as the forecast
+    bands are) and consumptions to each demand's ``[min, max]`` limits.
+    """
+    periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
+    if len(real.values) != len(periods):
+        raise RvppError(f"the realization of {real.day} has {len(real.values)} periods but the delivery day "
+                        f"{case.delivery_date} has {len(periods)}; use days of the same length")
+    sources = {}
+    for name in PRICE_COLUMNS:
+        kind = "price_da" if name == "price_da" else "price_sr"
+        sources[name] = _exact(name, kind, None, real.values[name].to_numpy(float))
+    for kind, unit in case.units():
+        low, high = _unit_limits(kind, unit)
+        values = np.clip(real.values[unit.name].to_numpy(float), low, high)
+        role = "production" if kind in ("wind", "pv", "csp") else "consumption"
+        sources[unit.name] = _exact(unit.name, role, kind, values)
+    tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
+    return Problem(case=case, day=case.delivery_date, periods=periods, bands=pd.DataFrame(),
+                   sources=sources, tariff_hpa=tariff, labels=period_labels(periods))
+
+
+def _exact(name: str, kind: str, unit_kind: str | None, values: np.ndarray) -> Source:
+    zero = np.zeros_like(values)
+    return Source(name, kind, unit_kind, values, zero, 0, deviation_up=zero if kind == "price_da" else None)
+
+
+def _unit_limits(kind: str, unit) -> tuple[float, float]:
+    """Physical range of a unit's uncertain series [MW] or [MW_th]."""
+    if kind == "csp":
+        return 0.0, unit.solar_field.p_max_mw_th
+    if kind in ("wind", "pv"):
+        return 0.0, unit.p_max_mw
+    if kind == "ed":
+        return unit.p_min_mw, unit.p_max_mw
+    return unit.h_min_mw_th, unit.h_max_mw_th
+
+
+# ----------------------------------------------------------------------------- model
+
+
+def build_recourse_model(problems: Sequence[Problem], penalties: Penalties,
+                         bids: FirstStage | None = None) -> pyo.ConcreteModel:
+    """Minimize the mean net cost over ``problems`` (one per realization) [EUR].
+
+    With ``bids`` the first stage is fixed (the recourse model of one plan); without,
+    the bids are shared decisions of every scenario (the stochastic benchmark).
+    Scenario ``k`` is the block ``m.scenario[k]`` with its own periods, activation
+    scenarios, unit blocks, slacks and settlement.
+    """
+    base = problems[0]
+    m = pyo.ConcreteModel(name=f"recourse {base.case.name} {base.day}")
+    add_time(m, base)
+    if bids is None:
+        add_market_bids(m, base)
+        add_market_limits(m, base)
+    else:
+        add_fixed_bids(m, bids)
+    m.scenario = pyo.Block(range(len(problems)))
+    for k, problem in enumerate(problems):
+        add_scenario(m, m.scenario[k], problem, penalties, bids)
+    weight = 1.0 / len(problems)
+    m.expected_net_cost = pyo.Objective(
+        expr=weight * sum(m.scenario[k].net_cost for k in m.scenario), sense=pyo.minimize)
+    return m
+
+
+def add_fixed_bids(m: pyo.ConcreteModel, bids: FirstStage) -> None:
+    """First-stage bids as fixed data ``p_da``, ``r_sr_up``, ``r_sr_dn`` [MW], ``h_hpa`` [MW_th]."""
+    if bids.nt != len(m.T):
+        raise RvppError(f"the bids have {bids.nt} periods but the day has {len(m.T)}")
+    for name in FIRST_STAGE:
+        values = getattr(bids, name)
+        m.add_component(name, pyo.Param(m.T, initialize=lambda _, t, v=values: float(v[t - 1])))
+
+
+def add_scenario(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalties: Penalties,
+                 bids: FirstStage | None) -> None:
+    """One realization: units, slacks, balances and settlement on block ``b``."""
+    add_time(b, problem)
+    add_units(b, problem)
+    if bids is not None:
+        fix_commitment(b, bids)
+    add_slacks(m, b)
+    add_recourse_electric_balance(m, b, problem)
+    add_recourse_heat_balance(m, b, problem)
+    add_settlement(m, b, problem, penalties)
+
+
+def fix_commitment(b: pyo.Block, bids: FirstStage) -> None:
+    """Keep the CSP turbine schedule of the plan (option of MODEL_SPEC §10): ``u[t] ≤ u_plan[t]``.
+
+    The turbine never starts where the plan has it off; where the plan has it on it may
+    still stop (trip), since a realized day may not bring the heat for its minimum input.
+    Staying off is always possible, so the settlement never becomes infeasible.
+    """
+    for name, online in bids.online.items():
+        for t in b.T:
+            if round(float(online[t - 1])) == 0:
+                b.csp[name].online[t].fix(0)
+
+
+def add_slacks(m: pyo.ConcreteModel, b: pyo.Block) -> None:
+    """Deficit ``s_neg``, surplus ``s_pos`` [MW], reserve shortfall ``q_up ≤ r_sr_up``,
+    ``q_dn ≤ r_sr_dn`` [MW] and unserved heat ``g`` [MW_th] (MODEL_SPEC §10)."""
+    b.s_neg = pyo.Var(b.T, domain=pyo.NonNegativeReals)
+    b.s_pos = pyo.Var(b.T, domain=pyo.NonNegativeReals)
+    b.q_up = pyo.Var(b.T, domain=pyo.NonNegativeReals)
+    b.q_dn = pyo.Var(b.T, domain=pyo.NonNegativeReals)
+    b.g = pyo.Var(b.T, domain=pyo.NonNegativeReals)
+    b.q_up_cap = pyo.Constraint(b.T, rule=lambda b, t: b.q_up[t] <= m.r_sr_up[t])
+    b.q_dn_cap = pyo.Constraint(b.T, rule=lambda b, t: b.q_dn[t] <= m.r_sr_dn[t])
+
+
+def add_recourse_electric_balance(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem) -> None:
+    """Supply-Demand1 with slacks in every activation scenario ``s`` [MW]:
+
+    ``net_injection_s = p_da − s_neg + s_pos + a_s(r_sr↑ − q↑, r_sr↓ − q↓)``.
+    """
+    case = problem.case
+    b.electric_balance = pyo.Constraint(b.S, b.T, rule=lambda b, s, t: (
+        net_injection(b, case, s, t) == m.p_da[t] - b.s_neg[t] + b.s_pos[t]
+        + activation(s, m.r_sr_up[t] - b.q_up[t], m.r_sr_dn[t] - b.q_dn[t])))
+
+
+def add_recourse_heat_balance(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem) -> None:
+    """Heat balance with unserved heat: ``Σθ h_θ + h_hpa + g = Σk h_k`` [MW_th]."""
+    case = problem.case
+    b.heat_balance = pyo.Constraint(b.T, rule=lambda b, t: (
+        sum(b.csp[c.name].h[t] for c in case.csp) + m.h_hpa[t] + b.g[t]
+        == sum(b.td[k.name].h[t] for k in case.td)))
+
+
+def add_settlement(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalties: Penalties) -> None:
+    """Market cost, penalty and net cost at realized prices [EUR] (MODEL_SPEC §10)."""
+    case, dt_h = problem.case, problem.dt_h
+    da, up, dn = (problem.sources[n].nominal for n in PRICE_COLUMNS)
+    hpa, c_heat = problem.tariff_hpa, penalties.heat_price(case)
+
+    def total(term):
+        return sum(term(t, t - 1) * dt_h for t in b.T)
+
+    b.revenue_dam = pyo.Expression(expr=total(lambda t, i: float(da[i]) * m.p_da[t]))
+    b.revenue_sr = pyo.Expression(expr=total(lambda t, i: float(up[i]) * m.r_sr_up[t] + float(dn[i]) * m.r_sr_dn[t]))
+    b.cost_hpa = pyo.Expression(expr=total(lambda t, i: float(hpa[i]) * m.h_hpa[t]))
+    b.cost_opex = pyo.Expression(expr=operating_cost(b, case, dt_h))
+    b.market_cost = pyo.Expression(expr=-(b.revenue_dam + b.revenue_sr) + b.cost_hpa + b.cost_opex)
+    b.penalty_deficit = pyo.Expression(expr=total(lambda t, i: penalties.m_def * float(da[i]) * b.s_neg[t]))
+    b.penalty_surplus = pyo.Expression(expr=total(lambda t, i: -penalties.m_sur * float(da[i]) * b.s_pos[t]))
+    b.penalty_reserve = pyo.Expression(expr=total(lambda t, i: penalties.m_sr * (
+        float(up[i]) * b.q_up[t] + float(dn[i]) * b.q_dn[t])))
+    b.penalty_heat = pyo.Expression(expr=total(lambda t, i: c_heat * b.g[t]))
+    b.penalty = pyo.Expression(expr=b.penalty_deficit + b.penalty_surplus + b.penalty_reserve + b.penalty_heat)
+    b.net_cost = pyo.Expression(expr=b.market_cost + b.penalty)
+
+
+# ----------------------------------------------------------------------------- evaluation
+
+
+SETTLEMENT = ("market_cost", "penalty", "net_cost", "revenue_dam", "revenue_sr", "cost_hpa", "cost_opex",
+              "penalty_deficit", "penalty_surplus", "penalty_reserve", "penalty_heat")
+SLACKS = {"deficit_mwh": "s_neg", "surplus_mwh": "s_pos", "reserve_up_short_mwh": "q_up",
+          "reserve_dn_short_mwh": "q_dn", "unserved_heat_mwh": "g"}
+
+
+def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalties = Penalties()) -> dict:
+    """Settle fixed ``bids`` against one realization: a plain record of the outcome.
+
+    Keys: ``day``, ``fingerprint``, ``status``, ``solve_s``, the settlement in [EUR]
+    (``market_cost_eur``, ``penalty_eur``, ``net_cost_eur`` and their parts) and the
+    slack energies [MWh] (``deficit_mwh``, ...). Values are ``None`` without a solution.
+    """
+    problem = realized_problem(case, real)
+    m = build_recourse_model([problem], penalties, bids)
+    outcome = run_highs(m, case.solver)
+    record = {"day": real.day.isoformat(), "fingerprint": real.fingerprint, "status": outcome["status"],
+              "solve_s": outcome["seconds"], "mip_gap": outcome["gap"]}
+    record.update(scenario_record(m.scenario[0], problem.dt_h, outcome["has_solution"]))
+    return record
+
+
+def scenario_record(b: pyo.Block, dt_h: float, solved: bool) -> dict:
+    """Settlement [EUR] and slack energies [MWh] of one solved scenario block."""
+    if not solved:
+        return {**{f"{k}_eur": None for k in SETTLEMENT}, **{k: None for k in SLACKS}}
+    record = {f"{k}_eur": float(pyo.value(getattr(b, k))) for k in SETTLEMENT}
+    record.update({k: float(sum(pyo.value(getattr(b, v)[t]) for t in b.T) * dt_h) for k, v in SLACKS.items()})
+    return record
+
+
+@dataclass(frozen=True, eq=False)
+class StochasticPlan:
+    """First-stage bids of the scenario-based benchmark and how the solve ended."""
+
+    bids: FirstStage | None
+    status: str
+    expected_profit_eur: float | None
+    bound_eur: float | None
+    mip_gap: float | None
+    solve_s: float
+    build_s: float
+    n_scenarios: int
+    message: str = ""
+
+
+def solve_stochastic(case: Case, scenarios: Sequence[Realization],
+                     penalties: Penalties = Penalties()) -> StochasticPlan:
+    """Maximize expected profit over equally likely ``scenarios`` with shared bids.
+
+    The stochastic benchmark of MODEL_SPEC §10 (the paper's comparison with its
+    reference [2]): one recourse copy per scenario, the same first-stage variables.
+    Solved with the case's solver settings (time limit, gap); the status and gap
+    are reported as HiGHS ends.
+    """
+    if not scenarios:
+        raise RvppError("the stochastic benchmark needs at least one scenario")
+    started = time.perf_counter()
+    problems = [realized_problem(case, real) for real in scenarios]
+    m = build_recourse_model(problems, penalties)
+    build_s = time.perf_counter() - started
+    outcome = run_highs(m, case.solver)
+    bids = None
+    if outcome["has_solution"]:
+        bids = FirstStage(*(np.array([float(pyo.value(getattr(m, name)[t])) for t in m.T]) for name in FIRST_STAGE))
+    flip = (lambda v: None if v is None else -v)
+    return StochasticPlan(bids=bids, status=outcome["status"], expected_profit_eur=flip(outcome["objective"]),
+                          bound_eur=flip(outcome["bound"]), mip_gap=outcome["gap"], solve_s=outcome["seconds"],
+                          build_s=build_s, n_scenarios=len(scenarios), message=outcome["message"])

@@ -1,0 +1,157 @@
+"""``python -m rvpp study NAME``: run a study (or ``reproduce``: all of them) into ``--out``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..case import STRATEGIES, load_case, parse_markets, with_options
+from ..errors import RvppError
+from ..recourse import Penalties
+from .settings import (HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS,
+                       StudySettings)
+
+DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
+
+
+def add_study_commands(commands) -> None:
+    """Add the ``study`` subcommand to the command line's subparsers."""
+    from . import REPRODUCE, STUDIES
+
+    study = commands.add_parser(
+        "study", help="run a case study of the paper (or reproduce all of them)",
+        description="Run one of the paper's case studies on a case and write its tables (CSV, Markdown, "
+                    "tables.xlsx), figures (HTML, PNG) and report.md to --out.")
+    study.add_argument("name", choices=[*STUDIES, REPRODUCE],
+                       help="the study; reproduce runs those of the paper (all but stress)")
+    study.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case folder (default: the paper case)")
+    study.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
+    study.add_argument("--dt", type=float, choices=(1.0, 0.5, 0.25), help="period length in hours")
+    study.add_argument("--out", type=Path, help="output folder (default: out/study-NAME)")
+    study.add_argument("--scheduler", default="processes",
+                       help="processes (default: local process pool), serial, local (a local Dask cluster) "
+                            "or the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    study.add_argument("--workers", type=int, help="worker processes of a local pool or cluster (default: cores)")
+    study.add_argument("--strategies", type=_names(STRATEGIES), help="comma-separated subset of "
+                       + ",".join(STRATEGIES))
+    study.add_argument("--gammas", type=_integers, help="Γ grid of the sensitivity, e.g. 0,6,12 "
+                       "(default: every hour of the day)")
+    study.add_argument("--sources", type=_words, default=(), help="sensitivity: sweep these sources or kinds "
+                       "one at a time, e.g. PV1,wind,price (default: all sources at once)")
+    study.add_argument("--market-sets", type=_market_sets, help="market sets of Table 10, e.g. "
+                       f"DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
+    study.add_argument("--hpa-prices", type=_floats, help=f"flat HPA tariffs [EUR/MWh_th] (default "
+                       f"{','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
+    study.add_argument("--test-days", type=int, default=TEST_DAYS, help=f"out-of-sample days (default {TEST_DAYS})")
+    study.add_argument("--scenarios", type=_integers, help="scenario counts N of the stochastic benchmark "
+                       f"(default {','.join(map(str, SCENARIO_COUNTS))})")
+    study.add_argument("--seed", type=int, default=SEED, help=f"seed of the scenario sampling (default {SEED})")
+    study.add_argument("--sp-time-limit", type=float, default=SP_TIME_LIMIT_S, metavar="S",
+                       help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
+    study.add_argument("--time-limit", type=float, metavar="S", help="time limit of every other solve [s]")
+    penalties = Penalties()
+    study.add_argument("--m-def", type=float, default=penalties.m_def, help="deficit price multiplier")
+    study.add_argument("--m-sur", type=float, default=penalties.m_sur, help="surplus price multiplier")
+    study.add_argument("--m-sr", type=float, default=penalties.m_sr, help="reserve shortfall price multiplier")
+    study.add_argument("--c-heat", type=float, metavar="EUR_PER_MWH",
+                       help="price of unserved heat (default: twice the highest HPA tariff)")
+    study.add_argument("--fix-commitment", action="store_true",
+                       help="settle with the plan's CSP turbine schedule: no start where the plan is off")
+    study.add_argument("--no-png", action="store_true", help="write interactive HTML figures only")
+    study.add_argument("--quiet", action="store_true", help="no progress bars")
+    study.set_defaults(run=run_study_command)
+
+
+def _names(allowed):
+    def parse(text: str) -> tuple[str, ...]:
+        names = _words(text)
+        unknown = [n for n in names if n not in allowed]
+        if unknown:
+            raise argparse.ArgumentTypeError(f"unknown {unknown[0]!r}; choose from {', '.join(allowed)}")
+        return names
+    return parse
+
+
+def _market_sets(text: str) -> tuple[str, ...]:
+    sets = _words(text)
+    for item in sets:
+        try:
+            parse_markets(item)
+        except RvppError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return sets
+
+
+def _words(text: str) -> tuple[str, ...]:
+    return tuple(part.strip() for part in text.split(",") if part.strip())
+
+
+def _integers(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(part) for part in _words(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} must be whole numbers separated by commas") from None
+
+
+def _floats(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(part) for part in _words(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} must be numbers separated by commas") from None
+
+
+def settings_from(args: argparse.Namespace) -> StudySettings:
+    """The study settings of the command line's options."""
+    changes = {"strategies": args.strategies, "gammas": args.gammas, "hpa_flat_prices": args.hpa_prices,
+               "market_sets": args.market_sets,
+               "scenario_counts": args.scenarios}
+    settings = StudySettings(
+        sources=args.sources, test_days=args.test_days, seed=args.seed, sp_time_limit_s=args.sp_time_limit,
+        penalties=Penalties(m_def=args.m_def, m_sur=args.m_sur, m_sr=args.m_sr, c_heat_eur_per_mwh=args.c_heat),
+        fix_commitment=args.fix_commitment, png=not args.no_png)
+    return settings.with_changes(**{k: v for k, v in changes.items() if v is not None})
+
+
+class ProgressBars:
+    """One tqdm bar per stage on standard error."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.bars: dict[str, object] = {}
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        from tqdm import tqdm
+
+        bar = self.bars.get(stage)
+        if bar is None:
+            bar = self.bars[stage] = tqdm(total=total, desc=f"{stage:>27}", unit="solve", file=sys.stderr,
+                                          dynamic_ncols=True)
+        bar.update(done - bar.n)
+        if done >= total:
+            bar.close()
+
+
+def run_study_command(args: argparse.Namespace) -> int:
+    from ..parallel import open_executor
+    from . import run_studies
+
+    if args.test_days < 1:
+        raise RvppError(f"--test-days={args.test_days} must be at least 1")
+    case = with_options(load_case(args.case), date=args.date, dt_h=args.dt, time_limit_s=args.time_limit)
+    settings = settings_from(args)
+    out = args.out or Path("out") / f"study-{args.name}"
+    if not args.quiet:
+        print(f"rvpp study {args.name}: case {case.name}, {case.delivery_date}, scheduler {args.scheduler}",
+              file=sys.stderr)
+    with open_executor(args.scheduler, args.workers) as executor:
+        outputs = run_studies(case, [args.name], settings, out, executor, ProgressBars(not args.quiet),
+                              scheduler=args.scheduler)
+    if not args.quiet:
+        for output in outputs:
+            print(f"{output.name}: {output.seconds:.1f} s" + "".join(f"\n  note: {n}" for n in output.notes),
+                  file=sys.stderr)
+        print(f"wrote {out}/report.md, tables/ and figures/", file=sys.stderr)
+    return 0

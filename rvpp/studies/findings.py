@@ -1,0 +1,262 @@
+"""The paper's qualitative findings, each checked against the numbers of our own run.
+
+Every check reads the tables of the studies that ran and returns a :class:`Finding`
+with a verdict and the numbers behind it, or ``None`` when its study did not run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .runner import StudyOutput
+from .stress import GREEDY, PAPER
+
+COST_TOLERANCE_KEUR = 1e-3  # differences below 1 EUR count as ties (solver gap 1e-4)
+MAJORITY = 0.5
+
+
+@dataclass(frozen=True)
+class Finding:
+    """A claim of the paper, where it is made, whether it holds here and why."""
+
+    claim: str
+    paper: str
+    holds: bool
+    evidence: str
+
+
+Outputs = dict[str, StudyOutput]
+
+
+def _fact(outputs: Outputs, study: str, name: str):
+    output = outputs.get(study)
+    return None if output is None else output.facts.get(name)
+
+
+def _costs(values) -> str:
+    """``name value`` pairs [kEUR]; a configuration without a plan reads "no plan"."""
+    return ", ".join(f"{k} {v:.1f}" if np.isfinite(v) else f"{k} no plan" for k, v in values.items())
+
+
+def cost_rises_with_gamma(outputs: Outputs) -> Finding | None:
+    table = _fact(outputs, "sensitivity", "sensitivity")
+    if table is None:
+        return None
+    part = table[table["sources"] == table["sources"].iloc[0]].sort_values("gamma")
+    steps = np.diff(part["cost_keur"].to_numpy(float))
+    drops = int((steps < -COST_TOLERANCE_KEUR).sum())
+    first, last = part.iloc[0], part.iloc[-1]
+    return Finding("Cost rises with the uncertainty budget Γ", "Case 2, Figure 15", drops == 0,
+                   f"cost {first['cost_keur']:.1f} kEUR at Γ={first['gamma']} and {last['cost_keur']:.1f} kEUR at "
+                   f"Γ={last['gamma']} (sources: {first['sources']}); {drops} of {len(steps)} steps lower the cost")
+
+
+def cost_rises_with_strategy(outputs: Outputs) -> Finding | None:
+    plans = _fact(outputs, "strategies", "plans")
+    if plans is None:
+        return None
+    costs = plans.set_index("strategy")["cost_keur"]
+    holds = bool((np.diff(costs.to_numpy(float)) >= -COST_TOLERANCE_KEUR).all())
+    return Finding("More conservative strategies cost more", "Case 3, Table 10", holds,
+                   f"cost [kEUR]: {_costs(costs)}")
+
+
+def _cheapest(table: pd.DataFrame, column: str, dearest: bool = False) -> tuple[bool, str]:
+    target = table[column]
+    other = table.drop(columns=column)
+    if dearest:  # a market set without a plan counts as the most expensive
+        ok = target.isna() | (target >= other.max(axis=1) - COST_TOLERANCE_KEUR)
+    else:
+        ok = (target <= other.min(axis=1) + COST_TOLERANCE_KEUR)
+    rows = "; ".join(f"{s}: {_costs(table.loc[s])}" for s in table.index)
+    return bool(ok.all()), f"cost [kEUR] by market set: {rows}"
+
+
+def all_markets_cheapest(outputs: Outputs) -> Finding | None:
+    table = _fact(outputs, "markets", "markets")
+    if table is None or "DAM+SRM+HPA" not in table:
+        return None
+    holds, evidence = _cheapest(table, "DAM+SRM+HPA")
+    return Finding("DAM+SRM+HPA is the cheapest market set for every strategy", "Case 3, Table 10", holds, evidence)
+
+
+def dam_only_dearest(outputs: Outputs) -> Finding | None:
+    table = _fact(outputs, "markets", "markets")
+    if table is None or "DAM" not in table:
+        return None
+    holds, evidence = _cheapest(table, "DAM", dearest=True)
+    return Finding("DAM-only participation is the most expensive", "Case 3, Table 10", holds, evidence)
+
+
+def csp_lowers_cost(outputs: Outputs) -> Finding | None:
+    with_csp, without = _fact(outputs, "markets", "markets"), _fact(outputs, "markets", "without_csp")
+    if with_csp is None or without is None:
+        return None
+    shared = [c for c in without.columns if c in with_csp.columns]
+    diff = without[shared] - with_csp.loc[without.index, shared]
+    holds = bool((diff > COST_TOLERANCE_KEUR).all().all())
+    return Finding("The RVPP without its CSP costs more", "Case 3, Table 11", holds,
+                   "extra cost without CSP [kEUR]: " + "; ".join(
+                       f"{s}: {_costs(diff.loc[s])}" for s in diff.index))
+
+
+def hpa_price_lowers_cost(outputs: Outputs) -> Finding | None:
+    table = _fact(outputs, "markets", "hpa_price")
+    if table is None or table.shape[1] < 2:
+        return None
+    flat = table.drop(columns="time-of-use", errors="ignore")
+    prices = [float(c) for c in flat.columns]
+    ordered = flat[[c for _, c in sorted(zip(prices, flat.columns), reverse=True)]]
+    holds = bool((np.diff(ordered.to_numpy(float), axis=1) <= COST_TOLERANCE_KEUR).all())
+    if "time-of-use" in table:
+        holds = holds and bool((ordered.iloc[:, 0] <= table["time-of-use"] + COST_TOLERANCE_KEUR).all())
+    return Finding("A lower HPA price lowers the cost", "Case 3, Table 12", holds,
+                   "cost [kEUR] by HPA tariff: " + "; ".join(f"{s}: {_costs(table.loc[s])}" for s in table.index))
+
+
+def _up_reserve(outputs: Outputs) -> pd.DataFrame | None:
+    flexibility = _fact(outputs, "strategies", "flexibility")
+    if flexibility is None or "csp" not in set(flexibility["kind"]):
+        return None
+    return flexibility
+
+
+def csp_supplies_most_up_reserve(outputs: Outputs) -> Finding | None:
+    flexibility = _up_reserve(outputs)
+    if flexibility is None:
+        return None
+    total = flexibility.groupby("strategy", sort=False)["r_up_mwh"].sum()
+    csp = flexibility[flexibility["kind"] == "csp"].set_index("strategy")["r_up_mwh"]
+    share = (csp / total.replace(0.0, np.nan)).fillna(0.0)
+    holds = bool((share > MAJORITY).all())
+    return Finding("The CSP supplies most of the up reserve", "Case 2, Figure 13; Conclusion", holds,
+                   "CSP share of the up reserve: " + ", ".join(
+                       f"{s} {share[s]:.0%} of {total[s]:.1f} MWh" for s in share.index))
+
+
+def csp_highest_up_ratio(outputs: Outputs) -> Finding | None:
+    flexibility = _up_reserve(outputs)
+    if flexibility is None:
+        return None
+    best = flexibility.loc[flexibility.groupby("strategy", sort=False)["r_up_h"].idxmax()]
+    holds = bool(((best["kind"] == "csp") & (best["r_up_h"] > 0)).all())
+    return Finding("The CSP has the highest up-reserve-to-capacity ratio", "Case 2, Table 9", holds,
+                   "highest ratio [h]: " + ", ".join(
+                       f"{r.strategy} {r.kind} {r.r_up_h:.2f}" for r in best.itertuples()))
+
+
+def _oos(outputs: Outputs, baseline: bool = True) -> pd.DataFrame | None:
+    """Table 13 by method; with ``baseline``, only if it has the deterministic plan and another."""
+    summary = _fact(outputs, "out_of_sample", "summary")
+    if summary is None or summary.empty:
+        return None
+    if baseline and ("deterministic" not in set(summary["method"]) or len(summary) < 2):
+        return None
+    return summary.set_index("method")
+
+
+def robust_cuts_penalty(outputs: Outputs) -> Finding | None:
+    summary = _oos(outputs)
+    if summary is None:
+        return None
+    base = summary.loc["deterministic", "avg_penalty_keur"]
+    robust = summary.drop(index="deterministic")["avg_penalty_keur"]
+    return Finding("Robust strategies cut penalties out-of-sample", "Case 4, Table 13",
+                   bool((robust < base).all()),
+                   f"average penalty [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+
+
+def robust_raise_market_cost(outputs: Outputs) -> Finding | None:
+    summary = _oos(outputs)
+    if summary is None:
+        return None
+    base = summary.loc["deterministic", "avg_market_cost_keur"]
+    robust = summary.drop(index="deterministic")["avg_market_cost_keur"]
+    return Finding("Robust strategies pay a higher average market cost", "Case 4, Table 13",
+                   bool((robust > base).all()),
+                   f"average market cost [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+
+
+def robust_lowers_net_cost(outputs: Outputs) -> Finding | None:
+    summary = _oos(outputs)
+    if summary is None:
+        return None
+    base = summary.loc["deterministic", "avg_net_cost_keur"]
+    robust = summary.drop(index="deterministic")["avg_net_cost_keur"]
+    return Finding("A robust strategy has a lower net cost than the deterministic plan", "Case 4, Table 13",
+                   bool(robust.min() < base),
+                   f"average net cost [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+
+
+def _sp(outputs: Outputs) -> pd.DataFrame | None:
+    summary = _fact(outputs, "stochastic", "summary")
+    if summary is None or summary["avg_net_cost_keur"].isna().all():
+        return None
+    return summary.dropna(subset=["avg_net_cost_keur"]).set_index("method")
+
+
+def ro_beats_sp(outputs: Outputs) -> Finding | None:
+    ro, sp = _oos(outputs, baseline=False), _sp(outputs)
+    if ro is None or sp is None:
+        return None
+    best_ro, best_sp = ro["avg_net_cost_keur"].idxmin(), sp["avg_net_cost_keur"].idxmin()
+    holds = bool(ro.loc[best_ro, "avg_net_cost_keur"] < sp.loc[best_sp, "avg_net_cost_keur"])
+    return Finding("The best robust strategy has a lower out-of-sample net cost than the stochastic benchmark",
+                   "Case 4, Tables 13-14", holds,
+                   f"best RO {best_ro} {ro.loc[best_ro, 'avg_net_cost_keur']:.1f} kEUR, best SP {best_sp} "
+                   f"{sp.loc[best_sp, 'avg_net_cost_keur']:.1f} kEUR")
+
+
+def sp_penalty_falls_with_scenarios(outputs: Outputs) -> Finding | None:
+    sp = _sp(outputs)
+    if sp is None or len(sp) < 2:
+        return None
+    ordered = sp.sort_values("n_scenarios")
+    first, last = ordered.iloc[0], ordered.iloc[-1]
+    return Finding("More scenarios lower the stochastic benchmark's penalty", "Case 4, Table 14",
+                   bool(last["avg_penalty_keur"] < first["avg_penalty_keur"]),
+                   "average penalty [kEUR]: " + ", ".join(
+                       f"N={int(r.n_scenarios)} {r.avg_penalty_keur:.1f}" for r in ordered.itertuples()))
+
+
+def ro_solves_faster(outputs: Outputs) -> Finding | None:
+    ro, sp = _oos(outputs, baseline=False), _fact(outputs, "stochastic", "summary")
+    if ro is None or sp is None:
+        return None
+    largest = sp.loc[sp["n_scenarios"].idxmax()]
+    slowest_ro = ro["solve_s"].max()
+    status = "" if largest["status"] == "optimal" else f", stopped by {largest['status']}"
+    return Finding(f"RO solves faster than SP with {int(largest['n_scenarios'])} scenarios", "Case 4, Tables 13-14",
+                   bool(slowest_ro < largest["solve_s"]),
+                   f"slowest RO plan {slowest_ro:.2f} s; SP N={int(largest['n_scenarios'])} {largest['solve_s']:.1f} s"
+                   f"{status} (gap {largest['mip_gap'] if largest['mip_gap'] is not None else float('nan'):.2%})")
+
+
+def paper_pattern_is_not_the_worst(outputs: Outputs) -> Finding | None:
+    table = _fact(outputs, "stress", "stress")
+    if table is None or table.empty:
+        return None
+    net = table.pivot(index="strategy", columns="pattern", values="net_cost_keur")
+    paper, greedy = net[PAPER], net[GREEDY]
+    return Finding("Inside the same budget set, a pattern worse than the paper-mode deviations exists "
+                   "(greedy search: a lower bound on the worst case)", "beyond the paper (MODEL_SPEC §10)",
+                   bool((greedy > paper + COST_TOLERANCE_KEUR).all()),
+                   "net cost [kEUR], paper-mode vs greedy pattern: " + ", ".join(
+                       f"{s} {paper[s]:.1f} vs {greedy[s]:.1f}" for s in net.index))
+
+
+CHECKS: tuple[Callable[[Outputs], Finding | None], ...] = (
+    cost_rises_with_gamma, cost_rises_with_strategy, all_markets_cheapest, dam_only_dearest, csp_lowers_cost,
+    hpa_price_lowers_cost, csp_supplies_most_up_reserve, csp_highest_up_ratio, robust_cuts_penalty,
+    robust_raise_market_cost, robust_lowers_net_cost, ro_beats_sp, sp_penalty_falls_with_scenarios,
+    ro_solves_faster, paper_pattern_is_not_the_worst,
+)
+
+
+def findings(outputs: Outputs) -> list[Finding]:
+    """Every finding whose studies ran."""
+    return [f for check in CHECKS if (f := check(outputs)) is not None]

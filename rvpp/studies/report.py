@@ -1,0 +1,193 @@
+"""Write study outputs: tables as CSV, Markdown and one Excel workbook, figures as HTML
+and PNG, and ``report.md`` with the paper's findings checked against our numbers."""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..case import Case
+from ..extract import SOLVER_ZERO
+from .findings import findings
+from .runner import StudyOutput
+from .settings import StudySettings
+
+EXCEL_SHEET_CHARS = 31
+REPORT_TABLES = {  # the tables shown in report.md; every table is in tables/ and tables.xlsx
+    "case1": ("case1_summary", "case1_flexibility"),
+    "strategies": ("strategies", "flexibility"),
+    "sensitivity": ("sensitivity",),
+    "markets": ("table10_markets", "table11_without_csp", "table12_hpa_price"),
+    "out_of_sample": ("table13_out_of_sample",),
+    "stochastic": ("table14_stochastic",),
+    "stress": ("stress",),
+}
+REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
+    "strategies": ["strategy", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
+                   "sr_up_mwh", "sr_dn_mwh", "solve_s", "audit_violations"],
+    "case1_summary": ["strategy", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
+                      "sr_up_mwh", "sr_dn_mwh", "solve_s", "audit_violations"],
+    "sensitivity": ["sources", "gamma", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
+                    "csp_up_mwh", "ed_up_mwh", "wind_dn_mwh", "pv_dn_mwh", "csp_dn_mwh", "ed_dn_mwh", "solve_s"],
+    "table13_out_of_sample": ["method", "status", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur",
+                              "solve_s", "test_days", "realization_set"],
+    "table14_stochastic": ["method", "status", "mip_gap", "avg_market_cost_keur", "avg_penalty_keur",
+                           "avg_net_cost_keur", "solve_s", "test_days", "realization_set"],
+}
+
+
+def markdown_table(table: pd.DataFrame, digits: int = 2) -> str:
+    """A GitHub-flavoured Markdown table; floats rounded to ``digits``."""
+    frame = table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
+    header = [str(c) for c in frame.columns]
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    for row in frame.itertuples(index=False):
+        lines.append("| " + " | ".join(_cell(v, digits) for v in row) + " |")
+    return "\n".join(lines)
+
+
+def _cell(value: Any, digits: int) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    if isinstance(value, (float, np.floating)):
+        if abs(value) <= SOLVER_ZERO:
+            return f"{0.0:.{digits}f}"
+        if SOLVER_ZERO < abs(value) < 10 ** -digits:  # e.g. a MIP gap: keep it visible
+            return f"{value:.1e}"
+        return f"{value:,.{digits}f}"
+    return str(value)
+
+
+def write_tables(outputs: Sequence[StudyOutput], folder: Path) -> list[Path]:
+    """Every table as ``tables/NAME.csv`` and ``tables/NAME.md``, and all of them in ``tables.xlsx``."""
+    target = folder / "tables"
+    target.mkdir(parents=True, exist_ok=True)
+    written = []
+    tables = {name: table for out in outputs for name, table in out.tables.items()}
+    for name, table in tables.items():
+        frame = table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
+        frame.to_csv(target / f"{name}.csv", index=False, float_format="%.6f")
+        (target / f"{name}.md").write_text(markdown_table(frame) + "\n", encoding="utf-8")
+        written += [target / f"{name}.csv", target / f"{name}.md"]
+    workbook = folder / "tables.xlsx"
+    with pd.ExcelWriter(workbook, engine="openpyxl") as writer:
+        for name, table in tables.items():
+            frame = table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
+            frame.to_excel(writer, sheet_name=name[:EXCEL_SHEET_CHARS], index=False)
+    return written + [workbook]
+
+
+def write_figures(outputs: Sequence[StudyOutput], folder: Path, png: bool) -> list[Path]:
+    """Every figure as interactive ``figures/NAME.html`` and, with ``png``, ``figures/NAME.png``."""
+    target = folder / "figures"
+    target.mkdir(parents=True, exist_ok=True)
+    figures = {name: fig for out in outputs for name, fig in out.figures.items()}
+    written = []
+    for name, fig in figures.items():
+        fig.write_html(target / f"{name}.html", include_plotlyjs="directory")
+        written.append(target / f"{name}.html")
+    if png and figures:
+        written += _write_png(figures, target)
+    return written
+
+
+def _write_png(figures: dict, target: Path) -> list[Path]:
+    import kaleido
+
+    kaleido.start_sync_server()
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="The kopts argument is ignored")
+            for name, fig in figures.items():
+                fig.write_image(target / f"{name}.png", width=1100, height=520)
+    finally:
+        kaleido.stop_sync_server()
+    return [target / f"{name}.png" for name in figures]
+
+
+def consistency(outputs: Sequence[StudyOutput]) -> dict[str, Any]:
+    """Checks a reader can redo: net = market cost + penalty; one realization set for all methods."""
+    frames = [out.facts["evaluations"] for out in outputs if "evaluations" in out.facts]
+    if not frames:
+        return {}
+    evaluations = pd.concat(frames, ignore_index=True)
+    gap = (evaluations["net_cost_eur"] - evaluations["market_cost_eur"] - evaluations["penalty_eur"]).abs()
+    per_day = evaluations.groupby("day")["fingerprint"].nunique()
+    return {"settlements": int(len(evaluations)),
+            "max_abs_net_minus_cost_plus_penalty_eur": float(gap.max()),
+            "realization_sets": sorted(evaluations["realization_set"].unique()),
+            "days_with_differing_realizations": int((per_day > 1).sum()),
+            "methods": list(dict.fromkeys(evaluations["method"]))}
+
+
+def write_report(outputs: Sequence[StudyOutput], folder: Path, case: Case, settings: StudySettings,
+                 run_info: dict[str, Any]) -> Path:
+    """``report.md``: context, findings with verdicts, the main tables, consistency checks."""
+    by_name = {out.name: out for out in outputs}
+    checks = consistency(outputs)
+    lines = [f"# Case studies of the RVPP bidding model: case `{case.name}`, delivery day {case.delivery_date}", "",
+             f"History `{case.history.source}` (fingerprint `{case.history.fingerprint}`), periods of "
+             f"{case.dt_h:g} h, forecast window {case.uncertainty.window_days} days. Penalties: "
+             + ", ".join(f"{k} = {v:g}" for k, v in settings.penalties.describe(case).items())
+             + f". Scheduler: {run_info.get('scheduler')}, wall time {run_info.get('wall_s', 0):.1f} s.", "",
+             "## Findings of the paper, checked on this run", "",
+             "| # | finding | paper | holds here | numbers |", "|---|---|---|---|---|"]
+    for i, finding in enumerate(findings(by_name), start=1):
+        lines.append(f"| {i} | {finding.claim} | {finding.paper} | {'yes' if finding.holds else 'no'} | "
+                     f"{finding.evidence} |")
+    for out in outputs:
+        lines += ["", f"## {out.title}", "", f"Wall time {out.seconds:.1f} s."]
+        lines += [f"> {note}" for note in out.notes]
+        for name in REPORT_TABLES.get(out.name, ()):
+            if name in out.tables:
+                table = out.tables[name]
+                columns = [c for c in REPORT_COLUMNS.get(name, list(table.columns)) if c in table.columns]
+                lines += ["", f"**{name}** (`tables/{name}.csv`)", "", markdown_table(table[columns])]
+        if out.figures:
+            lines += ["", "Figures: " + ", ".join(f"`figures/{n}.html`" for n in out.figures)]
+    if checks:
+        lines += ["", "## Consistency of the out-of-sample settlements", "",
+                  f"- {checks['settlements']} settlements of {len(checks['methods'])} methods "
+                  f"({', '.join(checks['methods'])}).",
+                  f"- Largest |net cost − (market cost + penalty)|: "
+                  f"{checks['max_abs_net_minus_cost_plus_penalty_eur']:.2e} EUR.",
+                  f"- Realization sets used: {', '.join(f'`{s}`' for s in checks['realization_sets'])} "
+                  f"({'one set for every method' if len(checks['realization_sets']) == 1 else 'DIFFERENT sets'}); "
+                  f"days whose realization differs between methods: {checks['days_with_differing_realizations']}."]
+    path = folder / "report.md"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def write_run_info(folder: Path, case: Case, settings: StudySettings, outputs: Sequence[StudyOutput],
+                   run_info: dict[str, Any]) -> Path:
+    """``run.json``: settings, case, timings, fingerprints and consistency checks."""
+    info = {"case": case.name, "delivery_date": case.delivery_date.isoformat(), "dt_h": case.dt_h,
+            "history_fingerprint": case.history.fingerprint, "settings": asdict(settings),
+            "penalties": settings.penalties.describe(case),
+            "studies": {out.name: {"seconds": out.seconds, "tables": list(out.tables), "figures": list(out.figures),
+                                   "notes": out.notes} for out in outputs},
+            "consistency": consistency(outputs),
+            "findings": [asdict(f) for f in findings({out.name: out for out in outputs})], **run_info}
+    path = folder / "run.json"
+    path.write_text(json.dumps(info, indent=2, default=str) + "\n", encoding="utf-8")
+    return path
+
+
+def write_all(outputs: Sequence[StudyOutput], folder: str | Path, case: Case, settings: StudySettings,
+              run_info: dict[str, Any]) -> list[Path]:
+    """Write tables, figures, ``report.md`` and ``run.json`` of ``outputs`` into ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = write_tables(outputs, folder) + write_figures(outputs, folder, settings.png)
+    written.append(write_report(outputs, folder, case, settings, run_info))
+    written.append(write_run_info(folder, case, settings, outputs, run_info))
+    return written

@@ -1,0 +1,73 @@
+"""Sensitivity of the plan to the uncertainty budget Γ (paper Case 2, Figures 15-16).
+
+Γ runs over a grid (default: every hour from 0 to the length of the day) for every
+source at once, or for named sources one at a time (a unit kind such as ``pv`` or
+``price`` names all of its sources). The sources not swept keep Γ = 0.
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import Executor
+
+from ..case import Case
+from ..errors import RvppError
+from ..history import PRICE_COLUMNS
+from ..periods import delivery_periods
+from . import figures
+from .runner import Config, Progress, StudyOutput, plan_table, solve_configs
+from .settings import StudySettings
+
+TITLE = "Sensitivity to the uncertainty budget (paper Figures 15-16)"
+ALL = "all"
+
+
+def gamma_grid(case: Case, settings: StudySettings) -> list[int]:
+    """Γ values [periods]: the settings' grid, or 0..NT in steps of one hour."""
+    nt = len(delivery_periods(case.delivery_date, case.timezone, case.dt_h))
+    if settings.gammas is not None:
+        too_large = [g for g in settings.gammas if not 0 <= g <= nt]
+        if too_large:
+            raise RvppError(f"--gammas: {too_large[0]} is outside 0..{nt}, the periods of {case.delivery_date}")
+        return sorted(set(settings.gammas))
+    return list(range(0, nt + 1, int(round(1.0 / case.dt_h))))
+
+
+def source_groups(case: Case, names: tuple[str, ...]) -> dict[str, list[str]]:
+    """``{label: sources}``: every source at once, or each named source / kind on its own."""
+    if not names:
+        return {ALL: case.sources()}
+    kinds = {kind: [u.name for k, u in case.units() if k == kind] for kind in ("wind", "pv", "csp", "ed", "td")}
+    kinds["price"] = list(PRICE_COLUMNS)
+    groups = {}
+    for name in names:
+        if name in kinds and kinds[name]:
+            groups[name] = kinds[name]
+        elif name in case.sources():
+            groups[name] = [name]
+        else:
+            raise RvppError(f"--sources: unknown source {name!r}; choose from {', '.join(case.sources())} "
+                            f"or a kind ({', '.join(k for k, v in kinds.items() if v)})")
+    return groups
+
+
+def configurations(case: Case, settings: StudySettings) -> list[Config]:
+    return [Config.of({"sources": label, "gamma": gamma}, strategy="deterministic",
+                      gammas={source: gamma for source in sources})
+            for label, sources in source_groups(case, settings.sources).items()
+            for gamma in gamma_grid(case, settings)]
+
+
+def run(case: Case, settings: StudySettings, executor: Executor | None = None,
+        progress: Progress | None = None) -> StudyOutput:
+    """Solve the plan at every Γ of the grid; cost, trades and reserves per Γ."""
+    started = time.perf_counter()
+    configs = configurations(case, settings)
+    results = solve_configs(case, configs, settings, executor, progress, "sensitivity")
+    table = plan_table(configs, results)
+    out = StudyOutput("sensitivity", TITLE, tables={"sensitivity": table})
+    out.figures["sensitivity_trades"] = figures.sensitivity_trade_figure(table)
+    out.figures["sensitivity_reserve"] = figures.sensitivity_reserve_figure(table)
+    out.facts["sensitivity"] = table
+    out.seconds = time.perf_counter() - started
+    return out

@@ -1,0 +1,66 @@
+"""Serial, process-pool and Dask runs of a study give identical numbers (rvpp.parallel, rvpp.batch)."""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import rvpp
+from rvpp.batch import run_many
+from rvpp.errors import RvppError
+from rvpp.parallel import open_executor
+from rvpp.studies import out_of_sample
+from rvpp.studies.settings import StudySettings
+
+CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
+SETTINGS = StudySettings(strategies=("optimistic", "pessimistic"), test_days=2)
+NUMBERS = ["method", "day", "fingerprint", "status", "market_cost_eur", "penalty_eur", "net_cost_eur",
+           "deficit_mwh", "unserved_heat_mwh"]
+
+
+def _delayed_square(x: int) -> int:
+    time.sleep(0.05 * (3 - x))
+    return x * x
+
+
+def _run(scheduler: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+    case = rvpp.load_case(CASE_DIR)
+    with open_executor(scheduler, workers=2) as executor:
+        out = out_of_sample.run(case, SETTINGS, executor)
+    return out.tables["table13_out_of_sample"], out.tables["out_of_sample_days"]
+
+
+@pytest.fixture(scope="module")
+def serial():
+    return _run("serial")
+
+
+@pytest.mark.parametrize("scheduler", ["processes", "local"])
+def test_parallel_runs_give_the_serial_numbers(serial, scheduler):
+    summary, days = _run(scheduler)
+    assert (days["status"] == "optimal").all()
+    pd.testing.assert_frame_equal(days[NUMBERS], serial[1][NUMBERS])
+    numbers = ["method", "plan_cost_keur", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur",
+               "realization_set"]
+    pd.testing.assert_frame_equal(summary[numbers], serial[0][numbers])
+
+
+def test_run_many_keeps_task_order_and_reports_progress():
+    calls = []
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        results = run_many(_delayed_square, [0, 1, 2], pool, lambda done, total: calls.append((done, total)))
+    assert results == [0, 1, 4]
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+    assert run_many(_delayed_square, [2, 1], None) == [4, 1]
+
+
+def test_serial_scheduler_has_no_executor_and_workers_are_checked():
+    with open_executor("serial") as executor:
+        assert executor is None
+    with pytest.raises(RvppError, match="workers"):
+        with open_executor("processes", workers=-1):
+            pass

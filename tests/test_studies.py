@@ -1,0 +1,182 @@
+"""The studies: shared realizations, consistency of the settlement, Γ law, the reproduce command."""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rvpp
+from rvpp.cli import main
+from rvpp.history import PRICE_COLUMNS
+from rvpp.studies import out_of_sample, sensitivity, stochastic, stress
+from rvpp.studies.evaluation import evaluation_days, sample_days, training_days
+from rvpp.studies.settings import StudySettings
+from rvpp.uncertainty import window_days
+
+CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
+SETTINGS = StudySettings(strategies=("deterministic", "pessimistic"), test_days=3, scenario_counts=(1, 2),
+                         sp_time_limit_s=120.0, gammas=(0, 4, 12))
+
+
+@pytest.fixture(scope="module")
+def case():
+    return rvpp.load_case(CASE_DIR)
+
+
+@pytest.fixture(scope="module")
+def case4(case):
+    return out_of_sample.run(case, SETTINGS), stochastic.run(case, SETTINGS)
+
+
+def _raw_fingerprint(case, day: dt.date) -> str:
+    """sha256 of the history's own values of ``day``, written independently of rvpp.recourse."""
+    rows = case.history.days(day, 1, case.timezone)
+    sources = sorted(list(PRICE_COLUMNS) + case.unit_names())
+    digest = hashlib.sha256(",".join(sources).encode())
+    digest.update(np.ascontiguousarray(rows[sources].to_numpy(dtype=float)).tobytes())
+    return digest.hexdigest()[:16]
+
+
+def test_every_method_is_settled_on_the_same_realizations(case, case4):
+    days = pd.concat([out.tables[name] for out, name in zip(case4, ("out_of_sample_days", "stochastic_days"))])
+    assert set(days["method"]) == {"deterministic", "pessimistic", "SP N=1", "SP N=2"}
+    expected = {d.isoformat(): _raw_fingerprint(case, d) for d in
+                (case.delivery_date + dt.timedelta(days=k) for k in range(SETTINGS.test_days))}
+    for method, part in days.groupby("method"):
+        assert dict(zip(part["day"], part["fingerprint"])) == expected, method
+    assert days["realization_set"].nunique() == 1
+    summaries = pd.concat([out.tables[name] for out, name in zip(case4, ("table13_out_of_sample",
+                                                                        "table14_stochastic"))])
+    assert summaries["realization_set"].nunique() == 1 and (summaries["test_days"] == SETTINGS.test_days).all()
+
+
+def test_settlements_add_up_and_averages_match_the_days(case4):
+    for out, days_name, table_name in zip(case4, ("out_of_sample_days", "stochastic_days"),
+                                          ("table13_out_of_sample", "table14_stochastic")):
+        days, table = out.tables[days_name], out.tables[table_name].set_index("method")
+        assert (days["status"] == "optimal").all()
+        np.testing.assert_allclose(days["net_cost_eur"], days["market_cost_eur"] + days["penalty_eur"], rtol=1e-9)
+        parts = days[["penalty_deficit_eur", "penalty_surplus_eur", "penalty_reserve_eur", "penalty_heat_eur"]]
+        np.testing.assert_allclose(parts.sum(axis=1), days["penalty_eur"], rtol=1e-9, atol=1e-6)
+        means = days.groupby("method")[["market_cost_eur", "penalty_eur", "net_cost_eur"]].mean() / 1000
+        np.testing.assert_allclose(table.loc[means.index, "avg_net_cost_keur"], means["net_cost_eur"])
+        np.testing.assert_allclose(table.loc[means.index, "avg_penalty_keur"], means["penalty_eur"])
+
+
+def test_windows_are_disjoint_and_scenarios_come_from_training(case, case4):
+    test = evaluation_days(case, 30)
+    train = training_days(case)
+    first, last = window_days(case.delivery_date, case.uncertainty.window_days)
+    assert test[0] == case.delivery_date and not set(test) & set(train)
+    assert all(first <= d <= last for d in train) and len(train) == case.uncertainty.window_days
+    sp = case4[1].tables["table14_stochastic"]
+    assert (sp["status"] == "optimal").all()
+    for days in sp["scenario_days"]:
+        assert {dt.date.fromisoformat(d) for d in days.split()} <= set(train)
+    assert sample_days(train, 5, 7)[:2] == sample_days(train, 2, 7)  # nested samples
+
+
+def test_clock_change_days_are_left_out_of_the_test_window(case):
+    spring = case.replace(delivery_date=dt.date(2025, 3, 28))
+    days = evaluation_days(spring, 5)
+    assert dt.date(2025, 3, 30) not in days and len(days) == 5
+
+
+def test_cost_never_falls_as_the_budget_grows(case):
+    out = sensitivity.run(case, SETTINGS)
+    table = out.tables["sensitivity"]
+    assert list(table["gamma"]) == [0, 4, 12] and (table["status"] == "optimal").all()
+    assert (table["audit_violations"] == 0).all()
+    assert (np.diff(table["cost_keur"]) >= -1e-3).all()
+
+
+def test_reproduce_runs_end_to_end(tmp_path):
+    out = tmp_path / "reproduce"
+    png = shutil.which("chromium") is not None
+    code = main(["study", "reproduce", "--out", str(out), "--scheduler", "serial",
+                 "--strategies", "optimistic,pessimistic", "--market-sets", "DAM,DAM+SRM+HPA",
+                 "--gammas", "0,6", "--hpa-prices", "60", "--test-days", "2", "--scenarios", "2",
+                 "--sp-time-limit", "60", "--quiet"] + ([] if png else ["--no-png"]))
+    assert code == 0
+    info = json.loads((out / "run.json").read_text())
+    assert set(info["studies"]) == {"case1", "strategies", "sensitivity", "markets", "out_of_sample", "stochastic"}
+    assert info["consistency"]["days_with_differing_realizations"] == 0
+    assert len(info["consistency"]["realization_sets"]) == 1
+    assert info["consistency"]["max_abs_net_minus_cost_plus_penalty_eur"] < 1e-6
+    tables = out / "tables"
+    for name in ("table10_markets", "table11_without_csp", "table12_hpa_price", "table13_out_of_sample",
+                 "table14_stochastic", "flexibility", "sensitivity"):
+        assert (tables / f"{name}.csv").is_file() and (tables / f"{name}.md").is_file()
+    assert (out / "tables.xlsx").is_file()
+    figures = sorted(p.stem for p in (out / "figures").glob("*.html"))
+    assert {"case1_trades", "case1_heat", "case1_storage_CSP1", "sensitivity_trades", "out_of_sample_cost"} <= set(figures)
+    if png:
+        assert (out / "figures" / "sensitivity_trades.png").stat().st_size > 0
+    assert list(pd.read_csv(tables / "table10_markets.csv").columns) == ["strategy", "DAM", "DAM+SRM+HPA"]
+    # Each verdict of report.md agrees with the tables it quotes.
+    verdicts = {f["claim"]: f["holds"] for f in info["findings"]}
+    sens = pd.read_csv(tables / "sensitivity.csv")
+    assert verdicts["Cost rises with the uncertainty budget Γ"] == bool((np.diff(sens["cost_keur"]) >= -1e-3).all())
+    plans = pd.read_csv(tables / "strategies.csv").set_index("strategy")
+    assert verdicts["More conservative strategies cost more"] == bool(
+        plans.loc["pessimistic", "cost_keur"] >= plans.loc["optimistic", "cost_keur"] - 1e-3)
+    oos = pd.read_csv(tables / "table13_out_of_sample.csv").set_index("method")
+    sp = pd.read_csv(tables / "table14_stochastic.csv").set_index("method")
+    ro_wins = "The best robust strategy has a lower out-of-sample net cost than the stochastic benchmark"
+    assert verdicts[ro_wins] == bool(oos["avg_net_cost_keur"].min() < sp.loc["SP N=2", "avg_net_cost_keur"])
+    markets = pd.read_csv(tables / "table10_markets.csv").set_index("strategy")
+    assert verdicts["DAM+SRM+HPA is the cheapest market set for every strategy"] == bool(
+        (markets["DAM+SRM+HPA"] <= markets["DAM"] + 1e-3).all())
+    report = (out / "report.md").read_text()
+    assert "## Findings of the paper, checked on this run" in report
+    assert report.count("| yes |") + report.count("| no |") == len(info["findings"])
+
+
+def test_out_of_sample_command_on_a_second_date(tmp_path):
+    code = main(["study", "out-of-sample", "--date", "2025-05-06", "--out", str(tmp_path), "--scheduler", "serial",
+                 "--strategies", "deterministic", "--test-days", "2", "--no-png", "--quiet"])
+    assert code == 0
+    assert json.loads((tmp_path / "run.json").read_text())["delivery_date"] == "2025-05-06"
+    days = pd.read_csv(tmp_path / "tables" / "out_of_sample_days.csv")
+    assert list(days["day"]) == ["2025-05-06", "2025-05-07"] and (days["status"] == "optimal").all()
+
+
+def test_bad_study_options_end_with_a_message(tmp_path, capsys):
+    assert main(["study", "sensitivity", "--gammas", "0,30", "--out", str(tmp_path), "--quiet",
+                 "--scheduler", "serial"]) == 2
+    assert "outside 0..24" in capsys.readouterr().err
+
+
+def test_stress_screening_matches_the_hand_computed_settlement(case):
+    ed = case.ed[2].model_copy(update={"e_min_mwh": 0.0, "flex_up": 0.0, "flex_dn": 0.0})
+    small = case.replace(wind=list(case.wind), pv=[], csp=[], ed=[ed], td=[], markets={"srm": False, "hpa": False},
+                         budgets={"strategy": "optimistic", "overrides": {}})
+    out = stress.run(small, StudySettings(strategies=("optimistic",)))
+    table = out.tables["stress"].set_index("pattern")
+    assert (table["status"] == "optimal").all()
+    assert table.loc[stress.NOMINAL, "deviations"] == 0
+    for periods in table.loc[stress.GREEDY, "periods"].split("; "):
+        name, ts = periods.split(": ")
+        assert len(ts.split(",")) <= 3  # Γ of the optimistic strategy for prices, wind farms and demands
+    # Lost wind in one period: first the surplus over p_da goes (m_sur·λ), then a deficit (m_def·λ);
+    # the wind farm saves its O&M on every MWh not produced.
+    plan = rvpp.solve(small.replace(solver={"threads": 1}))
+    problem, market = plan.problem, plan.market.set_index("t")
+    src = {n: problem.sources[n] for n in ("WF1", "WF2", ed.name, "price_da")}
+    screening = out.tables["stress_screening"]
+    rows = screening[screening["source"] == "WF1"]
+    assert len(rows) == int((src["WF1"].deviation > 0).sum())
+    for row in rows.itertuples():
+        i = row.t - 1
+        surplus = src["WF1"].nominal[i] + src["WF2"].nominal[i] - src[ed.name].nominal[i] - market.loc[row.t, "p_da_mw"]
+        lost, price = src["WF1"].deviation[i], src["price_da"].nominal[i]
+        expected = (0.5 * price * min(surplus, lost) + 2.0 * price * max(0.0, lost - surplus)
+                    - small.wind[0].om_eur_per_mwh * lost)
+        assert row.impact_eur == pytest.approx(expected, rel=1e-6, abs=1e-6)
