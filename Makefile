@@ -20,7 +20,7 @@ run: install
 	$(BIN)/streamlit run app.py --server.port $(PORT) --server.headless true
 
 test: install
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n 2
 
 bench: install
 	$(BIN)/python benchmarks/solve_times.py
