@@ -159,37 +159,32 @@ def _oos(outputs: Outputs, baseline: bool = True) -> pd.DataFrame | None:
     return summary.set_index("method")
 
 
-def robust_cuts_penalty(outputs: Outputs) -> Finding | None:
+def _versus_deterministic(outputs: Outputs, column: str, claim: str, label: str,
+                          holds: Callable[[pd.Series, float], bool]) -> Finding | None:
+    """A Table 13 finding comparing the robust strategies with the deterministic plan."""
     summary = _oos(outputs)
     if summary is None:
         return None
-    base = summary.loc["deterministic", "avg_penalty_keur"]
-    robust = summary.drop(index="deterministic")["avg_penalty_keur"]
-    return Finding("Robust strategies cut penalties out-of-sample", "Case 4, Table 13",
-                   bool((robust < base).all()),
-                   f"average penalty [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+    base = summary.loc["deterministic", column]
+    robust = summary.drop(index="deterministic")[column]
+    return Finding(claim, "Case 4, Table 13", bool(holds(robust, base)),
+                   f"{label} [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+
+
+def robust_cuts_penalty(outputs: Outputs) -> Finding | None:
+    return _versus_deterministic(outputs, "avg_penalty_keur", "Robust strategies cut penalties out-of-sample",
+                                 "average penalty", lambda robust, base: (robust < base).all())
 
 
 def robust_raise_market_cost(outputs: Outputs) -> Finding | None:
-    summary = _oos(outputs)
-    if summary is None:
-        return None
-    base = summary.loc["deterministic", "avg_market_cost_keur"]
-    robust = summary.drop(index="deterministic")["avg_market_cost_keur"]
-    return Finding("Robust strategies pay a higher average market cost", "Case 4, Table 13",
-                   bool((robust > base).all()),
-                   f"average market cost [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+    return _versus_deterministic(outputs, "avg_market_cost_keur", "Robust strategies pay a higher average market cost",
+                                 "average market cost", lambda robust, base: (robust > base).all())
 
 
 def robust_lowers_net_cost(outputs: Outputs) -> Finding | None:
-    summary = _oos(outputs)
-    if summary is None:
-        return None
-    base = summary.loc["deterministic", "avg_net_cost_keur"]
-    robust = summary.drop(index="deterministic")["avg_net_cost_keur"]
-    return Finding("A robust strategy has a lower net cost than the deterministic plan", "Case 4, Table 13",
-                   bool(robust.min() < base),
-                   f"average net cost [kEUR]: deterministic {base:.1f}, {_costs(robust)}")
+    return _versus_deterministic(outputs, "avg_net_cost_keur",
+                                 "A robust strategy has a lower net cost than the deterministic plan",
+                                 "average net cost", lambda robust, base: robust.min() < base)
 
 
 def _sp(outputs: Outputs) -> pd.DataFrame | None:
