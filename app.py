@@ -31,6 +31,7 @@ def main() -> None:
         ],
     }
     page = st.navigation(pages)
+    state.resume_deep_link()
     widgets.sidebar(state.case())
     page.run()
 

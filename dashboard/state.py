@@ -29,6 +29,8 @@ SOURCE = "case_source"     # where the case came from, for display
 CSP_ON = "csp_on"          # False: solve without the CSP plants (paper Table 11)
 REQUESTED = "requested"    # keys of the run cases this session asked to solve (done or under way)
 SAVED_RUNS = "saved_runs"  # label -> Result, kept for side-by-side comparison
+DEEP_LINK = "deep_link"    # the page asked for before app.py had set the session up
+APP = "app.py"
 
 
 @st.cache_resource(show_spinner=False, max_entries=MAX_CACHED_FOLDERS)
@@ -48,6 +50,27 @@ def init() -> None:
     if CASE not in st.session_state:
         load(_load(str(DEFAULT_CASE)), source=f"data/cases/{DEFAULT_CASE.name}")
     st.session_state.setdefault(SAVED_RUNS, {})
+
+
+def through_app(page: str) -> None:
+    """Run ``page`` only inside app.py's navigation.
+
+    Until some session has opened the app, Streamlit serves a link straight to a page
+    (a bookmark, or a tab reconnecting after a restart) in its pages-folder mode,
+    which runs the page file alone, without the session set up. Such a visit goes
+    through the app, which sets the session up and comes back to ``page``.
+    """
+    if CASE in st.session_state:
+        return
+    st.session_state[DEEP_LINK] = page
+    st.switch_page(APP)
+
+
+def resume_deep_link() -> None:
+    """Called by app.py once its navigation is set: go to the page first asked for."""
+    page = st.session_state.pop(DEEP_LINK, None)
+    if page:
+        st.switch_page(page)
 
 
 def load(case: Case, source: str) -> None:

@@ -9,6 +9,8 @@ from rvpp.case import STRATEGIES
 from rvpp.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
 from rvpp.plots import compare_trades_figure
 
+state.through_app("pages/compare.py")
+
 KEUR = st.column_config.NumberColumn(format="%.1f")
 
 

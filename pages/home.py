@@ -7,6 +7,8 @@ from dashboard import solving, state, widgets
 from rvpp.bundle import read_case_files
 from rvpp.plots import trades_figure
 
+state.through_app("pages/home.py")
+
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
 HEADLINE = ("Profit", "Cost", "DAM revenue", "Reserve revenue", "Protection cost")
 LINKS = (

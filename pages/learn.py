@@ -12,6 +12,8 @@ from rvpp.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure
                         thin_clock_ticks)
 from rvpp.problem import top_gamma_deviation
 
+state.through_app("pages/learn.py")
+
 CURVE_POINTS = 9  # budgets 0, NT/8, ..., NT on the price-of-robustness curve
 KEUR = 1000.0
 NARROW_TICK_HOURS = 2  # label every other hour on half-width charts

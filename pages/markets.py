@@ -7,6 +7,8 @@ from dashboard import solving, state, widgets
 from rvpp import CaseError
 from rvpp.plots import bands_figure, tariff_figure
 
+state.through_app("pages/markets.py")
+
 HOURS = range(24)
 FLAT_PRESETS = (70.0, 60.0, 50.0)  # EUR/MWh_th, the flat tariffs of the paper's Table 12
 PERIOD_MINUTES = {60: 1.0, 30: 0.5, 15: 0.25}

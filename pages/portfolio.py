@@ -6,6 +6,8 @@ from dashboard import fields, solving, state, widgets
 from rvpp import workbook
 from rvpp.plots import bands_figure, curve_figure, thin_clock_ticks
 
+state.through_app("pages/portfolio.py")
+
 KINDS = ("wind", "pv", "csp", "ed", "td")
 BAND_COLUMNS = 2
 NARROW_TICK_HOURS = 2  # label every other hour on half-width charts

@@ -6,6 +6,8 @@ from dashboard import solving, state, widgets
 from rvpp.plots import (KIND_LABELS, dispatch_figure, heat_figure, reserve_share_figure, storage_figure,
                         trades_figure)
 
+state.through_app("pages/results.py")
+
 FLEXIBILITY_COLUMNS = {
     "kind": st.column_config.TextColumn("Unit kind"),
     "r_up_mwh": st.column_config.NumberColumn("Up reserve [MWh]", format="%.1f"),

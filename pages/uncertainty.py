@@ -14,6 +14,8 @@ from rvpp.periods import delivery_periods
 from rvpp.plots import bands_figure, deviating_periods, thin_clock_ticks
 from rvpp.problem import STRATEGY_BUDGETS_H, strategy_budgets
 
+state.through_app("pages/uncertainty.py")
+
 BUDGETS_KEY = "uncertainty_budgets"
 WINDOW_DAYS = (7, 90)
 Q_LO, Q_HI = (0.05, 0.45), (0.55, 0.95)

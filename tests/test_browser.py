@@ -7,6 +7,7 @@ it). Screenshots and the server log are written to ``test-artifacts/``.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import socket
 import subprocess
@@ -40,39 +41,50 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
-@pytest.fixture(scope="module")
-def app_url():
+def require_browser() -> None:
     if not CHROMIUM.exists():
         pytest.skip(f"Chromium is not installed at {CHROMIUM} (Debian: apt-get install chromium); "
                     "the real-browser test needs it")
     pytest.importorskip("playwright.sync_api", reason="the Playwright Python package is not installed")
+
+
+@contextlib.contextmanager
+def streamlit_server(log_name: str):
+    """A fresh ``streamlit run app.py`` on a free port; yields its URL."""
     ARTIFACTS.mkdir(exist_ok=True)
     port = free_port()
-    log = open(ARTIFACTS / "streamlit.log", "w")
+    log = open(ARTIFACTS / log_name, "w")
     server = subprocess.Popen(
         [sys.executable, "-m", "streamlit", "run", "app.py", "--server.headless", "true",
          "--server.address", "127.0.0.1", "--server.port", str(port)],
         cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
     url = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + START_TIMEOUT_S
-    while True:
-        try:
-            with urllib.request.urlopen(f"{url}/_stcore/health", timeout=1) as response:
-                if response.status == 200:
-                    break
-        except OSError:
-            if server.poll() is not None or time.monotonic() > deadline:
-                server.kill()
-                log.close()
-                pytest.fail(f"streamlit did not start; see {ARTIFACTS / 'streamlit.log'}")
-            time.sleep(0.2)
-    yield url
-    server.terminate()
     try:
-        server.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        server.kill()
-    log.close()
+        while True:
+            try:
+                with urllib.request.urlopen(f"{url}/_stcore/health", timeout=1) as response:
+                    if response.status == 200:
+                        break
+            except OSError:
+                if server.poll() is not None or time.monotonic() > deadline:
+                    pytest.fail(f"streamlit did not start; see {ARTIFACTS / log_name}")
+                time.sleep(0.2)
+        yield url
+    finally:
+        server.terminate()
+        try:
+            server.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            server.kill()
+        log.close()
+
+
+@pytest.fixture(scope="module")
+def app_url():
+    require_browser()
+    with streamlit_server("streamlit.log") as url:
+        yield url
 
 
 def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
@@ -105,5 +117,29 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
             assert list(bids.columns) == MARKET_COLUMNS
             np.testing.assert_allclose(bids["p_da_mw"], expected.market["p_da_mw"], atol=1e-5)
             page.screenshot(path=ARTIFACTS / "results.png", full_page=True)
+        finally:
+            browser.close()
+
+
+def test_a_link_straight_to_a_page_on_a_fresh_server_opens_that_page():
+    # Until a session has opened the app, Streamlit runs a page linked directly (a
+    # bookmark, a tab reconnecting after a restart) without app.py; the page must
+    # route itself through the app and come back, with the app's navigation.
+    require_browser()
+    from playwright.sync_api import sync_playwright
+
+    with streamlit_server("streamlit-deep-link.log") as url, sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 1600})
+            page.set_default_timeout(WAIT_MS)
+            page.goto(f"{url}/portfolio")
+            page.get_by_role("heading", name="Portfolio").wait_for()
+            page.get_by_role("heading", name="Wind farms").wait_for()
+            navigation = page.get_by_test_id("stSidebarNav")
+            navigation.get_by_role("link", name="Compare strategies").wait_for()
+            assert page.url.endswith("/portfolio")
+            assert page.get_by_test_id("stException").count() == 0
+            page.screenshot(path=ARTIFACTS / "deep-link.png", full_page=True)
         finally:
             browser.close()
