@@ -22,7 +22,7 @@ Task = TypeVar("Task")
 
 def solve_many(cases: Sequence[Case], executor: Executor | None = None,
                progress: Progress | None = None) -> list[Result]:
-    """Results in the order of ``cases``; ``progress(done, total)`` after each solve."""
+    """Results in the order of ``cases``; ``progress(done, total)`` before the first solve and after each."""
     if executor is not None:
         cases = [case.replace(solver={"threads": 1}) if case.solver.threads != 1 else case for case in cases]
     return run_many(solve, cases, executor, progress)
@@ -32,12 +32,14 @@ def run_many(function: Callable[[Task], Any], tasks: Sequence[Task], executor: E
              progress: Progress | None = None) -> list[Any]:
     """``function(task)`` for every task, in the order of ``tasks``.
 
-    Serial without an executor; otherwise every task is submitted at once and
-    ``progress(done, total)`` is called as results arrive. ``function`` must be a
-    module-level function so it can be sent to worker processes.
+    Serial without an executor; otherwise every task is submitted at once.
+    ``progress(done, total)`` is called once with ``done=0`` before the first task (so a
+    long first task already shows its stage) and then as results arrive.
+    ``function`` must be a module-level function so it can be sent to worker processes.
     """
     total = len(tasks)
     report = progress or (lambda _done, _total: None)
+    report(0, total)
     if executor is None:
         results = []
         for i, task in enumerate(tasks, start=1):

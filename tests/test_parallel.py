@@ -54,7 +54,7 @@ def test_run_many_keeps_task_order_and_reports_progress():
     with ThreadPoolExecutor(max_workers=3) as pool:
         results = run_many(_delayed_square, [0, 1, 2], pool, lambda done, total: calls.append((done, total)))
     assert results == [0, 1, 4]
-    assert calls == [(1, 3), (2, 3), (3, 3)]
+    assert calls == [(0, 3), (1, 3), (2, 3), (3, 3)]
     assert run_many(_delayed_square, [2, 1], None) == [4, 1]
 
 
