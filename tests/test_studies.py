@@ -154,6 +154,38 @@ def test_bad_study_options_end_with_a_message(tmp_path, capsys):
     assert "outside 0..24" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"strategies": ()}, "strategies is empty"),
+    ({"strategies": ("cautious",)}, "unknown strategy 'cautious'"),
+    ({"gammas": (0, -2)}, "gammas: -2 must be a whole number >= 0"),
+    ({"gammas": (1.5,)}, "gammas: 1.5 must be a whole number"),
+    ({"market_sets": ("DAM+XYZ",)}, "market_sets: "),
+    ({"hpa_flat_prices": (float("nan"),)}, "hpa_flat_prices: nan must be a finite number >= 0"),
+    ({"test_days": 0}, "test_days=0 must be at least 1"),
+    ({"scenario_counts": (5, 0)}, "scenario_counts: N=0 must be at least 1"),
+    ({"sp_time_limit_s": 0.0}, "sp_time_limit_s=0.0 must be a number > 0"),
+    ({"threads": 0}, "threads=0 must be at least 1"),
+])
+def test_study_settings_name_the_broken_rule(changes, message):
+    with pytest.raises(rvpp.RvppError, match="^study settings: ") as err:
+        SETTINGS.with_changes(**changes)
+    assert message in str(err.value)
+
+
+def test_study_settings_report_every_broken_rule_at_once():
+    with pytest.raises(rvpp.RvppError) as err:
+        StudySettings(test_days=0, threads=0)
+    assert "test_days=0" in str(err.value) and "threads=0" in str(err.value)
+
+
+def test_sweep_choices_offer_every_kind_then_every_source(case):
+    choices = sensitivity.sweep_choices(case)
+    assert choices[:6] == ["wind", "pv", "csp", "ed", "td", "price"]
+    assert choices[6:] == case.sources()
+    groups = sensitivity.source_groups(case, ("price", "WF1"))
+    assert groups == {"price": list(PRICE_COLUMNS), "WF1": ["WF1"]}
+
+
 def test_stress_screening_matches_the_hand_computed_settlement(case):
     ed = case.ed[2].model_copy(update={"e_min_mwh": 0.0, "flex_up": 0.0, "flex_dn": 0.0})
     small = case.replace(wind=list(case.wind), pv=[], csp=[], ed=[ed], td=[], markets={"srm": False, "hpa": False},

@@ -104,3 +104,13 @@ def summarize(evaluations: pd.DataFrame, plans: pd.DataFrame) -> pd.DataFrame:
         "realization_set": grouped["realization_set"].first().to_numpy(),
     })
     return plans.merge(summary, on="method", how="left")
+
+
+def realizations_used(evaluations: pd.DataFrame) -> pd.DataFrame:
+    """One row per test day and realization fingerprint, with the number of methods settled on it.
+
+    Every method met the same data when each day has a single row whose ``methods`` is
+    the number of methods evaluated.
+    """
+    grouped = evaluations.groupby(["day", "fingerprint"], sort=True)["method"]
+    return grouped.nunique().reset_index(name="methods")

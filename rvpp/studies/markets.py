@@ -42,6 +42,15 @@ def wide(plans: pd.DataFrame, table: str) -> pd.DataFrame:
         index=list(dict.fromkeys(part["strategy"])), columns=list(dict.fromkeys(part["column"])))
 
 
+def note(row, result) -> str:
+    """Why a configuration is not an optimal plan: no plan (n/a in its table), or stopped early."""
+    where = f"{row.strategy}, {row.column} ({row.table.replace('_', ' ')})"
+    gap = "" if result.mip_gap is None else f", gap {result.mip_gap:.2%}"
+    what = (f"no plan, {result.status}" if not result.has_plan
+            else f"{result.status}{gap}: the cost in the table is of a plan that may not be optimal")
+    return f"{where}: {what}" + (f" ({result.message})" if result.message else "")
+
+
 def run(case: Case, settings: StudySettings, executor: Executor | None = None,
         progress: Progress | None = None) -> StudyOutput:
     """Solve every market set, the portfolio without CSP and every HPA price."""
@@ -58,9 +67,7 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
         tables["without_csp"], "Cost without the CSP", "markets")
     out.figures["hpa_price_cost"] = figures.cost_bars_figure(
         tables["hpa_price"], "Cost by HPA tariff [EUR/MWh_th]", "HPA tariff")
-    out.notes += [f"{r.strategy}, {r.column} ({r.table.replace('_', ' ')}): no plan, {r.status}"
-                  + (f" ({message})" if (message := res.message) else "")
-                  for r, res in zip(plans.itertuples(), results) if r.status != "optimal"]
+    out.notes += [note(row, result) for row, result in zip(plans.itertuples(), results) if result.status != "optimal"]
     out.facts.update(plans=plans, **tables)
     out.seconds = time.perf_counter() - started
     return out

@@ -28,26 +28,37 @@ def gamma_grid(case: Case, settings: StudySettings) -> list[int]:
     if settings.gammas is not None:
         too_large = [g for g in settings.gammas if not 0 <= g <= nt]
         if too_large:
-            raise RvppError(f"--gammas: {too_large[0]} is outside 0..{nt}, the periods of {case.delivery_date}")
+            raise RvppError(f"Γ grid: {too_large[0]} is outside 0..{nt}, the periods of {case.delivery_date}")
         return sorted(set(settings.gammas))
     return list(range(0, nt + 1, int(round(1.0 / case.dt_h))))
+
+
+def kind_sources(case: Case) -> dict[str, list[str]]:
+    """``{kind: sources}`` for every kind the case has (``price``: the three prices)."""
+    kinds = {kind: [u.name for k, u in case.units() if k == kind] for kind in ("wind", "pv", "csp", "ed", "td")}
+    kinds["price"] = list(PRICE_COLUMNS)
+    return {kind: sources for kind, sources in kinds.items() if sources}
+
+
+def sweep_choices(case: Case) -> list[str]:
+    """What can be swept one at a time: every kind the case has, then every source."""
+    return list(kind_sources(case)) + case.sources()
 
 
 def source_groups(case: Case, names: tuple[str, ...]) -> dict[str, list[str]]:
     """``{label: sources}``: every source at once, or each named source / kind on its own."""
     if not names:
         return {ALL: case.sources()}
-    kinds = {kind: [u.name for k, u in case.units() if k == kind] for kind in ("wind", "pv", "csp", "ed", "td")}
-    kinds["price"] = list(PRICE_COLUMNS)
+    kinds = kind_sources(case)
     groups = {}
     for name in names:
-        if name in kinds and kinds[name]:
+        if name in kinds:
             groups[name] = kinds[name]
         elif name in case.sources():
             groups[name] = [name]
         else:
-            raise RvppError(f"--sources: unknown source {name!r}; choose from {', '.join(case.sources())} "
-                            f"or a kind ({', '.join(k for k, v in kinds.items() if v)})")
+            raise RvppError(f"sources: unknown source {name!r}; choose from {', '.join(case.sources())} "
+                            f"or a kind ({', '.join(kinds)})")
     return groups
 
 

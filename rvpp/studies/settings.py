@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass, field, replace
 
-from ..case import STRATEGIES
+from ..case import STRATEGIES, parse_markets
+from ..errors import CaseError, RvppError
 from ..recourse import Penalties
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # paper Table 10
@@ -26,6 +29,10 @@ class StudySettings:
     ``scenario_counts``: N of the stochastic benchmark; ``sp_time_limit_s``: time limit
     of each stochastic solve [s]; ``threads``: HiGHS threads per solve (1 keeps serial
     and parallel runs identical); ``png``: also write static figures.
+
+    Checked on creation: an :class:`~rvpp.errors.RvppError` names every broken rule, e.g.
+    ``study settings: test_days=0 must be at least 1``. Rules that need the case (Γ up
+    to the day's periods, test days covered by the history) are checked by the study.
     """
 
     strategies: tuple[str, ...] = STRATEGIES
@@ -42,6 +49,36 @@ class StudySettings:
     fix_commitment: bool = False
     threads: int = 1
     png: bool = True
+
+    def __post_init__(self) -> None:
+        problems = self._problems()
+        if problems:
+            raise RvppError("study settings: " + "; ".join(problems))
+
+    def _problems(self) -> list[str]:
+        problems = []
+        if not self.strategies:
+            problems.append("strategies is empty; choose at least one of " + ", ".join(STRATEGIES))
+        problems += [f"strategies: unknown strategy {s!r}; choose from {', '.join(STRATEGIES)}"
+                     for s in self.strategies if s not in STRATEGIES]
+        problems += [f"gammas: {g} must be a whole number >= 0" for g in self.gammas or ()
+                     if isinstance(g, bool) or not isinstance(g, numbers.Integral) or g < 0]
+        for name in ("market_sets", "market_sets_without_csp"):
+            for markets in getattr(self, name):
+                try:
+                    parse_markets(markets)
+                except CaseError as err:
+                    problems.append(f"{name}: {err}")
+        problems += [f"hpa_flat_prices: {p} must be a finite number >= 0 [EUR/MWh_th]"
+                     for p in self.hpa_flat_prices if not (math.isfinite(p) and p >= 0)]
+        if self.test_days < 1:
+            problems.append(f"test_days={self.test_days} must be at least 1")
+        problems += [f"scenario_counts: N={n} must be at least 1" for n in self.scenario_counts if n < 1]
+        if not (math.isfinite(self.sp_time_limit_s) and self.sp_time_limit_s > 0):
+            problems.append(f"sp_time_limit_s={self.sp_time_limit_s} must be a number > 0 [s]")
+        if self.threads < 1:
+            problems.append(f"threads={self.threads} must be at least 1")
+        return problems
 
     def with_changes(self, **changes) -> "StudySettings":
         return replace(self, **changes)
