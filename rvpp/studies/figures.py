@@ -1,98 +1,178 @@
 """Figures of the sensitivity, market and out-of-sample studies (Plotly).
 
 Each function takes a study table and returns a ``plotly.graph_objects.Figure``; the
-same figure is drawn on a dashboard page, saved as interactive HTML and as PNG.
+same figure is drawn on a dashboard page, saved as interactive HTML and as PNG. As in
+:mod:`rvpp.plots`: every axis title carries its unit, every trace has a legend entry and
+a hover value with its unit, backgrounds are transparent and the palette reads on light
+and dark themes alike.
 """
 
 from __future__ import annotations
+
+import math
 
 import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
+from ..plots import (BLUE, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, ORANGE, PURPLE,
+                     SERIES_COLORS, STRATEGY_COLORS, TRANSPARENT, VERMILION)
 from ..results import FLEX_KINDS
 
 KIND_LABELS = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP", "ed": "Electrical demands"}
-KIND_COLORS = {"wind": "#4C78A8", "pv": "#F2B701", "csp": "#E45756", "ed": "#54A24B"}
-STRATEGY_COLORS = {"deterministic": "#7F7F7F", "optimistic": "#54A24B", "balanced": "#4C78A8",
-                   "pessimistic": "#E45756"}
-LAYOUT = {"template": "plotly_white", "legend": {"orientation": "h", "y": -0.18}, "margin": {"t": 60}}
+GAMMA_TITLE = "Uncertainty budget Γ [periods]"
+TRADES = (("sold_mwh", "Sold (DAM) [MWh]", "MWh", BLUE), ("bought_mwh", "Bought (DAM) [MWh]", "MWh", VERMILION),
+          ("heat_bought_mwh", "Heat bought (HPA) [MWh_th]", "MWh_th", GREEN))
+NOT_AVAILABLE = "n/a"
 
 
 def sensitivity_trade_figure(table: pd.DataFrame) -> go.Figure:
     """Cost, traded electricity and bought heat against Γ (paper Figure 15)."""
-    fig = make_subplots(rows=1, cols=2, subplot_titles=("Cost [kEUR]", "Energy traded [MWh]"))
-    for group, part in table.groupby("sources", sort=False):
+    fig = make_subplots(rows=1, cols=2, subplot_titles=("Cost", "Energy traded over the day"),
+                        horizontal_spacing=0.1)
+    groups = list(table.groupby("sources", sort=False))
+    for i, (group, part) in enumerate(groups):
         suffix = "" if group == "all" else f" ({group})"
+        dash = _dash(i)
         fig.add_trace(go.Scatter(x=part["gamma"], y=part["cost_keur"], mode="lines+markers",
-                                 name=f"cost{suffix}"), row=1, col=1)
-        for column, label in (("sold_mwh", "sold (DAM)"), ("bought_mwh", "bought (DAM)"),
-                              ("heat_bought_mwh", "heat bought (HPA) [MWh_th]")):
-            fig.add_trace(go.Scatter(x=part["gamma"], y=part[column], mode="lines+markers",
-                                     name=f"{label}{suffix}"), row=1, col=2)
-    fig.update_xaxes(title_text="uncertainty budget Γ [periods]")
-    fig.update_layout(title="Sensitivity to the uncertainty budget: cost and traded energy", **LAYOUT)
+                                 name=f"Cost [kEUR]{suffix}", line=dict(color=SERIES_COLORS[i % len(SERIES_COLORS)]
+                                                                        if len(groups) > 1 else PURPLE, dash=dash),
+                                 hovertemplate=f"Γ = %{{x}}: %{{y:.1f}} kEUR{suffix}<extra></extra>"), row=1, col=1)
+        for column, label, unit, color in TRADES:
+            fig.add_trace(go.Scatter(x=part["gamma"], y=part[column], mode="lines+markers", name=f"{label}{suffix}",
+                                     line=dict(color=color, dash=dash),
+                                     hovertemplate=f"Γ = %{{x}}: %{{y:.1f}} {unit}<extra>{label}{suffix}</extra>"),
+                          row=1, col=2)
+    _style(fig, "Sensitivity to the uncertainty budget: cost and traded energy")
+    fig.update_xaxes(title_text=GAMMA_TITLE)
+    fig.update_yaxes(title_text="Cost (−profit) [kEUR]", row=1, col=1)
+    fig.update_yaxes(title_text="Energy [MWh] / heat [MWh_th]", row=1, col=2)
     return fig
 
 
-def sensitivity_reserve_figure(table: pd.DataFrame) -> go.Figure:
-    """Up and down reserve by unit kind against Γ (paper Figure 16)."""
-    fig = make_subplots(rows=1, cols=2, subplot_titles=("Up reserve [MWh]", "Down reserve [MWh]"))
-    part = table[table["sources"] == table["sources"].iloc[0]]
-    for col, direction in enumerate(("up", "dn"), start=1):
+def sensitivity_reserve_figure(table: pd.DataFrame, sources: str | None = None) -> go.Figure:
+    """Up and down reserve by unit kind against Γ (paper Figure 16).
+
+    ``sources``: which sweep to draw (a value of the table's ``sources`` column; default
+    the first).
+    """
+    fig = make_subplots(rows=1, cols=2, subplot_titles=("Up reserve over the day", "Down reserve over the day"),
+                        horizontal_spacing=0.1)
+    sources = table["sources"].iloc[0] if sources is None else sources
+    part = table[table["sources"] == sources]
+    for col, (direction, word) in enumerate((("up", "up"), ("dn", "down")), start=1):
         for kind in FLEX_KINDS:
             column = f"{kind}_{direction}_mwh"
             if column in part:
                 fig.add_trace(go.Bar(x=part["gamma"], y=part[column], name=KIND_LABELS[kind],
-                                     marker_color=KIND_COLORS[kind], showlegend=col == 1,
-                                     legendgroup=kind), row=1, col=col)
-    fig.update_layout(barmode="stack", title=f"Reserve by unit kind against Γ (sources: {part['sources'].iloc[0]})",
-                      **LAYOUT)
-    fig.update_xaxes(title_text="uncertainty budget Γ [periods]")
+                                     marker_color=KIND_COLORS[kind], showlegend=col == 1, legendgroup=kind,
+                                     hovertemplate=f"Γ = %{{x}}: %{{y:.1f}} MWh<extra>{KIND_LABELS[kind]} {word}"
+                                                   "</extra>"), row=1, col=col)
+    _style(fig, f"Reserve by unit kind against Γ (sources: {sources})")
+    fig.update_layout(barmode="stack")
+    fig.update_xaxes(title_text=GAMMA_TITLE)
+    fig.update_yaxes(title_text="Reserve energy [MWh]")
     return fig
 
 
 def reserve_by_kind_figure(flexibility: pd.DataFrame) -> go.Figure:
     """Reserve energy by unit kind per strategy (paper Table 9 as bars)."""
-    fig = make_subplots(rows=1, cols=2, subplot_titles=("Up reserve [MWh]", "Down reserve [MWh]"))
+    fig = make_subplots(rows=1, cols=2, subplot_titles=("Up reserve over the day", "Down reserve over the day"),
+                        horizontal_spacing=0.1)
     for col, column in enumerate(("r_up_mwh", "r_dn_mwh"), start=1):
         for kind in flexibility["kind"].unique():
             part = flexibility[flexibility["kind"] == kind]
-            fig.add_trace(go.Bar(x=part["strategy"], y=part[column], name=KIND_LABELS.get(kind, kind),
-                                 marker_color=KIND_COLORS.get(kind), showlegend=col == 1, legendgroup=kind),
-                          row=1, col=col)
-    fig.update_layout(barmode="group", title="Reserve provided by unit kind and strategy", **LAYOUT)
+            label = KIND_LABELS.get(kind, kind)
+            fig.add_trace(go.Bar(x=part["strategy"], y=part[column], name=label, marker_color=KIND_COLORS.get(kind),
+                                 showlegend=col == 1, legendgroup=kind,
+                                 hovertemplate=f"%{{x}}: %{{y:.1f}} MWh<extra>{label}</extra>"), row=1, col=col)
+    _style(fig, "Reserve provided by unit kind and strategy")
+    fig.update_layout(barmode="group")
+    fig.update_xaxes(title_text="Strategy")
+    fig.update_yaxes(title_text="Reserve energy [MWh]")
     return fig
 
 
 def cost_bars_figure(wide: pd.DataFrame, title: str, column_title: str) -> go.Figure:
-    """Grouped bars of cost [kEUR]: one group per strategy, one bar per column of ``wide``."""
+    """Grouped bars of cost [kEUR]: one group per strategy, one bar per column of ``wide``.
+
+    A configuration without a plan (NaN) has no bar and is labelled ``n/a``.
+    """
     fig = go.Figure()
-    for column in wide.columns:
-        fig.add_trace(go.Bar(x=list(wide.index), y=wide[column], name=str(column),
-                             text=[f"{v:.1f}" for v in wide[column]], textposition="outside"))
-    fig.update_layout(barmode="group", title=title, yaxis_title="cost [kEUR]", legend_title=column_title,
-                      **LAYOUT)
+    for i, column in enumerate(wide.columns):
+        values = [None if _missing(v) else float(v) for v in wide[column]]
+        fig.add_trace(go.Bar(x=list(wide.index), y=values, name=str(column),
+                             marker_color=SERIES_COLORS[i % len(SERIES_COLORS)],
+                             text=[NOT_AVAILABLE if v is None else f"{v:.1f}" for v in values],
+                             textposition="outside", cliponaxis=False,
+                             hovertemplate=f"%{{x}}, {column}: %{{y:.1f}} kEUR<extra></extra>"))
+    _style(fig, title)
+    fig.update_layout(barmode="group", legend_title_text=column_title)
+    fig.update_xaxes(title_text="Strategy")
+    fig.update_yaxes(title_text="Cost (−profit) [kEUR]")
     return fig
 
 
 def out_of_sample_figure(summary: pd.DataFrame) -> go.Figure:
     """Average market cost and penalty per method, net cost marked (paper Tables 13-14)."""
     fig = go.Figure()
-    fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_market_cost_keur"], name="market cost"))
-    fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_penalty_keur"], name="penalty"))
+    fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_market_cost_keur"], name="Market cost [kEUR]",
+                         marker_color=BLUE, hovertemplate="%{x}: %{y:.1f} kEUR<extra>market cost</extra>"))
+    fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_penalty_keur"], name="Penalty [kEUR]",
+                         marker_color=ORANGE, hovertemplate="%{x}: %{y:.1f} kEUR<extra>penalty</extra>"))
     fig.add_trace(go.Scatter(x=summary["method"], y=summary["avg_net_cost_keur"], mode="markers+text",
-                             name="net cost", marker={"symbol": "diamond", "size": 12, "color": "black"},
-                             text=[f"{v:.1f}" for v in summary["avg_net_cost_keur"]], textposition="top center"))
-    fig.update_layout(barmode="relative", title="Out-of-sample: average cost per test day", yaxis_title="kEUR",
-                      **LAYOUT)
+                             name="Net cost [kEUR]", marker={"symbol": "diamond", "size": 13, "color": VERMILION,
+                                                             "line": {"width": 1, "color": GREY}},
+                             text=[NOT_AVAILABLE if _missing(v) else f"{v:.1f}" for v in summary["avg_net_cost_keur"]],
+                             textposition="top center", hovertemplate="%{x}: %{y:.1f} kEUR<extra>net cost</extra>"))
+    _style(fig, "Out-of-sample: average cost per test day")
+    fig.update_layout(barmode="relative")
+    fig.update_xaxes(title_text="Method")
+    fig.update_yaxes(title_text="Average per test day [kEUR]")
+    return fig
+
+
+def net_cost_by_day_figure(evaluations: pd.DataFrame) -> go.Figure:
+    """Net cost [kEUR] of every method on every test day (one line per method)."""
+    fig = go.Figure()
+    others = [c for c in SERIES_COLORS if c not in STRATEGY_COLORS.values()]
+    methods = list(dict.fromkeys(evaluations["method"]))
+    colors = dict(STRATEGY_COLORS)
+    colors.update({m: others[i % len(others)] for i, m in enumerate(m for m in methods if m not in colors)})
+    for method, part in evaluations.groupby("method", sort=False):
+        color = colors[method]
+        fig.add_trace(go.Scatter(x=part["day"], y=part["net_cost_eur"] / 1000.0, mode="lines+markers", name=method,
+                                 line=dict(color=color, dash="solid" if method in STRATEGY_COLORS else "dot"),
+                                 hovertemplate=f"%{{x}}: %{{y:.1f}} kEUR<extra>{method}</extra>"))
+    _style(fig, "Net cost on each test day")
+    fig.update_xaxes(title_text="Test day (realization)", type="category")
+    fig.update_yaxes(title_text="Net cost (market cost + penalty) [kEUR]")
     return fig
 
 
 def solve_time_figure(summary: pd.DataFrame) -> go.Figure:
     """First-stage solve time per method [s], log scale."""
-    fig = go.Figure(go.Bar(x=summary["method"], y=summary["solve_s"],
-                           text=[f"{v:.1f} s" for v in summary["solve_s"]], textposition="outside"))
-    fig.update_layout(title="Solve time of the first-stage plan", yaxis_title="seconds", yaxis_type="log",
-                      **LAYOUT)
+    fig = go.Figure(go.Bar(x=summary["method"], y=summary["solve_s"], name="Solve time [s]", marker_color=GREY,
+                           text=[f"{v:.1f} s" for v in summary["solve_s"]], textposition="outside", cliponaxis=False,
+                           hovertemplate="%{x}: %{y:.2f} s<extra></extra>", showlegend=True))
+    _style(fig, "Solve time of the first-stage plan")
+    fig.update_xaxes(title_text="Method")
+    fig.update_yaxes(title_text="Solve time [s] (log scale)", type="log")
     return fig
+
+
+def _style(fig: go.Figure, title: str) -> None:
+    """The look of :mod:`rvpp.plots`: transparent background, grey grid, legend on top."""
+    fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT,
+                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, margin=dict(t=110, b=60, l=70, r=30),
+                      legend=dict(orientation="h", yanchor="bottom", y=1.08, xanchor="left", x=0))
+    fig.update_xaxes(gridcolor=GRID_COLOR)
+    fig.update_yaxes(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
+
+
+def _dash(i: int) -> str:
+    return ("solid", "dash", "dot", "dashdot", "longdash")[i % 5]
+
+
+def _missing(value) -> bool:
+    return value is None or (isinstance(value, float) and math.isnan(value))

@@ -3,6 +3,7 @@ and PNG, and ``report.md`` with the paper's findings checked against our numbers
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import warnings
@@ -46,7 +47,7 @@ REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
 
 def markdown_table(table: pd.DataFrame, digits: int = 2) -> str:
     """A GitHub-flavoured Markdown table; floats rounded to ``digits``."""
-    frame = table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
+    frame = flat(table)
     header = [str(c) for c in frame.columns]
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     for row in frame.itertuples(index=False):
@@ -66,6 +67,25 @@ def _cell(value: Any, digits: int) -> str:
     return str(value)
 
 
+def flat(table: pd.DataFrame) -> pd.DataFrame:
+    """``table`` with a named index turned into columns (how tables are written)."""
+    return table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
+
+
+def table_csv(table: pd.DataFrame) -> str:
+    """A table as CSV text, full precision (the content of ``tables/NAME.csv``)."""
+    return flat(table).to_csv(index=False, float_format="%.6f")
+
+
+def tables_workbook_bytes(tables: dict[str, pd.DataFrame]) -> bytes:
+    """Tables as one Excel workbook, one sheet each (the content of ``tables.xlsx``)."""
+    buffer = io.BytesIO()
+    with pd.ExcelWriter(buffer, engine="openpyxl") as writer:
+        for name, table in tables.items():
+            flat(table).to_excel(writer, sheet_name=name[:EXCEL_SHEET_CHARS], index=False)
+    return buffer.getvalue()
+
+
 def write_tables(outputs: Sequence[StudyOutput], folder: Path) -> list[Path]:
     """Every table as ``tables/NAME.csv`` and ``tables/NAME.md``, and all of them in ``tables.xlsx``."""
     target = folder / "tables"
@@ -73,15 +93,11 @@ def write_tables(outputs: Sequence[StudyOutput], folder: Path) -> list[Path]:
     written = []
     tables = {name: table for out in outputs for name, table in out.tables.items()}
     for name, table in tables.items():
-        frame = table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
-        frame.to_csv(target / f"{name}.csv", index=False, float_format="%.6f")
-        (target / f"{name}.md").write_text(markdown_table(frame) + "\n", encoding="utf-8")
+        (target / f"{name}.csv").write_text(table_csv(table), encoding="utf-8")
+        (target / f"{name}.md").write_text(markdown_table(table) + "\n", encoding="utf-8")
         written += [target / f"{name}.csv", target / f"{name}.md"]
     workbook = folder / "tables.xlsx"
-    with pd.ExcelWriter(workbook, engine="openpyxl") as writer:
-        for name, table in tables.items():
-            frame = table.reset_index() if not isinstance(table.index, pd.RangeIndex) else table
-            frame.to_excel(writer, sheet_name=name[:EXCEL_SHEET_CHARS], index=False)
+    workbook.write_bytes(tables_workbook_bytes(tables))
     return written + [workbook]
 
 
