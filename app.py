@@ -9,12 +9,13 @@ import streamlit as st
 
 
 def main() -> None:
-    from dashboard import solving, state, widgets  # here, not above: worker processes import this file
+    from dashboard import solving, state, studies, widgets  # here, not above: worker processes import this file
 
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
                        layout="wide")
     state.init()
     solving.worker_pool()
+    studies.start()
     pages = {
         "Plan": [
             st.Page("pages/home.py", title="Home", icon=":material/home:", default=True),
@@ -25,6 +26,11 @@ def main() -> None:
         ],
         "Analyse": [
             st.Page("pages/compare.py", title="Compare strategies", icon=":material/compare_arrows:"),
+        ],
+        "Studies": [
+            st.Page("pages/sensitivity.py", title="Sensitivity to Γ", icon=":material/tune:"),
+            st.Page("pages/market_sets.py", title="Market sets & HPA prices", icon=":material/storefront:"),
+            st.Page("pages/out_of_sample.py", title="Out-of-sample vs stochastic", icon=":material/fact_check:"),
         ],
         "Learn": [
             st.Page("pages/learn.py", title="Robust bidding explained", icon=":material/school:"),

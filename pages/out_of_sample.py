@@ -1,0 +1,138 @@
+"""Out-of-sample: the robust strategies against the scenario-based stochastic benchmark,
+settled on the same test days (paper Case 4, Tables 13-14), computed by
+``rvpp.studies.out_of_sample`` and ``rvpp.studies.stochastic``."""
+
+import pandas as pd
+import streamlit as st
+
+from dashboard import state, studies, widgets
+from rvpp import RvppError
+from rvpp.case import STRATEGIES
+from rvpp.recourse import Penalties
+from rvpp.studies import StudySettings, figures
+from rvpp.studies.evaluation import evaluation_days, realizations_used, training_days
+
+state.through_app("pages/out_of_sample.py")
+
+TEST_DAYS, SCENARIOS, TIME_LIMIT_S = 10, (5, 10), 60.0  # small enough for a browser: about two minutes
+STUDIES = {"out-of-sample": "Robust strategies", "stochastic": "Stochastic benchmark"}
+SUMMARY_COLUMNS = {
+    "method": st.column_config.TextColumn("Method"),
+    "n_scenarios": st.column_config.NumberColumn("N"),
+    "status": st.column_config.TextColumn("Status", help="How the plan's solve ended"),
+    "mip_gap": st.column_config.NumberColumn("MIP gap [-]", format="%.1e"),
+    "avg_market_cost_keur": st.column_config.NumberColumn("Avg market cost [kEUR]", format="%.1f"),
+    "avg_penalty_keur": st.column_config.NumberColumn("Avg penalty [kEUR]", format="%.1f"),
+    "avg_net_cost_keur": st.column_config.NumberColumn("Avg net cost [kEUR]", format="%.1f"),
+    "solve_s": st.column_config.NumberColumn("Solve time [s]", format="%.2f"),
+    "test_days": st.column_config.NumberColumn("Test days"),
+    "realization_set": st.column_config.TextColumn("Realization set"),
+}
+TABLE13 = ["method", "status", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur", "solve_s",
+           "test_days", "realization_set"]
+TABLE14 = ["n_scenarios", "status", "mip_gap", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur",
+           "solve_s", "test_days", "realization_set"]
+
+st.title("Out-of-sample: robust strategies against the stochastic benchmark")
+run = state.run_case()
+window = run.uncertainty.window_days
+st.markdown(f"Every method plans the delivery day **{run.delivery_date:%d %B %Y}** from the {window} days before it: "
+            "the robust strategies from their forecast bands, the stochastic program from N whole days sampled "
+            "from that window. Each plan is then settled by one recourse model against the realized values of the "
+            "test days from the delivery day on, the same days for every method, paying penalties for what it "
+            "could not deliver.")
+st.caption(f"The defaults ({TEST_DAYS} test days, N = {', '.join(map(str, SCENARIOS))}, {TIME_LIMIT_S:.0f} s per "
+           "stochastic program) take about two minutes; the paper's 30 days and N up to 25 take half an hour or "
+           "more (`python -m rvpp study reproduce`).")
+
+penalties = Penalties()
+with st.form("out_of_sample_form"):
+    first, second, third = st.columns(3)
+    test_days = first.number_input("Test days", min_value=1, max_value=366, value=TEST_DAYS, step=1,
+                                   key="out_of_sample_test_days", persist_state="session",
+                                   help="Realized days from the delivery day on (days with a clock change are "
+                                        "skipped)")
+    scenarios_text = second.text_input("Scenario counts N", value=", ".join(map(str, SCENARIOS)),
+                                       key="out_of_sample_scenarios", persist_state="session",
+                                       help="One stochastic program per N, whole numbers separated by commas")
+    time_limit = third.number_input("Time limit per stochastic program [s]", min_value=1.0, value=TIME_LIMIT_S,
+                                    step=10.0, key="out_of_sample_time_limit", persist_state="session",
+                                    help="A program stopped by the limit is settled with the best bids found")
+    strategies = st.multiselect("Robust strategies", STRATEGIES, default=list(STRATEGIES),
+                                key="out_of_sample_strategies", persist_state="session")
+    st.markdown("**Penalties** of the settlement")
+    p1, p2, p3, p4 = st.columns(4)
+    m_def = p1.number_input("Deficit multiplier m_def [-]", min_value=0.0, value=penalties.m_def, step=0.25,
+                            key="out_of_sample_m_def", persist_state="session",
+                            help="Energy delivered short of the DAM bid costs m_def × the realized DAM price")
+    m_sur = p2.number_input("Surplus multiplier m_sur [-]", min_value=0.0, value=penalties.m_sur, step=0.25,
+                            key="out_of_sample_m_sur", persist_state="session",
+                            help="Energy delivered beyond the DAM bid earns m_sur × the realized DAM price")
+    m_sr = p3.number_input("Reserve shortfall multiplier m_sr [-]", min_value=0.0, value=penalties.m_sr, step=0.25,
+                           key="out_of_sample_m_sr", persist_state="session",
+                           help="Reserve that could not be delivered costs m_sr × its realized price")
+    c_heat = p4.number_input("Unserved heat [EUR/MWh_th]", min_value=0.0, value=None, step=10.0,
+                             key="out_of_sample_c_heat", persist_state="session",
+                             placeholder=f"{penalties.heat_price(run):g} (twice the highest HPA tariff)",
+                             help="Empty: twice the highest HPA tariff of the case")
+    with st.expander("More settings"):
+        seed = st.number_input("Seed of the scenario sampling", min_value=0, value=StudySettings().seed, step=1,
+                               key="out_of_sample_seed", persist_state="session")
+        fix_commitment = st.checkbox("Settle with the plan's CSP turbine schedule", key="out_of_sample_fix",
+                                     persist_state="session",
+                                     help="The turbine never starts where the plan has it off")
+    submitted = st.form_submit_button("Run", type="primary", key="out_of_sample_run", icon=":material/play_arrow:")
+
+try:
+    scenarios = studies.whole_numbers(scenarios_text, "Scenario counts N")
+    if not scenarios:
+        raise RvppError("Scenario counts N: give at least one, e.g. 5, 10")
+    settings = StudySettings(
+        strategies=tuple(strategies), test_days=int(test_days), scenario_counts=scenarios, seed=int(seed),
+        sp_time_limit_s=float(time_limit), fix_commitment=fix_commitment,
+        penalties=Penalties(m_def=m_def, m_sur=m_sur, m_sr=m_sr, c_heat_eur_per_mwh=c_heat))
+    days = evaluation_days(run, settings.test_days)
+    pool = training_days(run)
+except RvppError as err:
+    widgets.refusal(err, "Settings refused", note="Fix them and press Run.")
+    st.stop()
+st.caption(f"Test days {days[0]:%d %b} – {days[-1]:%d %b %Y}; scenarios drawn from the {len(pool)} days "
+           f"before the delivery day. {len(strategies)} robust plans and {len(scenarios)} stochastic programs, each "
+           f"settled on {len(days)} days.")
+
+outputs = studies.run(STUDIES, run, settings, "out_of_sample", submitted)
+if outputs is None:
+    st.stop()
+robust, stochastic = outputs["out-of-sample"], outputs["stochastic"]
+evaluations = pd.concat([robust.tables["out_of_sample_days"], stochastic.tables["stochastic_days"]],
+                        ignore_index=True)
+summaries = pd.concat([robust.tables["table13_out_of_sample"], stochastic.tables["table14_stochastic"]],
+                      ignore_index=True)
+
+st.subheader("Same days for every method")
+used = realizations_used(evaluations)
+sets = sorted({robust.facts["realization_set"], stochastic.facts["realization_set"]})
+if len(sets) == 1 and used["day"].is_unique:
+    st.success(f"Every method was settled on the same {len(used)} days: realization set **`{sets[0]}`** "
+               "(a fingerprint of every realized value of every day).", icon=":material/verified:")
+else:
+    st.error(f"The methods met different data: realization sets {', '.join(sets)}.", icon=":material/error:")
+with st.expander("Test days and their fingerprints"):
+    st.dataframe(used, hide_index=True, column_config={
+        "day": st.column_config.TextColumn("Test day"), "fingerprint": st.column_config.TextColumn("Fingerprint"),
+        "methods": st.column_config.NumberColumn("Methods settled on it")})
+
+st.subheader("Robust strategies (paper Table 13)")
+st.dataframe(robust.tables["table13_out_of_sample"][TABLE13], hide_index=True, column_config=SUMMARY_COLUMNS)
+st.subheader("Stochastic benchmark (paper Table 14)")
+st.dataframe(stochastic.tables["table14_stochastic"][TABLE14], hide_index=True, column_config=SUMMARY_COLUMNS)
+st.caption("Averages over the test days. Net cost = market cost + penalty; a negative penalty is surplus energy "
+           "bought back at m_sur × the DAM price. Solve time: the plan's own solve (shared study process).")
+
+st.plotly_chart(figures.out_of_sample_figure(summaries), key="out_of_sample_cost")
+st.plotly_chart(figures.net_cost_by_day_figure(evaluations), key="out_of_sample_days")
+st.plotly_chart(figures.solve_time_figure(summaries), key="out_of_sample_solve_time")
+st.caption(f"Computed in {robust.seconds:.1f} s (robust) and {stochastic.seconds:.1f} s (stochastic), side by side.")
+st.subheader("Downloads")
+studies.downloads([robust, stochastic], f"{run.name}_{run.delivery_date:%Y%m%d}_out_of_sample",
+                  key="out_of_sample_download")

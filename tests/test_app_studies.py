@@ -1,0 +1,194 @@
+"""The study pages of the dashboard, driven through Streamlit's AppTest.
+
+Each page runs its study in the dashboard's study processes; the numbers it shows are
+checked against the same study run directly in this process, on a reduced setting.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from streamlit.testing.v1 import AppTest
+
+from rvpp.studies import STUDIES, StudySettings
+from tests.test_app import APP, TIMEOUT_S, errors, values
+
+
+def open_page(page: str) -> AppTest:
+    at = AppTest.from_file(APP, default_timeout=TIMEOUT_S).run()
+    at.switch_page(f"pages/{page}.py").run()
+    assert not at.exception, at.exception
+    return at
+
+
+def run_button(at: AppTest, key: str) -> AppTest:
+    at.button(key=key).click().run()
+    assert not at.exception, at.exception
+    return at
+
+
+def infos(at: AppTest) -> str:
+    return "\n".join(i.value for i in at.info)
+
+
+def charts(at: AppTest) -> dict[str, dict]:
+    specs = [json.loads(chart.proto.spec) for chart in at.get("plotly_chart")]
+    return {spec["layout"]["title"]["text"]: spec for spec in specs}
+
+
+def numeric(frame: pd.DataFrame) -> pd.DataFrame:
+    return frame.select_dtypes("number").drop(columns=[c for c in frame if c.endswith("_s")], errors="ignore")
+
+
+# ----------------------------------------------------------------------------- Sensitivity
+
+
+def test_sensitivity_page_matches_the_study_and_comes_back_without_a_click(paper_case, paper_solve):
+    at = open_page("sensitivity")
+    assert "press **Run**" in infos(at)
+    assert not at.get("plotly_chart")
+
+    at.text_input(key="sensitivity_gammas").input("0, 12, 24")
+    run_button(at, "sensitivity_run")
+    shown = at.dataframe[0].value
+    expected = STUDIES["sensitivity"](paper_case, StudySettings(gammas=(0, 12, 24))).tables["sensitivity"]
+    assert list(shown["gamma"]) == [0, 12, 24]
+    assert list(shown["status"]) == ["optimal"] * 3
+    pd.testing.assert_frame_equal(numeric(shown), numeric(expected), rtol=1e-6, atol=1e-6)
+    # Γ = 0 everywhere is the deterministic plan, solved here on its own.
+    assert shown["cost_keur"].iloc[0] == pytest.approx(-paper_solve(strategy="deterministic").objective_eur / 1000,
+                                                       rel=1e-6)
+    assert shown["cost_keur"].is_monotonic_increasing
+    assert shown["audit_violations"].eq(0).all()
+
+    spec = charts(at)["Sensitivity to the uncertainty budget: cost and traded energy"]
+    cost = next(t for t in spec["data"] if t["name"].startswith("Cost"))
+    np.testing.assert_allclose(values(cost["y"]), shown["cost_keur"], rtol=1e-9)
+    assert spec["layout"]["xaxis"]["title"]["text"] == "Uncertainty budget Γ [periods]"
+    assert "Reserve by unit kind against Γ (sources: all)" in charts(at)
+
+    at.switch_page("pages/home.py").run()
+    at.switch_page("pages/sensitivity.py").run()
+    assert not at.exception, at.exception
+    assert list(at.dataframe[0].value["cost_keur"]) == list(shown["cost_keur"])
+
+    # A new grid is a new study (inputs of a form count once Run is pressed); the old one is kept.
+    at.text_input(key="sensitivity_gammas").input("0, 24")
+    run_button(at, "sensitivity_run")
+    assert list(at.dataframe[0].value["gamma"]) == [0, 24]
+    assert at.dataframe[0].value["cost_keur"].iloc[1] == pytest.approx(shown["cost_keur"].iloc[2], rel=1e-9)
+
+
+def test_sensitivity_page_refuses_bad_settings_and_keeps_working():
+    """Settings are checked before anything is solved; a refusal names the rule."""
+    at = open_page("sensitivity")
+    at.text_input(key="sensitivity_gammas").input("0, 99")
+    run_button(at, "sensitivity_run")
+    assert "Γ grid: 99 is outside 0..24" in errors(at)
+    at.text_input(key="sensitivity_gammas").input("0, six")
+    run_button(at, "sensitivity_run")
+    assert "'six' is not a whole number" in errors(at)
+    at.text_input(key="sensitivity_gammas").input("0, 6")
+    at.radio(key="sensitivity_mode").set_value("Chosen sources one at a time")
+    run_button(at, "sensitivity_run")
+    assert "choose at least one source or kind" in errors(at)
+    assert not at.exception
+
+
+def test_sensitivity_page_sweeps_one_source_at_a_time(paper_case):
+    at = open_page("sensitivity")
+    at.text_input(key="sensitivity_gammas").input("0, 8")
+    at.radio(key="sensitivity_mode").set_value("Chosen sources one at a time")
+    at.multiselect(key="sensitivity_sources").set_value(["price", "wind"])
+    run_button(at, "sensitivity_run")
+    shown = at.dataframe[0].value
+    expected = STUDIES["sensitivity"](paper_case, StudySettings(gammas=(0, 8), sources=("price", "wind")))
+    expected = expected.tables["sensitivity"]
+    assert list(shown["sources"]) == ["price", "price", "wind", "wind"]
+    pd.testing.assert_frame_equal(numeric(shown), numeric(expected), rtol=1e-6, atol=1e-6)
+    # Γ = 0 is the same deterministic plan whichever source is swept.
+    assert shown["cost_keur"].iloc[0] == pytest.approx(shown["cost_keur"].iloc[2], rel=1e-9)
+
+
+# ----------------------------------------------------------------------------- Market sets
+
+
+def test_market_sets_page_matches_the_study(paper_case, paper_solve):
+    at = open_page("market_sets")
+    at.multiselect(key="market_sets_strategies").set_value(["deterministic", "pessimistic"])
+    at.multiselect(key="market_sets_sets").set_value(["DAM", "DAM+SRM+HPA"])
+    at.multiselect(key="market_sets_without_csp").set_value(["DAM+SRM+HPA"])
+    at.text_input(key="market_sets_prices").input("50")
+    run_button(at, "market_sets_run")
+
+    settings = StudySettings(strategies=("deterministic", "pessimistic"), market_sets=("DAM", "DAM+SRM+HPA"),
+                             market_sets_without_csp=("DAM+SRM+HPA",), hpa_flat_prices=(50.0,))
+    expected = STUDIES["markets"](paper_case, settings).tables
+    # The Styler-formatted cost tables come back as their underlying frames.
+    markets, without_csp, hpa = (d.value for d in at.dataframe[:3])
+    np.testing.assert_allclose(markets.to_numpy(float), expected["table10_markets"].to_numpy(float), rtol=1e-6)
+    np.testing.assert_allclose(without_csp.to_numpy(float), expected["table11_without_csp"].to_numpy(float),
+                               rtol=1e-6)
+    np.testing.assert_allclose(hpa.to_numpy(float), expected["table12_hpa_price"].to_numpy(float), rtol=1e-6)
+    assert list(markets.columns) == ["DAM", "DAM+SRM+HPA"]
+    assert list(hpa.columns) == ["time-of-use", "50"]
+    # The full market set with the time-of-use tariff is the case's own pessimistic plan.
+    assert markets.loc["pessimistic", "DAM+SRM+HPA"] == pytest.approx(
+        -paper_solve(strategy="pessimistic").objective_eur / 1000, rel=1e-6)
+    assert hpa["time-of-use"].tolist() == pytest.approx(markets["DAM+SRM+HPA"].tolist(), rel=1e-9)
+    assert {"Cost by market set", "Cost without the CSP"} <= set(charts(at))
+
+
+def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list():
+    at = open_page("market_sets")
+    at.text_input(key="market_sets_prices").input("70, -5")
+    run_button(at, "market_sets_run")
+    assert "hpa_flat_prices: -5.0 must be a finite number >= 0" in errors(at)
+    at.text_input(key="market_sets_prices").input("70")
+    at.multiselect(key="market_sets_strategies").set_value([])
+    run_button(at, "market_sets_run")
+    assert "strategies is empty" in errors(at)
+    assert not at.exception
+
+
+# ----------------------------------------------------------------------------- Out-of-sample
+
+
+def test_out_of_sample_page_matches_the_studies_on_the_same_days(paper_case):
+    at = open_page("out_of_sample")
+    at.number_input(key="out_of_sample_test_days").set_value(2)
+    at.text_input(key="out_of_sample_scenarios").input("1, 2")
+    at.multiselect(key="out_of_sample_strategies").set_value(["deterministic", "balanced"])
+    run_button(at, "out_of_sample_run")
+
+    settings = StudySettings(strategies=("deterministic", "balanced"), test_days=2, scenario_counts=(1, 2),
+                             sp_time_limit_s=60.0)
+    robust = STUDIES["out-of-sample"](paper_case, settings).tables["table13_out_of_sample"]
+    stochastic = STUDIES["stochastic"](paper_case, settings).tables["table14_stochastic"]
+    used, table13, table14 = (d.value for d in at.dataframe[:3])
+    assert list(used["methods"]) == [4, 4]  # two strategies and two stochastic programs on each day
+    assert "settled on the same 2 days" in "\n".join(s.value for s in at.success)
+    assert set(table13["realization_set"]) == set(table14["realization_set"]) == set(robust["realization_set"])
+    for shown, expected in ((table13, robust), (table14, stochastic)):
+        for column in ("avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur"):
+            np.testing.assert_allclose(shown[column], expected[column], rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(shown["avg_net_cost_keur"],
+                                   shown["avg_market_cost_keur"] + shown["avg_penalty_keur"], rtol=1e-9)
+    assert list(table13["method"]) == ["deterministic", "balanced"]
+    assert list(table14["n_scenarios"]) == [1, 2]
+    assert {"Out-of-sample: average cost per test day", "Net cost on each test day",
+            "Solve time of the first-stage plan"} <= set(charts(at))
+
+
+def test_out_of_sample_page_refuses_empty_scenario_counts():
+    at = open_page("out_of_sample")
+    at.text_input(key="out_of_sample_scenarios").input(" ")
+    run_button(at, "out_of_sample_run")
+    assert "give at least one" in errors(at)
+    at.text_input(key="out_of_sample_scenarios").input("0")
+    run_button(at, "out_of_sample_run")
+    assert "N=0 must be at least 1" in errors(at)
+    assert not at.exception
