@@ -233,10 +233,13 @@ def _wait(running: dict[str, Job], studies: dict[str, str], page: str, keys: lis
         job.poll()
     if all(job.future.done() for job in running.values()):
         return
-    st.button("Cancel", key=f"{page}_cancel", icon=":material/stop_circle:", on_click=_cancel, args=(page, keys),
-              help="Stops the studies after the solve under way (for every tab waiting on this input).")
-    st.caption("Leaving the page or changing an input only stops waiting: a started study finishes in the "
-               "background and its results are here when you come back. **Cancel** stops it.")
+    controls = st.empty()  # cleared once every study ended
+    with controls.container():
+        st.button("Cancel", key=f"{page}_cancel", icon=":material/stop_circle:", on_click=_cancel,
+                  args=(page, keys), help="Stops the studies after the solve under way (for every tab waiting "
+                                          "on this input).")
+        st.caption("Leaving the page or changing an input only stops waiting: a started study finishes in the "
+                   "background and its results are here when you come back. **Cancel** stops it.")
     with st.status(f"Running {len(running)} stud{'y' if len(running) == 1 else 'ies'}…", expanded=True) as status:
         bars = {name: st.progress(0.0, text=f"{studies[name]}: starting") for name in running}
         while True:
@@ -249,6 +252,7 @@ def _wait(running: dict[str, Job], studies: dict[str, str], page: str, keys: lis
             wait([job.future for job in running.values()], timeout=POLL_S, return_when=ALL_COMPLETED)
         elapsed = max((job.finished or time.perf_counter()) - job.started for job in running.values())
         status.update(label=f"Done in {elapsed:.0f} s", state="complete", expanded=False)
+    controls.empty()
 
 
 def _outputs(running: dict[str, Job], studies: dict[str, str], page: str,

@@ -73,8 +73,9 @@ with st.form("out_of_sample_form"):
                            help="Reserve that could not be delivered costs m_sr × its realized price")
     c_heat = p4.number_input("Unserved heat [EUR/MWh_th]", min_value=0.0, value=None, step=10.0,
                              key="out_of_sample_c_heat", persist_state="session",
-                             placeholder=f"{penalties.heat_price(run):g} (twice the highest HPA tariff)",
-                             help="Empty: twice the highest HPA tariff of the case")
+                             placeholder=f"{penalties.heat_price(run):g} (default)",
+                             help=f"Empty: twice the highest HPA tariff of the case, "
+                                  f"{penalties.heat_price(run):g} EUR/MWh_th")
     with st.expander("More settings"):
         seed = st.number_input("Seed of the scenario sampling", min_value=0, value=StudySettings().seed, step=1,
                                key="out_of_sample_seed", persist_state="session")

@@ -7,6 +7,7 @@ checked against the same study run directly in this process, on a reduced settin
 from __future__ import annotations
 
 import json
+import time
 
 import numpy as np
 import pandas as pd
@@ -192,3 +193,28 @@ def test_out_of_sample_page_refuses_empty_scenario_counts():
     run_button(at, "out_of_sample_run")
     assert "N=0 must be at least 1" in errors(at)
     assert not at.exception
+
+
+# ----------------------------------------------------------------------------- the study processes
+
+
+def test_a_cancelled_study_stops_after_its_solve_and_is_started_afresh(paper_case):
+    """Cancel reaches the study process through its progress callback; the next ask runs it anew."""
+    from dashboard import studies
+
+    settings = StudySettings(gammas=tuple(range(25)))
+    job = studies.jobs().get_or_start("sensitivity", paper_case, settings)
+    deadline = time.monotonic() + TIMEOUT_S
+    while job.done < 1 and time.monotonic() < deadline:  # one plan solved: the study is under way
+        time.sleep(0.1)
+        job.poll()
+    assert job.total == 25 and job.done >= 1
+    studies.jobs().cancel([job.key])
+    with pytest.raises(studies.StudyCancelled):
+        job.future.result(timeout=TIMEOUT_S)
+    job.poll()
+    assert job.done < job.total
+    assert not job.usable
+    again = studies.jobs().get_or_start("sensitivity", paper_case, settings)
+    assert again is not job and not again.cancel.is_set()
+    studies.jobs().cancel([again.key])
