@@ -9,13 +9,12 @@ import streamlit as st
 
 
 def main() -> None:
-    from dashboard import solving, state, studies, widgets  # here, not above: worker processes import this file
+    from dashboard import solving, state, widgets  # here, not above: worker processes import this file
 
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
                        layout="wide")
     state.init()
     solving.worker_pool()
-    studies.start()
     pages = {
         "Plan": [
             st.Page("pages/home.py", title="Home", icon=":material/home:", default=True),

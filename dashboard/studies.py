@@ -72,24 +72,15 @@ def study_key(name: str, case: Case, settings: StudySettings) -> str:
     return hashlib.sha256(f"{name}|{case_key(case)}|{settings!r}".encode()).hexdigest()
 
 
-def start() -> None:
-    """Start the study processes and the progress manager; ``app.py`` calls this on every run.
-
-    They must be started from ``app.py``: a spawned process imports the script that is
-    running when it starts, and a page script, unlike ``app.py``, has no ``__main__``
-    guard. After a crash they are started again by the next run of ``app.py``.
-    """
-    study_pool()
-    _manager()
-
-
 @st.cache_resource(show_spinner=False)
 def study_pool() -> ProcessPoolExecutor:
-    """The shared study processes, all spawned at once (each imports the studies on first use)."""
-    pool = ProcessPoolExecutor(max_workers=STUDY_WORKERS, mp_context=multiprocessing.get_context("spawn"))
-    for _ in range(STUDY_WORKERS):
-        pool.submit(os.getpid)
-    return pool
+    """The shared study processes, spawned by the first study (not at start-up: a first page
+    load then shares the two cores only with the plan solvers' imports).
+
+    A spawned process imports the main script as ``__mp_main__``: during a page run that
+    is ``app.py``, whose ``__main__`` guard keeps it from drawing anything.
+    """
+    return ProcessPoolExecutor(max_workers=STUDY_WORKERS, mp_context=multiprocessing.get_context("spawn"))
 
 
 @st.cache_resource(show_spinner=False)
