@@ -42,8 +42,13 @@ def worker_pool() -> ProcessPoolExecutor:
     """The shared solver processes, started once and warmed up (imports done)."""
     pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=multiprocessing.get_context("spawn"))
     for _ in range(WORKERS):
-        pool.submit(importlib.import_module, "rvpp.solving")
+        pool.submit(_import_solver)
     return pool
+
+
+def _import_solver() -> None:
+    """Runs in a worker: import Pyomo and the model once (returns nothing to send back)."""
+    importlib.import_module("rvpp.solving")
 
 
 @st.cache_data(max_entries=CACHE_ENTRIES, show_spinner=False, hash_funcs={Case: case_key})
