@@ -143,3 +143,35 @@ def test_a_link_straight_to_a_page_on_a_fresh_server_opens_that_page():
             page.screenshot(path=ARTIFACTS / "deep-link.png", full_page=True)
         finally:
             browser.close()
+
+
+def test_a_study_page_runs_its_study_with_progress_and_downloads_its_table(app_url, paper_solve):
+    # The study runs in a study process spawned under the real server; its table must
+    # carry the same numbers as a plain solve (Γ = 0 everywhere is the deterministic plan).
+    from playwright.sync_api import sync_playwright
+
+    deterministic = paper_solve(strategy="deterministic")
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport=VIEWPORT, accept_downloads=True)
+            page.set_default_timeout(WAIT_MS)
+            page.goto(app_url)
+            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Sensitivity to Γ").click()
+            page.get_by_role("heading", name="Sensitivity to the uncertainty budget Γ").wait_for()
+            page.get_by_test_id("stTextInputField").first.fill("0, 24")
+            page.get_by_role("button", name="Run").click()
+            page.get_by_text("Done in").wait_for()
+            page.get_by_test_id("stPlotlyChart").nth(1).locator(".main-svg").first.wait_for()
+            assert page.get_by_role("button", name="Cancel").count() == 0
+            page.screenshot(path=ARTIFACTS / "sensitivity.png", full_page=True)
+
+            with page.expect_download() as download:
+                page.get_by_role("button", name="Table (CSV)").click()
+            table = pd.read_csv(io.BytesIO(Path(download.value.path()).read_bytes()))
+            assert list(table["gamma"]) == [0, 24]
+            assert list(table["status"]) == ["optimal", "optimal"]
+            assert table["cost_keur"][0] == pytest.approx(-deterministic.objective_eur / 1000, rel=1e-6)
+            assert table["cost_keur"][1] > table["cost_keur"][0]
+        finally:
+            browser.close()
