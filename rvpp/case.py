@@ -40,7 +40,15 @@ class _Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
-class NdresUnit(_Frozen):
+class _FollowsSeries(_Frozen):
+    """A unit whose forecast band follows one history column: ``series`` if set, else its name."""
+
+    @property
+    def column(self) -> str:
+        return self.series or self.name
+
+
+class NdresUnit(_FollowsSeries):
     """Wind farm or PV plant: non-dispatchable, curtailable (MODEL_SPEC §9, paper Table 6)."""
 
     name: UnitName
@@ -53,10 +61,6 @@ class NdresUnit(_Frozen):
     reserve_share: Fraction = 0.1
     series: str | None = None
     series_scale: Positive = 1.0
-
-    @property
-    def column(self) -> str:
-        return self.series or self.name
 
     @model_validator(mode="after")
     def _limits(self) -> "NdresUnit":
@@ -145,10 +149,8 @@ class CSP(_Frozen):
                  "<=", "storage.p_ch_max_mw_th", ts.p_ch_max_mw_th)
         _require(ts.p_dis_min_mw_th <= ts.p_dis_max_mw_th, "storage.p_dis_min_mw_th", ts.p_dis_min_mw_th,
                  "<=", "storage.p_dis_max_mw_th", ts.p_dis_max_mw_th)
-        if ts.e_init_mwh_th is not None and not ts.e_min_mwh_th <= ts.e_init_mwh_th <= ts.e_max_mwh_th:
-            raise ValueError(f"storage.e_init_mwh_th={ts.e_init_mwh_th:g} must lie in "
-                             f"[storage.e_min_mwh_th={ts.e_min_mwh_th:g}, "
-                             f"storage.e_max_mwh_th={ts.e_max_mwh_th:g}]")
+        _require_within("storage.e_init_mwh_th", ts.e_init_mwh_th, "storage.e_min_mwh_th", ts.e_min_mwh_th,
+                        "storage.e_max_mwh_th", ts.e_max_mwh_th)
         _require(pb.p_in_min_mw_th < pb.p_in_max_mw_th, "power_block.p_in_min_mw_th", pb.p_in_min_mw_th,
                  "<", "power_block.p_in_max_mw_th", pb.p_in_max_mw_th)
         _check_breakpoints(pb)
@@ -180,7 +182,7 @@ def _check_breakpoints(pb: PowerBlock) -> None:
                          f"breakpoint input {inputs[-1]:g}")
 
 
-class ElectricalDemand(_Frozen):
+class ElectricalDemand(_FollowsSeries):
     """Flexible electrical demand (MODEL_SPEC §9, paper Demand1-Demand8, Table 4)."""
 
     name: UnitName
@@ -195,20 +197,14 @@ class ElectricalDemand(_Frozen):
     series: str | None = None
     series_scale: Positive = 1.0
 
-    @property
-    def column(self) -> str:
-        return self.series or self.name
-
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":
         _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
-        if self.p_init_mw is not None and not self.p_min_mw <= self.p_init_mw <= self.p_max_mw:
-            raise ValueError(f"p_init_mw={self.p_init_mw:g} must lie in [p_min_mw={self.p_min_mw:g}, "
-                             f"p_max_mw={self.p_max_mw:g}]")
+        _require_within("p_init_mw", self.p_init_mw, "p_min_mw", self.p_min_mw, "p_max_mw", self.p_max_mw)
         return self
 
 
-class ThermalDemand(_Frozen):
+class ThermalDemand(_FollowsSeries):
     """Thermal demand served by the CSPs and the HPA (MODEL_SPEC §9, paper Demand_Heat1-3)."""
 
     name: UnitName
@@ -219,17 +215,12 @@ class ThermalDemand(_Frozen):
     series: str | None = None
     series_scale: Positive = 1.0
 
-    @property
-    def column(self) -> str:
-        return self.series or self.name
-
     @model_validator(mode="after")
     def _limits(self) -> "ThermalDemand":
         _require(self.h_min_mw_th <= self.h_max_mw_th, "h_min_mw_th", self.h_min_mw_th, "<=",
                  "h_max_mw_th", self.h_max_mw_th)
-        if self.h_init_mw_th is not None and not self.h_min_mw_th <= self.h_init_mw_th <= self.h_max_mw_th:
-            raise ValueError(f"h_init_mw_th={self.h_init_mw_th:g} must lie in "
-                             f"[h_min_mw_th={self.h_min_mw_th:g}, h_max_mw_th={self.h_max_mw_th:g}]")
+        _require_within("h_init_mw_th", self.h_init_mw_th, "h_min_mw_th", self.h_min_mw_th,
+                        "h_max_mw_th", self.h_max_mw_th)
         return self
 
 
@@ -447,6 +438,12 @@ def _is_multiple(hours: float, dt_h: float) -> bool:
 def _require(ok: bool, left: str, lval: float, op: str, right: str, rval: float) -> None:
     if not ok:
         raise ValueError(f"{left}={lval:g} must be {op} {right}={rval:g}")
+
+
+def _require_within(name: str, value: float | None, low: str, lval: float, high: str, hval: float) -> None:
+    """An optional initial value must lie in its unit's range."""
+    if value is not None and not lval <= value <= hval:
+        raise ValueError(f"{name}={value:g} must lie in [{low}={lval:g}, {high}={hval:g}]")
 
 
 # ----------------------------------------------------------------------------- parsing
