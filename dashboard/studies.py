@@ -41,6 +41,7 @@ import streamlit as st
 from rvpp import Case, RvppError
 from rvpp.studies import STUDIES, StudyOutput, StudySettings
 from rvpp.studies.report import table_csv, tables_workbook_bytes
+from rvpp.studies.settings import parse_numbers
 
 from . import widgets
 from .state import case_key
@@ -67,9 +68,10 @@ def run_in_worker(name: str, case: Case, settings: StudySettings, channel, cance
     return STUDIES[name](case, settings, None, progress)
 
 
-def study_key(name: str, case: Case, settings: StudySettings) -> str:
-    """A digest of everything a study depends on: its name, the case's content, the settings."""
-    return hashlib.sha256(f"{name}|{case_key(case)}|{settings!r}".encode()).hexdigest()
+def study_key(name: str, case_digest: str, settings: StudySettings) -> str:
+    """A digest of everything a study depends on: its name, the case's content
+    (``case_digest``, from :func:`dashboard.state.case_key`), the settings."""
+    return hashlib.sha256(f"{name}|{case_digest}|{settings!r}".encode()).hexdigest()
 
 
 @st.cache_resource(show_spinner=False)
@@ -145,8 +147,8 @@ class Jobs:
         self.lock = threading.Lock()
         self.items: OrderedDict[str, Job] = OrderedDict()
 
-    def get_or_start(self, name: str, case: Case, settings: StudySettings) -> Job:
-        key = study_key(name, case, settings)
+    def get_or_start(self, key: str, name: str, case: Case, settings: StudySettings) -> Job:
+        """The job of ``key`` (see :func:`study_key`) if it is usable, else a new run of it."""
         with self.lock:
             job = self.items.get(key)
             if job is not None and job.usable:
@@ -195,7 +197,9 @@ def run(studies: dict[str, str], case: Case, settings: StudySettings, page: str,
     by waiting for the run under way). Returns ``None`` when there is nothing to show
     yet, or when a study was cancelled or refused (the reason is shown in place).
     """
-    keys = [study_key(name, case, settings) for name in studies]
+    digest = case_key(case)
+    keyed = {name: study_key(name, digest, settings) for name in studies}
+    keys = list(keyed.values())
     asked = requested(page)
     if start:
         asked.update(keys)
@@ -208,7 +212,7 @@ def run(studies: dict[str, str], case: Case, settings: StudySettings, page: str,
             st.info(f"{changed}Set the inputs and press **Run**.", icon=":material/info:")
         return None
     try:
-        running = {name: jobs().get_or_start(name, case, settings) for name in studies}
+        running = {name: jobs().get_or_start(key, name, case, settings) for name, key in keyed.items()}
     except (OSError, EOFError, BrokenProcessPool):
         _restart()
         st.error("The study processes stopped unexpectedly; press **Run** again to restart them.",
@@ -275,32 +279,13 @@ def _restart() -> None:
         jobs().items.clear()
 
 
-def whole_numbers(text: str, label: str) -> tuple[int, ...]:
-    """``"0, 6, 12"`` → ``(0, 6, 12)``; a part that is not a whole number is refused by name."""
-    values = []
-    for part in (p.strip() for p in text.split(",")):
-        if not part:
-            continue
-        try:
-            values.append(int(part))
-        except ValueError:
-            raise RvppError(f"{label}: {part!r} is not a whole number (write whole numbers separated by "
-                            "commas, e.g. 0, 6, 12)") from None
-    return tuple(values)
-
-
-def numbers(text: str, label: str) -> tuple[float, ...]:
-    """``"70, 60, 50"`` → ``(70.0, 60.0, 50.0)``; a part that is not a number is refused by name."""
-    values = []
-    for part in (p.strip() for p in text.split(",")):
-        if not part:
-            continue
-        try:
-            values.append(float(part))
-        except ValueError:
-            raise RvppError(f"{label}: {part!r} is not a number (write numbers separated by commas, "
-                            "e.g. 70, 60, 50)") from None
-    return tuple(values)
+def numbers(text: str, label: str, whole: bool = False) -> tuple[float, ...] | tuple[int, ...]:
+    """``"70, 60, 50"`` → ``(70.0, 60.0, 50.0)`` (whole numbers with ``whole``); a part that
+    is not a number is refused with ``label`` and the part."""
+    try:
+        return parse_numbers(text, whole)
+    except ValueError as err:
+        raise RvppError(f"{label}: {err}") from None
 
 
 def listed(values: Sequence[float] | None) -> str:

@@ -85,7 +85,7 @@ with st.form("out_of_sample_form"):
     submitted = st.form_submit_button("Run", type="primary", key="out_of_sample_run", icon=":material/play_arrow:")
 
 try:
-    scenarios = studies.whole_numbers(scenarios_text, "Scenario counts N")
+    scenarios = studies.numbers(scenarios_text, "Scenario counts N", whole=True)
     if not scenarios:
         raise RvppError("Scenario counts N: give at least one, e.g. 5, 10")
     settings = StudySettings(

@@ -55,7 +55,7 @@ with st.form("sensitivity_form"):
     submitted = st.form_submit_button("Run", type="primary", key="sensitivity_run", icon=":material/play_arrow:")
 
 try:
-    gammas = studies.whole_numbers(gammas_text, "Γ grid")
+    gammas = studies.numbers(gammas_text, "Γ grid", whole=True)
     if mode == ONE_AT_A_TIME and not chosen:
         raise RvppError("Sources: choose at least one source or kind to sweep one at a time, or sweep every "
                         "source at once")

@@ -10,7 +10,7 @@ from ..case import STRATEGIES, load_case, parse_markets, with_options
 from ..errors import RvppError
 from ..recourse import Penalties
 from .settings import (HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS,
-                       StudySettings)
+                       StudySettings, parse_numbers)
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 
@@ -35,17 +35,17 @@ def add_study_commands(commands) -> None:
     study.add_argument("--workers", type=int, help="worker processes of a local pool or cluster (default: cores)")
     study.add_argument("--strategies", type=_names(STRATEGIES), help="comma-separated subset of "
                        + ",".join(STRATEGIES))
-    study.add_argument("--gammas", type=_integers, help="Γ grid of the sensitivity, e.g. 0,6,12 "
+    study.add_argument("--gammas", type=_numbers(whole=True), help="Γ grid of the sensitivity, e.g. 0,6,12 "
                        "(default: every hour of the day)")
     study.add_argument("--sources", type=_words, default=(), help="sensitivity: sweep these sources or kinds "
                        "one at a time, e.g. PV1,wind,price (default: all sources at once)")
     study.add_argument("--market-sets", type=_market_sets, help="market sets of Table 10, e.g. "
                        f"DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
-    study.add_argument("--hpa-prices", type=_floats, help=f"flat HPA tariffs [EUR/MWh_th] (default "
-                       f"{','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
+    study.add_argument("--hpa-prices", type=_numbers(whole=False), help="flat HPA tariffs [EUR/MWh_th] "
+                       f"(default {','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
     study.add_argument("--test-days", type=int, default=TEST_DAYS, help=f"out-of-sample days (default {TEST_DAYS})")
-    study.add_argument("--scenarios", type=_integers, help="scenario counts N of the stochastic benchmark "
-                       f"(default {','.join(map(str, SCENARIO_COUNTS))})")
+    study.add_argument("--scenarios", type=_numbers(whole=True), help="scenario counts N of the stochastic "
+                       f"benchmark (default {','.join(map(str, SCENARIO_COUNTS))})")
     study.add_argument("--seed", type=int, default=SEED, help=f"seed of the scenario sampling (default {SEED})")
     study.add_argument("--sp-time-limit", type=float, default=SP_TIME_LIMIT_S, metavar="S",
                        help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
@@ -87,18 +87,13 @@ def _words(text: str) -> tuple[str, ...]:
     return tuple(part.strip() for part in text.split(",") if part.strip())
 
 
-def _integers(text: str) -> tuple[int, ...]:
-    try:
-        return tuple(int(part) for part in _words(text))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} must be whole numbers separated by commas") from None
-
-
-def _floats(text: str) -> tuple[float, ...]:
-    try:
-        return tuple(float(part) for part in _words(text))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} must be numbers separated by commas") from None
+def _numbers(whole: bool):
+    def parse(text: str) -> tuple:
+        try:
+            return parse_numbers(text, whole)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return parse
 
 
 def settings_from(args: argparse.Namespace) -> StudySettings:
@@ -138,10 +133,8 @@ def run_study_command(args: argparse.Namespace) -> int:
     from ..parallel import open_executor
     from . import run_studies
 
-    if args.test_days < 1:
-        raise RvppError(f"--test-days={args.test_days} must be at least 1")
+    settings = settings_from(args)  # checks every setting before the case is read
     case = with_options(load_case(args.case), date=args.date, dt_h=args.dt, time_limit_s=args.time_limit)
-    settings = settings_from(args)
     out = args.out or Path("out") / f"study-{args.name}"
     if not args.quiet:
         print(f"rvpp study {args.name}: case {case.name}, {case.delivery_date}, scheduler {args.scheduler}",

@@ -82,3 +82,22 @@ class StudySettings:
 
     def with_changes(self, **changes) -> "StudySettings":
         return replace(self, **changes)
+
+
+def parse_numbers(text: str, whole: bool = False) -> tuple[float, ...] | tuple[int, ...]:
+    """``"70, 60, 50"`` → ``(70.0, 60.0, 50.0)``; with ``whole``, ``"0, 6, 12"`` → ``(0, 6, 12)``.
+
+    Empty parts are skipped. A part that is not a number raises ``ValueError`` naming it,
+    e.g. ``'six' is not a whole number (write whole numbers separated by commas, e.g. 0, 6, 12)``.
+    """
+    convert, one, many, example = (int, "a whole number", "whole numbers", "0, 6, 12") if whole else \
+        (float, "a number", "numbers", "70, 60, 50")
+    values = []
+    for part in (p.strip() for p in text.split(",")):
+        if not part:
+            continue
+        try:
+            values.append(convert(part))
+        except ValueError:
+            raise ValueError(f"{part!r} is not {one} (write {many} separated by commas, e.g. {example})") from None
+    return tuple(values)
