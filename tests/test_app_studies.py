@@ -6,7 +6,6 @@ checked against the same study run directly in this process, on a reduced settin
 
 from __future__ import annotations
 
-import json
 import time
 
 import numpy as np
@@ -15,29 +14,11 @@ import pytest
 from streamlit.testing.v1 import AppTest
 
 from rvpp.studies import STUDIES, StudySettings
-from tests.test_app import APP, TIMEOUT_S, errors, values
-
-
-def open_page(page: str) -> AppTest:
-    at = AppTest.from_file(APP, default_timeout=TIMEOUT_S).run()
-    at.switch_page(f"pages/{page}.py").run()
-    assert not at.exception, at.exception
-    return at
-
-
-def run_button(at: AppTest, key: str) -> AppTest:
-    at.button(key=key).click().run()
-    assert not at.exception, at.exception
-    return at
+from tests.test_app import TIMEOUT_S, click, errors, figures, open_app, values
 
 
 def infos(at: AppTest) -> str:
     return "\n".join(i.value for i in at.info)
-
-
-def charts(at: AppTest) -> dict[str, dict]:
-    specs = [json.loads(chart.proto.spec) for chart in at.get("plotly_chart")]
-    return {spec["layout"]["title"]["text"]: spec for spec in specs}
 
 
 def numeric(frame: pd.DataFrame) -> pd.DataFrame:
@@ -48,12 +29,12 @@ def numeric(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def test_sensitivity_page_matches_the_study_and_comes_back_without_a_click(paper_case, paper_solve):
-    at = open_page("sensitivity")
+    at = open_app("sensitivity")
     assert "press **Run**" in infos(at)
     assert not at.get("plotly_chart")
 
     at.text_input(key="sensitivity_gammas").input("0, 12, 24")
-    run_button(at, "sensitivity_run")
+    click(at, "sensitivity_run")
     shown = at.dataframe[0].value
     expected = STUDIES["sensitivity"](paper_case, StudySettings(gammas=(0, 12, 24))).tables["sensitivity"]
     assert list(shown["gamma"]) == [0, 12, 24]
@@ -65,11 +46,11 @@ def test_sensitivity_page_matches_the_study_and_comes_back_without_a_click(paper
     assert shown["cost_keur"].is_monotonic_increasing
     assert shown["audit_violations"].eq(0).all()
 
-    spec = charts(at)["Sensitivity to the uncertainty budget: cost and traded energy"]
+    spec = figures(at)["Sensitivity to the uncertainty budget: cost and traded energy"]
     cost = next(t for t in spec["data"] if t["name"].startswith("Cost"))
     np.testing.assert_allclose(values(cost["y"]), shown["cost_keur"], rtol=1e-9)
     assert spec["layout"]["xaxis"]["title"]["text"] == "Uncertainty budget Γ [periods]"
-    assert "Reserve by unit kind against Γ (sources: all)" in charts(at)
+    assert "Reserve by unit kind against Γ (sources: all)" in figures(at)
 
     at.switch_page("pages/home.py").run()
     at.switch_page("pages/sensitivity.py").run()
@@ -78,33 +59,33 @@ def test_sensitivity_page_matches_the_study_and_comes_back_without_a_click(paper
 
     # A new grid is a new study (inputs of a form count once Run is pressed); the old one is kept.
     at.text_input(key="sensitivity_gammas").input("0, 24")
-    run_button(at, "sensitivity_run")
+    click(at, "sensitivity_run")
     assert list(at.dataframe[0].value["gamma"]) == [0, 24]
     assert at.dataframe[0].value["cost_keur"].iloc[1] == pytest.approx(shown["cost_keur"].iloc[2], rel=1e-9)
 
 
 def test_sensitivity_page_refuses_bad_settings_and_keeps_working():
     """Settings are checked before anything is solved; a refusal names the rule."""
-    at = open_page("sensitivity")
+    at = open_app("sensitivity")
     at.text_input(key="sensitivity_gammas").input("0, 99")
-    run_button(at, "sensitivity_run")
+    click(at, "sensitivity_run")
     assert "Γ grid: 99 is outside 0..24" in errors(at)
     at.text_input(key="sensitivity_gammas").input("0, six")
-    run_button(at, "sensitivity_run")
+    click(at, "sensitivity_run")
     assert "'six' is not a whole number" in errors(at)
     at.text_input(key="sensitivity_gammas").input("0, 6")
     at.radio(key="sensitivity_mode").set_value("Chosen sources one at a time")
-    run_button(at, "sensitivity_run")
+    click(at, "sensitivity_run")
     assert "choose at least one source or kind" in errors(at)
     assert not at.exception
 
 
 def test_sensitivity_page_sweeps_one_source_at_a_time(paper_case):
-    at = open_page("sensitivity")
+    at = open_app("sensitivity")
     at.text_input(key="sensitivity_gammas").input("0, 8")
     at.radio(key="sensitivity_mode").set_value("Chosen sources one at a time")
     at.multiselect(key="sensitivity_sources").set_value(["price", "wind"])
-    run_button(at, "sensitivity_run")
+    click(at, "sensitivity_run")
     shown = at.dataframe[0].value
     expected = STUDIES["sensitivity"](paper_case, StudySettings(gammas=(0, 8), sources=("price", "wind")))
     expected = expected.tables["sensitivity"]
@@ -118,12 +99,12 @@ def test_sensitivity_page_sweeps_one_source_at_a_time(paper_case):
 
 
 def test_market_sets_page_matches_the_study(paper_case, paper_solve):
-    at = open_page("market_sets")
+    at = open_app("market_sets")
     at.multiselect(key="market_sets_strategies").set_value(["deterministic", "pessimistic"])
     at.multiselect(key="market_sets_sets").set_value(["DAM", "DAM+SRM+HPA"])
     at.multiselect(key="market_sets_without_csp").set_value(["DAM+SRM+HPA"])
     at.text_input(key="market_sets_prices").input("50")
-    run_button(at, "market_sets_run")
+    click(at, "market_sets_run")
 
     settings = StudySettings(strategies=("deterministic", "pessimistic"), market_sets=("DAM", "DAM+SRM+HPA"),
                              market_sets_without_csp=("DAM+SRM+HPA",), hpa_flat_prices=(50.0,))
@@ -140,17 +121,17 @@ def test_market_sets_page_matches_the_study(paper_case, paper_solve):
     assert markets.loc["pessimistic", "DAM+SRM+HPA"] == pytest.approx(
         -paper_solve(strategy="pessimistic").objective_eur / 1000, rel=1e-6)
     assert hpa["time-of-use"].tolist() == pytest.approx(markets["DAM+SRM+HPA"].tolist(), rel=1e-9)
-    assert {"Cost by market set", "Cost without the CSP"} <= set(charts(at))
+    assert {"Cost by market set", "Cost without the CSP"} <= set(figures(at))
 
 
 def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list():
-    at = open_page("market_sets")
+    at = open_app("market_sets")
     at.text_input(key="market_sets_prices").input("70, -5")
-    run_button(at, "market_sets_run")
+    click(at, "market_sets_run")
     assert "hpa_flat_prices: -5.0 must be a finite number >= 0" in errors(at)
     at.text_input(key="market_sets_prices").input("70")
     at.multiselect(key="market_sets_strategies").set_value([])
-    run_button(at, "market_sets_run")
+    click(at, "market_sets_run")
     assert "strategies is empty" in errors(at)
     assert not at.exception
 
@@ -159,11 +140,11 @@ def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list()
 
 
 def test_out_of_sample_page_matches_the_studies_on_the_same_days(paper_case):
-    at = open_page("out_of_sample")
+    at = open_app("out_of_sample")
     at.number_input(key="out_of_sample_test_days").set_value(2)
     at.text_input(key="out_of_sample_scenarios").input("1, 2")
     at.multiselect(key="out_of_sample_strategies").set_value(["deterministic", "balanced"])
-    run_button(at, "out_of_sample_run")
+    click(at, "out_of_sample_run")
 
     settings = StudySettings(strategies=("deterministic", "balanced"), test_days=2, scenario_counts=(1, 2),
                              sp_time_limit_s=60.0)
@@ -181,16 +162,16 @@ def test_out_of_sample_page_matches_the_studies_on_the_same_days(paper_case):
     assert list(table13["method"]) == ["deterministic", "balanced"]
     assert list(table14["n_scenarios"]) == [1, 2]
     assert {"Out-of-sample: average cost per test day", "Net cost on each test day",
-            "Solve time of the first-stage plan"} <= set(charts(at))
+            "Solve time of the first-stage plan"} <= set(figures(at))
 
 
 def test_out_of_sample_page_refuses_empty_scenario_counts():
-    at = open_page("out_of_sample")
+    at = open_app("out_of_sample")
     at.text_input(key="out_of_sample_scenarios").input(" ")
-    run_button(at, "out_of_sample_run")
+    click(at, "out_of_sample_run")
     assert "give at least one" in errors(at)
     at.text_input(key="out_of_sample_scenarios").input("0")
-    run_button(at, "out_of_sample_run")
+    click(at, "out_of_sample_run")
     assert "N=0 must be at least 1" in errors(at)
     assert not at.exception
 
@@ -201,9 +182,11 @@ def test_out_of_sample_page_refuses_empty_scenario_counts():
 def test_a_cancelled_study_stops_after_its_solve_and_is_started_afresh(paper_case):
     """Cancel reaches the study process through its progress callback; the next ask runs it anew."""
     from dashboard import studies
+    from dashboard.state import case_key
 
     settings = StudySettings(gammas=tuple(range(25)))
-    job = studies.jobs().get_or_start("sensitivity", paper_case, settings)
+    key = studies.study_key("sensitivity", case_key(paper_case), settings)
+    job = studies.jobs().get_or_start(key, "sensitivity", paper_case, settings)
     deadline = time.monotonic() + TIMEOUT_S
     while job.done < 1 and time.monotonic() < deadline:  # one plan solved: the study is under way
         time.sleep(0.1)
@@ -215,6 +198,6 @@ def test_a_cancelled_study_stops_after_its_solve_and_is_started_afresh(paper_cas
     job.poll()
     assert job.done < job.total
     assert not job.usable
-    again = studies.jobs().get_or_start("sensitivity", paper_case, settings)
+    again = studies.jobs().get_or_start(key, "sensitivity", paper_case, settings)
     assert again is not job and not again.cancel.is_set()
     studies.jobs().cancel([again.key])
