@@ -38,8 +38,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import rvpp  # noqa: E402
-from rvpp.batch import solve_many  # noqa: E402
-from rvpp.case import STRATEGIES  # noqa: E402
+from rvpp.solving.batch import solve_many  # noqa: E402
+from rvpp.data.case import STRATEGIES  # noqa: E402
 
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -18,7 +18,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from rvpp import load_case, solve, with_options  # noqa: E402
-from rvpp.problem import STRATEGY_BUDGETS_H  # noqa: E402
+from rvpp.solving.problem import STRATEGY_BUDGETS_H  # noqa: E402
 
 CASE = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 TARGET_S = {1.0: 10.0, 0.25: 60.0}  # every strategy to a 1e-4 gap within these seconds

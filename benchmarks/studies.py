@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import pandas as pd  # noqa: E402
 
 import rvpp  # noqa: E402
-from rvpp.parallel import default_workers, open_executor  # noqa: E402
+from rvpp.solving.parallel import default_workers, open_executor  # noqa: E402
 from rvpp.studies import markets, out_of_sample, sensitivity, stochastic  # noqa: E402
 from rvpp.studies.settings import SCENARIO_COUNTS, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings  # noqa: E402
 

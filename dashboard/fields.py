@@ -6,7 +6,7 @@ from __future__ import annotations
 import streamlit as st
 
 from rvpp import Case
-from rvpp.workbook import SERIES_FIELDS, new_unit_row, unit_columns
+from rvpp.outputs.workbook import SERIES_FIELDS, new_unit_row, unit_columns
 
 # field -> (label with unit, help)
 FIELDS = {

@@ -1,6 +1,6 @@
 """Solves for the dashboard: cached by their full input, run in worker processes.
 
-A solve is a pure function of its frozen :class:`~rvpp.case.Case`, so results are cached
+A solve is a pure function of its frozen :class:`~rvpp.data.case.Case`, so results are cached
 with ``st.cache_data`` keyed by the case's content (:func:`dashboard.state.case_key`):
 going back to a page is instant and any changed input is a new key.
 
@@ -48,7 +48,7 @@ def worker_pool() -> ProcessPoolExecutor:
 
 def _import_solver() -> None:
     """Runs in a worker: import Pyomo and the model once (returns nothing to send back)."""
-    importlib.import_module("rvpp.solving")
+    importlib.import_module("rvpp.solving.plan")
 
 
 @st.cache_data(max_entries=CACHE_ENTRIES, show_spinner=False, hash_funcs={Case: case_key})

@@ -10,9 +10,9 @@ import pandas as pd
 import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
-from rvpp.bundle import case_zip_bytes
-from rvpp.export import plan_workbook_bytes
-from rvpp.workbook import case_workbook_bytes
+from rvpp.outputs.bundle import case_zip_bytes
+from rvpp.outputs.export import plan_workbook_bytes
+from rvpp.outputs.workbook import case_workbook_bytes
 
 from . import state
 

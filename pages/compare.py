@@ -5,9 +5,9 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import RvppError
-from rvpp.case import STRATEGIES
-from rvpp.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
-from rvpp.plots import compare_trades_figure
+from rvpp.data.case import STRATEGIES
+from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
+from rvpp.outputs.plots import compare_trades_figure
 
 state.through_app("pages/compare.py")
 

@@ -4,8 +4,8 @@ import streamlit as st
 
 import rvpp
 from dashboard import solving, state, widgets
-from rvpp.bundle import read_case_files
-from rvpp.plots import trades_figure
+from rvpp.outputs.bundle import read_case_files
+from rvpp.outputs.plots import trades_figure
 
 state.through_app("pages/home.py")
 

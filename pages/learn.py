@@ -7,10 +7,10 @@ import streamlit as st
 import rvpp
 from dashboard import solving, state, widgets
 from rvpp import RvppError
-from rvpp.audit import price_exposures, protection_exact
-from rvpp.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
+from rvpp.settle.audit import price_exposures, protection_exact
+from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
                         thin_clock_ticks)
-from rvpp.problem import top_gamma_deviation
+from rvpp.solving.problem import top_gamma_deviation
 
 state.through_app("pages/learn.py")
 

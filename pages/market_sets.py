@@ -5,7 +5,7 @@ import streamlit as st
 
 from dashboard import state, studies, widgets
 from rvpp import RvppError
-from rvpp.case import STRATEGIES
+from rvpp.data.case import STRATEGIES
 from rvpp.studies import StudySettings, markets
 from rvpp.studies.settings import HPA_FLAT_PRICES, MARKET_SETS, MARKET_SETS_WITHOUT_CSP
 

@@ -5,7 +5,7 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import CaseError
-from rvpp.plots import bands_figure, tariff_figure
+from rvpp.outputs.plots import bands_figure, tariff_figure
 
 state.through_app("pages/markets.py")
 

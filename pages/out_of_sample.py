@@ -7,8 +7,8 @@ import streamlit as st
 
 from dashboard import state, studies, widgets
 from rvpp import RvppError
-from rvpp.case import STRATEGIES
-from rvpp.recourse import Penalties
+from rvpp.data.case import STRATEGIES
+from rvpp.settle.recourse import Penalties
 from rvpp.studies import StudySettings, figures
 from rvpp.studies.evaluation import evaluation_days, realizations_used, training_days
 

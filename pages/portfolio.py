@@ -3,8 +3,8 @@
 import streamlit as st
 
 from dashboard import fields, solving, state, widgets
-from rvpp import workbook
-from rvpp.plots import bands_figure, curve_figure, thin_clock_ticks
+from rvpp.outputs import workbook
+from rvpp.outputs.plots import bands_figure, curve_figure, thin_clock_ticks
 
 state.through_app("pages/portfolio.py")
 

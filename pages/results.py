@@ -3,7 +3,7 @@
 import streamlit as st
 
 from dashboard import solving, state, widgets
-from rvpp.plots import (KIND_LABELS, dispatch_figure, heat_figure, reserve_share_figure, storage_figure,
+from rvpp.outputs.plots import (KIND_LABELS, dispatch_figure, heat_figure, reserve_share_figure, storage_figure,
                         trades_figure)
 
 state.through_app("pages/results.py")

@@ -8,11 +8,11 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import Case, CaseError
-from rvpp.case import STRATEGIES
-from rvpp.history import PRICE_COLUMNS
-from rvpp.periods import delivery_periods
-from rvpp.plots import bands_figure, deviating_periods, thin_clock_ticks
-from rvpp.problem import STRATEGY_BUDGETS_H, strategy_budgets
+from rvpp.data.case import STRATEGIES
+from rvpp.data.history import PRICE_COLUMNS
+from rvpp.data.periods import delivery_periods
+from rvpp.outputs.plots import bands_figure, deviating_periods, thin_clock_ticks
+from rvpp.solving.problem import STRATEGY_BUDGETS_H, strategy_budgets
 
 state.through_app("pages/uncertainty.py")
 

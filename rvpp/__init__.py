@@ -15,13 +15,13 @@ its validation load without the optimisation stack (Pyomo, HiGHS).
 from importlib import import_module
 
 _EXPORTS = {
-    "Case": "case", "load_case": "case", "save_case": "case", "with_options": "case",
+    "Case": "data.case", "load_case": "data.case", "save_case": "data.case", "with_options": "data.case",
     "CaseError": "errors", "ModelError": "errors", "RvppError": "errors",
-    "Problem": "problem", "prepare": "problem",
-    "Result": "results",
-    "audit_export": "audit", "audit_result": "audit",
-    "write_plan": "export",
-    "solve": "solving", "solve_problem": "solving",
+    "Problem": "solving.problem", "prepare": "solving.problem",
+    "Result": "solving.results",
+    "audit_export": "settle.audit", "audit_result": "settle.audit",
+    "write_plan": "outputs.export",
+    "solve": "solving.plan", "solve_problem": "solving.plan",
 }
 
 __all__ = sorted(_EXPORTS)

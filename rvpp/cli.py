@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .case import STRATEGIES, load_case, with_options
+from .data.case import STRATEGIES, load_case, with_options
 from .errors import RvppError
 
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
@@ -90,8 +90,8 @@ def _parse_gammas(items: list[str]) -> dict[str, int]:
 
 
 def _run_solve(args: argparse.Namespace) -> int:
-    from .export import write_plan
-    from .solving import solve, write_mps
+    from .outputs.export import write_plan
+    from .solving.plan import solve, write_mps
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(f"  {m}", file=sys.stderr))
     case = load_case(args.case)
@@ -126,7 +126,7 @@ def _describe(result) -> str:
 
 
 def _run_data_build(args: argparse.Namespace) -> int:
-    from . import synth
+    from .data import synth
 
     seed = synth.DEFAULT_SEED if args.seed is None else args.seed
     frame = synth.write_history(args.out, seed=seed)

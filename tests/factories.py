@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rvpp.case import parse_case
-from rvpp.history import History
-from rvpp.periods import delivery_periods
-from rvpp.problem import problem_from_bands
+from rvpp.data.case import parse_case
+from rvpp.data.history import History
+from rvpp.data.periods import delivery_periods
+from rvpp.solving.problem import problem_from_bands
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPER = ROOT / "data" / "cases" / "paper"

@@ -2,7 +2,7 @@
 
 Builds MODEL_SPEC §3-§9 for one delivery day directly with HiGHS through highspy's
 modelling API and returns its optimal objective [EUR]. It shares no code with the
-model package: unit parameters come from the :class:`rvpp.case.Case`, and the data
+model package: unit parameters come from the :class:`rvpp.data.case.Case`, and the data
 that depend on the uncertainty characterization (§6) and on the budget placement (§5)
 come from a plan's exported tables (``docs/exports.md``):
 

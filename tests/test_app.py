@@ -18,10 +18,10 @@ import pytest
 from streamlit.testing.v1 import AppTest
 
 import rvpp
-from rvpp.audit import price_exposures, protection_exact
-from rvpp.bundle import case_zip_bytes
-from rvpp.case import STRATEGIES
-from rvpp.compare import strategy_case
+from rvpp.settle.audit import price_exposures, protection_exact
+from rvpp.outputs.bundle import case_zip_bytes
+from rvpp.data.case import STRATEGIES
+from rvpp.outputs.compare import strategy_case
 
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")

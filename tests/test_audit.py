@@ -6,7 +6,7 @@ import copy
 
 import pytest
 
-from rvpp.audit import audit_tables
+from rvpp.settle.audit import audit_tables
 
 
 @pytest.fixture(scope="module")

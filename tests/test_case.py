@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from rvpp import CaseError, load_case, prepare, save_case, with_options
-from rvpp.case import parse_case
+from rvpp.data.case import parse_case
 
 from tests.factories import PAPER
 

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from rvpp import load_case
-from rvpp.audit import audit_export
+from rvpp.settle.audit import audit_export
 from rvpp.cli import main
 
 from tests.factories import PAPER

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rvpp.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
+from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
 
 
 def test_strategy_case_drops_edited_budgets_and_sets_the_markets(paper_case):

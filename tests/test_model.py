@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rvpp import solve_problem
-from rvpp.audit import audit_result
+from rvpp.settle.audit import audit_result
 
 from tests.factories import demand, heat, tiny_case, tiny_problem, wind
 

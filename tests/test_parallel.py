@@ -1,4 +1,4 @@
-"""Serial, process-pool and Dask runs of a study give identical numbers (rvpp.parallel, rvpp.batch)."""
+"""Serial, process-pool and Dask runs of a study give identical numbers (rvpp.solving.parallel, rvpp.solving.batch)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 
 import rvpp
-from rvpp.batch import run_many
+from rvpp.solving.batch import run_many
 from rvpp.errors import RvppError
-from rvpp.parallel import open_executor
+from rvpp.solving.parallel import open_executor
 from rvpp.studies import out_of_sample
 from rvpp.studies.settings import StudySettings
 

@@ -7,9 +7,9 @@ import pandas as pd
 import pytest
 
 import rvpp
-from rvpp import plots
-from rvpp.audit import price_exposures
-from rvpp.problem import top_gamma_deviation
+from rvpp.outputs import plots
+from rvpp.settle.audit import price_exposures
+from rvpp.solving.problem import top_gamma_deviation
 
 
 @pytest.fixture(scope="module")

@@ -9,9 +9,9 @@ import pytest
 
 import rvpp
 from rvpp.errors import RvppError
-from rvpp.recourse import (Penalties, Realization, evaluate, first_stage, nominal_realization, realization,
+from rvpp.settle.recourse import (Penalties, Realization, evaluate, first_stage, nominal_realization, realization,
                            realized_problem, set_fingerprint, solve_stochastic, values_fingerprint)
-from rvpp.solving import solve_problem
+from rvpp.solving.plan import solve_problem
 
 CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 REL = 1e-6  # relative tolerance on EUR figures of LP-sized recourse problems

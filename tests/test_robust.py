@@ -9,10 +9,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rvpp import solve_problem
-from rvpp.audit import audit_result, protection_exact
-from rvpp.case import SolverSettings
-from rvpp.robust import add_price_protection
-from rvpp.highs import run_highs
+from rvpp.settle.audit import audit_result, protection_exact
+from rvpp.data.case import SolverSettings
+from rvpp.solving.robust import add_price_protection
+from rvpp.solving.highs import run_highs
 
 from tests.factories import demand, heat, tiny_case, tiny_problem, wind
 

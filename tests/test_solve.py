@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from rvpp import solve, with_options
-from rvpp.audit import audit_result
-from rvpp.curve import curve_output
-from rvpp.problem import STRATEGY_BUDGETS_H
+from rvpp.settle.audit import audit_result
+from rvpp.model.curve import curve_output
+from rvpp.solving.problem import STRATEGY_BUDGETS_H
 
 STRATEGIES = tuple(STRATEGY_BUDGETS_H)
 
@@ -163,7 +163,7 @@ def test_incremental_and_convex_combination_encodings_agree(paper_case):
 
 
 def test_a_conflicting_thread_count_is_reported_not_fatal(monkeypatch):
-    solve_module = importlib.import_module("rvpp.highs")
+    solve_module = importlib.import_module("rvpp.solving.highs")
 
     monkeypatch.setattr(solve_module, "_pool_threads", [1])
     assert solve_module._thread_option(1) == ({"threads": 1}, "")

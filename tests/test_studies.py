@@ -14,11 +14,11 @@ import pytest
 
 import rvpp
 from rvpp.cli import main
-from rvpp.history import PRICE_COLUMNS
+from rvpp.data.history import PRICE_COLUMNS
 from rvpp.studies import out_of_sample, sensitivity, stochastic, stress
 from rvpp.studies.evaluation import evaluation_days, sample_days, training_days
 from rvpp.studies.settings import StudySettings
-from rvpp.uncertainty import window_days
+from rvpp.uncertainty.bands import window_days
 
 CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 SETTINGS = StudySettings(strategies=("deterministic", "pessimistic"), test_days=3, scenario_counts=(1, 2),
@@ -36,7 +36,7 @@ def case4(case):
 
 
 def _raw_fingerprint(case, day: dt.date) -> str:
-    """sha256 of the history's own values of ``day``, written independently of rvpp.recourse."""
+    """sha256 of the history's own values of ``day``, written independently of rvpp.settle.recourse."""
     rows = case.history.days(day, 1, case.timezone)
     sources = sorted(list(PRICE_COLUMNS) + case.unit_names())
     digest = hashlib.sha256(",".join(sources).encode())

@@ -1,4 +1,4 @@
-"""Tests of the synthetic history generator (rvpp.synth)."""
+"""Tests of the synthetic history generator (rvpp.data.synth)."""
 
 import dataclasses
 import time
@@ -9,7 +9,7 @@ import pandas as pd
 import pvlib
 import pytest
 
-from rvpp import synth
+from rvpp.data import synth
 
 HISTORY_CSV = Path(__file__).resolve().parents[1] / "data" / "cases" / "paper" / "history.csv"
 TZ = "Europe/Madrid"

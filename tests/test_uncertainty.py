@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rvpp.history import History
-from rvpp.periods import delivery_periods, period_labels
-from rvpp.uncertainty import forecast_bands, realized_values
+from rvpp.data.history import History
+from rvpp.data.periods import delivery_periods, period_labels
+from rvpp.uncertainty.bands import forecast_bands, realized_values
 
 TZ = "Europe/Madrid"
 

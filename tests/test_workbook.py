@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 import rvpp
-from rvpp import bundle, workbook
-from rvpp.history import History
+from rvpp.outputs import bundle, workbook
+from rvpp.data.history import History
 
 CASE = "data/cases/paper"
 

@@ -2,15 +2,15 @@
 
 :func:`build_model` reads like the paper: one call per constraint family, one block
 per asset on the shared periods, system balances and market coupling at the top, then
-the robust layer (:mod:`rvpp.robust`) and the objective.
+the robust layer (:mod:`rvpp.solving.robust`) and the objective.
 """
 
 from __future__ import annotations
 
 import pyomo.environ as pyo
 
-from ..problem import Problem
-from ..robust import add_robustness
+from ..solving.problem import Problem
+from ..solving.robust import add_robustness
 from .csp import (add_csp_commitment, add_csp_power_block, add_csp_reserves, add_csp_solar_field,
                   add_csp_storage)
 from .market import (SCENARIOS, activation, add_electric_balance, add_heat_balance, add_market_bids,
@@ -39,7 +39,7 @@ def add_units(m: pyo.Block, problem: Problem) -> None:
     """One block per unit on the periods ``m.T`` and scenarios ``m.S`` of ``m`` (MODEL_SPEC §8-§9).
 
     ``m`` is the model itself or any block carrying its own ``T`` and ``S``, such as
-    one scenario of the stochastic benchmark (:mod:`rvpp.recourse`).
+    one scenario of the stochastic benchmark (:mod:`rvpp.settle.recourse`).
     """
     case = problem.case
     m.ndres = pyo.Block([u.name for u in case.ndres])

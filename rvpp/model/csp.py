@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import pyomo.environ as pyo
 
-from ..case import CSP
-from ..problem import Problem
+from ..data.case import CSP
+from ..solving.problem import Problem
 from .market import activation
-from ..curve import on_curve
+from .curve import on_curve
 from .piecewise import add_convex_combination, add_incremental
 from .units import reserve_cap
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pyomo.environ as pyo
 
-from ..history import PRICE_COLUMNS
-from ..problem import Problem
+from ..data.history import PRICE_COLUMNS
+from ..solving.problem import Problem
 
 SCENARIOS = ("none", "up", "dn")
 
@@ -41,7 +41,7 @@ def add_market_bids(m: pyo.ConcreteModel, problem: Problem) -> None:
     ``p_da`` [MW] day-ahead energy (+ sell, − buy); ``r_sr_up``, ``r_sr_dn`` [MW] secondary
     reserve bands, each ``≤ κ·max(0, ΣPmax_r + ΣPmax_θ − ΣPmax_d)``; ``h_hpa`` [MW_th] heat
     bought through the HPA. A market switched off fixes its decisions to zero.
-    ``protection[price]`` [EUR] holds the price protection that :mod:`rvpp.robust` adds.
+    ``protection[price]`` [EUR] holds the price protection that :mod:`rvpp.solving.robust` adds.
     """
     markets = problem.case.markets
     reserve_cap = capacities(problem)[2] if markets.srm else 0.0
@@ -76,7 +76,7 @@ def net_injection(m: pyo.Block, case, s: str, t: int):
     """Units' supply minus demand in scenario ``s`` (left side of Supply-Demand1) [MW].
 
     ``Σr (p_r + a_s(r↑_r, r↓_r)) + Σθ e_θ,s − Σd (p_d − a_s(r↑_d, r↓_d))``; ``m`` holds the
-    unit blocks (the model, or one scenario block of :mod:`rvpp.recourse`).
+    unit blocks (the model, or one scenario block of :mod:`rvpp.settle.recourse`).
     """
     supply = sum(m.ndres[u.name].p[t] + activation(s, m.ndres[u.name].r_up[t], m.ndres[u.name].r_dn[t])
                  for u in case.ndres)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import pyomo.environ as pyo
 
-from ..curve import OnCurve
+from .curve import OnCurve
 
 
 def add_incremental(b, name: str, index: list, x, e, u, curve: OnCurve) -> None:

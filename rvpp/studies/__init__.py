@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from concurrent.futures import Executor
 from pathlib import Path
 
-from ..case import Case
+from ..data.case import Case
 from . import case1, markets, out_of_sample, sensitivity, stochastic, strategies, stress
 from .report import write_all
 from .runner import Progress, StudyOutput

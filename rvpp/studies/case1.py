@@ -7,9 +7,9 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from .. import plots
-from ..case import Case
-from ..solving import solve
+from ..outputs import plots
+from ..data.case import Case
+from ..solving.plan import solve
 from .runner import Config, Progress, StudyOutput, plan_row, stage
 from .settings import StudySettings
 

@@ -6,9 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..case import STRATEGIES, load_case, parse_markets, with_options
+from ..data.case import STRATEGIES, load_case, parse_markets, with_options
 from ..errors import RvppError
-from ..recourse import Penalties
+from ..settle.recourse import Penalties
 from .settings import (HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS,
                        StudySettings, parse_numbers)
 
@@ -130,7 +130,7 @@ class ProgressBars:
 
 
 def run_study_command(args: argparse.Namespace) -> int:
-    from ..parallel import open_executor
+    from ..solving.parallel import open_executor
     from . import run_studies
 
     settings = settings_from(args)  # checks every setting before the case is read

@@ -17,12 +17,12 @@ from concurrent.futures import Executor
 import numpy as np
 import pandas as pd
 
-from ..batch import run_many
-from ..case import Case
+from ..solving.batch import run_many
+from ..data.case import Case
 from ..errors import RvppError
-from ..periods import delivery_periods
-from ..recourse import FirstStage, Penalties, Realization, evaluate, realization, set_fingerprint
-from ..uncertainty import window_days
+from ..data.periods import delivery_periods
+from ..settle.recourse import FirstStage, Penalties, Realization, evaluate, realization, set_fingerprint
+from ..uncertainty.bands import window_days
 
 EUR_PER_KEUR = 1000.0
 

@@ -2,7 +2,7 @@
 
 Each function takes a study table and returns a ``plotly.graph_objects.Figure``; the
 same figure is drawn on a dashboard page, saved as interactive HTML and as PNG. As in
-:mod:`rvpp.plots`: every axis title carries its unit, every trace has a legend entry and
+:mod:`rvpp.outputs.plots`: every axis title carries its unit, every trace has a legend entry and
 a hover value with its unit, backgrounds are transparent and the palette reads on light
 and dark themes alike.
 """
@@ -15,9 +15,9 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from ..plots import (BLUE, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, ORANGE, PURPLE,
+from ..outputs.plots import (BLUE, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, ORANGE, PURPLE,
                      SERIES_COLORS, STRATEGY_COLORS, TRANSPARENT, VERMILION)
-from ..results import FLEX_KINDS
+from ..solving.results import FLEX_KINDS
 
 KIND_LABELS = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP", "ed": "Electrical demands"}
 GAMMA_TITLE = "Uncertainty budget Γ [periods]"
@@ -162,7 +162,7 @@ def solve_time_figure(summary: pd.DataFrame) -> go.Figure:
 
 
 def _style(fig: go.Figure, title: str) -> None:
-    """The look of :mod:`rvpp.plots`: transparent background, grey grid, legend on top."""
+    """The look of :mod:`rvpp.outputs.plots`: transparent background, grey grid, legend on top."""
     fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT,
                       paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, margin=dict(t=110, b=60, l=70, r=30),
                       legend=dict(orientation="h", yanchor="bottom", y=1.08, xanchor="left", x=0))

@@ -7,7 +7,7 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from ..case import Case
+from ..data.case import Case
 from . import figures
 from .runner import Config, Progress, StudyOutput, plan_table, solve_configs
 from .settings import StudySettings

@@ -11,8 +11,8 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from ..case import Case, with_options
-from ..recourse import first_stage, set_fingerprint
+from ..data.case import Case, with_options
+from ..settle.recourse import first_stage, set_fingerprint
 from . import figures
 from .evaluation import evaluate_methods, evaluation_days, realizations, summarize
 from .runner import Config, Progress, StudyOutput, solve_configs, stage

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..case import Case
-from ..extract import SOLVER_ZERO
+from ..data.case import Case
+from ..solving.extract import SOLVER_ZERO
 from .findings import findings
 from .runner import StudyOutput
 from .settings import StudySettings

@@ -1,8 +1,8 @@
 """The shared runner: a study is a list of configurations solved by one function.
 
 A :class:`Config` names its labels (e.g. ``strategy``, ``markets``) and the
-:func:`~rvpp.case.with_options` changes that make its case. :func:`solve_configs`
-solves them through :func:`rvpp.batch.solve_many` (serially or on any executor), solves
+:func:`~rvpp.data.case.with_options` changes that make its case. :func:`solve_configs`
+solves them through :func:`rvpp.solving.batch.solve_many` (serially or on any executor), solves
 identical cases once, and :func:`plan_row` turns every plan into one flat record.
 """
 
@@ -15,10 +15,10 @@ from typing import Any
 
 import pandas as pd
 
-from ..audit import audit_result
-from ..batch import solve_many
-from ..case import Case, with_options
-from ..results import FLEX_KINDS, Result
+from ..settle.audit import audit_result
+from ..solving.batch import solve_many
+from ..data.case import Case, with_options
+from ..solving.results import FLEX_KINDS, Result
 from .settings import StudySettings
 
 Progress = Callable[[str, int, int], None]  # (stage, done, total)
@@ -76,7 +76,7 @@ def plan_row(config: Config, result: Result) -> dict[str, Any]:
     """One flat record of a plan: labels, status, cost, trades and reserves by unit kind.
 
     Energies are ``Σt x·dt`` [MWh] / [MWh_th]; ``audit_violations`` counts the rules of
-    MODEL_SPEC the plan breaks (:func:`rvpp.audit.audit_result`; 0 expected).
+    MODEL_SPEC the plan breaks (:func:`rvpp.settle.audit.audit_result`; 0 expected).
     """
     row: dict[str, Any] = dict(config.labels)
     row.update({"status": result.status, "cost_keur": result.cost_keur, "profit_eur": result.objective_eur,

@@ -10,10 +10,10 @@ from __future__ import annotations
 import time
 from concurrent.futures import Executor
 
-from ..case import Case
+from ..data.case import Case
 from ..errors import RvppError
-from ..history import PRICE_COLUMNS
-from ..periods import delivery_periods
+from ..data.history import PRICE_COLUMNS
+from ..data.periods import delivery_periods
 from . import figures
 from .runner import Config, Progress, StudyOutput, plan_table, solve_configs
 from .settings import StudySettings

@@ -6,9 +6,9 @@ import math
 import numbers
 from dataclasses import dataclass, field, replace
 
-from ..case import STRATEGIES, parse_markets
+from ..data.case import STRATEGIES, parse_markets
 from ..errors import CaseError, RvppError
-from ..recourse import Penalties
+from ..settle.recourse import Penalties
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # paper Table 10
 MARKET_SETS_WITHOUT_CSP = ("DAM+HPA", "DAM+SRM+HPA")  # paper Table 11 (heat needs the HPA)

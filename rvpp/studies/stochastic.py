@@ -12,9 +12,9 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from ..batch import run_many
-from ..case import Case, with_options
-from ..recourse import StochasticPlan, set_fingerprint, solve_stochastic
+from ..solving.batch import run_many
+from ..data.case import Case, with_options
+from ..settle.recourse import StochasticPlan, set_fingerprint, solve_stochastic
 from . import figures
 from .evaluation import EUR_PER_KEUR, evaluate_methods, realizations, sample_days, summarize, training_days
 from .out_of_sample import shared_realizations

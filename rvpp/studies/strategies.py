@@ -7,8 +7,8 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from ..case import Case
-from ..results import Result
+from ..data.case import Case
+from ..solving.results import Result
 from . import figures
 from .runner import Config, Progress, StudyOutput, plan_table, solve_configs
 from .settings import StudySettings

@@ -26,10 +26,10 @@ from concurrent.futures import Executor
 import numpy as np
 import pandas as pd
 
-from ..batch import run_many
-from ..case import Case, with_options
-from ..problem import Problem, top_gamma_deviation
-from ..recourse import Realization, first_stage, nominal_realization
+from ..solving.batch import run_many
+from ..data.case import Case, with_options
+from ..solving.problem import Problem, top_gamma_deviation
+from ..settle.recourse import Realization, first_stage, nominal_realization
 from .evaluation import EUR_PER_KEUR, evaluate_task
 from .runner import Config, Progress, StudyOutput, solve_configs, stage
 from .settings import StudySettings

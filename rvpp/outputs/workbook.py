@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .case import UNIT_KINDS, Case, parse_case
-from .errors import CaseError
-from .history import History
+from ..data.case import UNIT_KINDS, Case, parse_case
+from ..errors import CaseError
+from ..data.history import History
 
 BREAKPOINTS = "power_block.breakpoints"
 BREAKPOINT_COLUMNS = ("input_mw_th", "efficiency")

@@ -1,7 +1,7 @@
 """Plotly figures of plans and forecast bands.
 
-Every builder is a pure function of a :class:`~rvpp.results.Result` or a
-:class:`~rvpp.problem.Problem` and returns a :class:`plotly.graph_objects.Figure`:
+Every builder is a pure function of a :class:`~rvpp.solving.results.Result` or a
+:class:`~rvpp.solving.problem.Problem` and returns a :class:`plotly.graph_objects.Figure`:
 the x axis shows the clock time of each period's start on the delivery day (local
 time), every axis title carries its unit, every trace has a legend entry and a hover
 value. Backgrounds are transparent and the palette (after Okabe & Ito's colour-blind
@@ -18,9 +18,9 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from .audit import price_exposures, protection_exact
-from .problem import Problem
-from .results import FLEX_KINDS, Result
+from ..settle.audit import price_exposures, protection_exact
+from ..solving.problem import Problem
+from ..solving.results import FLEX_KINDS, Result
 
 # Okabe & Ito's (2008) colour-blind safe palette, its blue lightened to read on dark backgrounds too.
 BLUE, SKY, GREEN, YELLOW = "#2E86DE", "#56B4E9", "#009E73", "#F0E442"

@@ -1,7 +1,7 @@
 """Solve a case: prepare the day, build the MILP, run HiGHS, extract the plan.
 
-:func:`solve` is a pure function of its :class:`~rvpp.case.Case` and returns plain data
-(a :class:`~rvpp.results.Result`), never a Pyomo model, so callers can cache it.
+:func:`solve` is a pure function of its :class:`~rvpp.data.case.Case` and returns plain data
+(a :class:`~rvpp.solving.results.Result`), never a Pyomo model, so callers can cache it.
 """
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ import time
 from pathlib import Path
 from collections.abc import Callable
 
-from .case import Case
+from ..data.case import Case
 from .diagnose import explain_infeasibility
 from .highs import run_highs
-from .model import build_model
+from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
 from .extract import extract
 from .results import Result

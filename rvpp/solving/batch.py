@@ -12,9 +12,9 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, as_completed
 from typing import Any, TypeVar
 
-from .case import Case
+from ..data.case import Case
 from .results import Result
-from .solving import solve
+from .plan import solve
 
 Progress = Callable[[int, int], None]
 Task = TypeVar("Task")

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import CaseError
+from ..errors import CaseError
 
 PRICE_COLUMNS = ("price_da", "price_sr_up", "price_sr_dn")
 HOUR = pd.Timedelta(hours=1)

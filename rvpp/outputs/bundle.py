@@ -1,8 +1,8 @@
 """Cases as files to upload or download: a zip of a case folder, a ``case.yaml`` with its
-history CSV, or an Excel case workbook (:mod:`rvpp.workbook`).
+history CSV, or an Excel case workbook (:mod:`rvpp.outputs.workbook`).
 
 :func:`read_case_files` takes the files as ``{file name: bytes}`` and returns a validated
-:class:`~rvpp.case.Case`; anything wrong raises :class:`~rvpp.errors.CaseError` with a
+:class:`~rvpp.data.case.Case`; anything wrong raises :class:`~rvpp.errors.CaseError` with a
 message meant for the person who uploaded the files.
 """
 
@@ -14,8 +14,8 @@ import zipfile
 from collections.abc import Mapping
 from pathlib import Path, PurePosixPath
 
-from .case import CASE_FILE, Case, load_case, save_case
-from .errors import CaseError
+from ..data.case import CASE_FILE, Case, load_case, save_case
+from ..errors import CaseError
 from .workbook import read_case_workbook
 
 MAX_UNZIPPED_BYTES = 200 * 1024 ** 2  # refuse archives that inflate beyond 200 MiB

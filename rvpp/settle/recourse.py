@@ -33,15 +33,15 @@ import numpy as np
 import pandas as pd
 import pyomo.environ as pyo
 
-from .case import Case
-from .errors import RvppError
-from .history import PRICE_COLUMNS
-from .model import add_units
-from .model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
-from .periods import delivery_periods, period_labels
-from .problem import Problem, Source, source_columns
-from .highs import run_highs
-from .uncertainty import realized_values
+from ..data.case import Case
+from ..errors import RvppError
+from ..data.history import PRICE_COLUMNS
+from ..model import add_units
+from ..model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
+from ..data.periods import delivery_periods, period_labels
+from ..solving.problem import Problem, Source, source_columns
+from ..solving.highs import run_highs
+from ..uncertainty.bands import realized_values
 
 FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
 HEAT_PRICE_FACTOR = 2.0  # default c_heat = 2 × the highest HPA tariff (MODEL_SPEC §10)

@@ -38,7 +38,7 @@ def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True) -> dict:
     """Run HiGHS on ``m`` with a fresh solver object; load the incumbent if there is one.
 
     Safe to call from several threads: solves in one process take turns (use
-    processes, e.g. :func:`rvpp.batch.solve_many` with a process pool, to run in parallel).
+    processes, e.g. :func:`rvpp.solving.batch.solve_many` with a process pool, to run in parallel).
 
     Returns ``status`` (optimal|time_limit|infeasible|error), ``termination``,
     ``objective``, ``bound``, ``gap``, ``seconds``, ``has_solution`` and ``message``.

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .case import PowerBlock
+from ..data.case import PowerBlock
 
 
 @dataclass(frozen=True)

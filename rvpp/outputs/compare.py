@@ -12,8 +12,8 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-from .case import STRATEGIES, Case, with_options
-from .results import Result
+from ..data.case import STRATEGIES, Case, with_options
+from ..solving.results import Result
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # the columns of the paper's Table 10
 KIND_NAMES = {"wind": "WFs", "pv": "PVs", "csp": "CSP", "ed": "EDs"}  # the rows of the paper's Table 9

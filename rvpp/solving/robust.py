@@ -4,7 +4,7 @@ Bertsimas, D. and Sim, M. (2004), "The Price of Robustness", Operations Research
 52(1):35-53, Proposition 1: for fixed decisions, the worst case of ``Σt λneg_t·x_t``
 over at most Γ deviating periods equals ``min Γ·φ + Σt ζ_t`` subject to
 ``φ + ζ_t ≥ λneg_t·|x_t|``, ``φ, ζ ≥ 0``. This module takes the nominal model built
-by :mod:`rvpp.model`, the deviations and budgets of each :class:`~rvpp.problem.Source`
+by :mod:`rvpp.model`, the deviations and budgets of each :class:`~rvpp.solving.problem.Source`
 and adds
 
 * the price protection of the objective for the DAM, SR-up and SR-down prices

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pyomo.environ as pyo
 
-from .model import build_model
+from ..model import build_model
 from .problem import Problem
 from .highs import run_highs
 

@@ -1,4 +1,4 @@
-"""Read a solved Pyomo model into the plain tables of a :class:`~rvpp.results.Result`."""
+"""Read a solved Pyomo model into the plain tables of a :class:`~rvpp.solving.results.Result`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pyomo.environ as pyo
 
-from .history import PRICE_COLUMNS
+from ..data.history import PRICE_COLUMNS
 from .problem import Problem
 from .results import flexibility_table
 

@@ -7,7 +7,7 @@ the power-block curve, the storage energy recursion and reserve margins, the tur
 commitment and minimum up/down times, the placement of the budgets χ, the price
 protection (sum of the Γ largest exposures) and the objective.
 
-Use :func:`audit_result` on a :class:`~rvpp.results.Result`, or :func:`audit_export`
+Use :func:`audit_result` on a :class:`~rvpp.solving.results.Result`, or :func:`audit_export`
 on a folder written by ``python -m rvpp solve``.
 """
 
@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .case import Case
-from .curve import on_curve
-from .problem import Problem, prepare
+from ..data.case import Case
+from ..model.curve import on_curve
+from ..solving.problem import Problem, prepare
 
 TOLERANCE = 1e-4  # [MW], [MWh]: exported values carry 6 decimals
 MONEY_TOLERANCE = 1e-2  # [EUR]: one cent on any objective part
@@ -72,7 +72,7 @@ def _activation(s: str, up, dn):
 
 
 def audit_result(result, tol: float = TOLERANCE) -> list[Violation]:
-    """Audit a solved :class:`~rvpp.results.Result` (empty list: every rule holds)."""
+    """Audit a solved :class:`~rvpp.solving.results.Result` (empty list: every rule holds)."""
     if not result.has_plan:
         return [Violation("plan", None, None, float("nan"), f"no plan to audit ({result.status})")]
     return audit_tables(result.problem, result.market, result.units, result.csp, result.summary(), tol)

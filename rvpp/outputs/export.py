@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .results import Result
+from ..solving.results import Result
 
 TABLES = ("market", "units", "csp", "flexibility")
 

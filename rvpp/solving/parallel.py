@@ -21,7 +21,7 @@ from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 
-from .errors import RvppError
+from ..errors import RvppError
 
 SCHEDULERS = ("processes", "serial", "local")
 

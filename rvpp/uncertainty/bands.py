@@ -14,8 +14,8 @@ import datetime as dt
 import numpy as np
 import pandas as pd
 
-from .errors import CaseError
-from .history import History
+from ..errors import CaseError
+from ..data.history import History
 
 STATS = ("lo", "mid", "hi")
 

@@ -1,6 +1,6 @@
 """One delivery day made concrete: periods, forecast bands, uncertain sources, budgets.
 
-:func:`prepare` turns a :class:`~rvpp.case.Case` into a :class:`Problem`, the only
+:func:`prepare` turns a :class:`~rvpp.data.case.Case` into a :class:`Problem`, the only
 input of the model builder. The conventions of MODEL_SPEC §6 live here:
 
 =====================  ==================  ==========================================
@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .case import STRATEGIES, Case
-from .errors import CaseError
-from .history import PRICE_COLUMNS
-from .periods import delivery_periods, period_labels
-from .uncertainty import forecast_bands
+from ..data.case import STRATEGIES, Case
+from ..errors import CaseError
+from ..data.history import PRICE_COLUMNS
+from ..data.periods import delivery_periods, period_labels
+from ..uncertainty.bands import forecast_bands
 
 # Γ in hours per strategy (paper Table 7; MODEL_SPEC §6).
 STRATEGY_BUDGETS_H = {

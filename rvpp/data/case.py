@@ -20,7 +20,7 @@ from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .errors import CaseError
+from ..errors import CaseError
 from .history import PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 

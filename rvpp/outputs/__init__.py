@@ -1,0 +1,1 @@
+"""Outputs: plan exports, case files (zip, workbook), comparison tables and figures."""

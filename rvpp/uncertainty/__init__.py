@@ -1,0 +1,1 @@
+"""Uncertainty: forecast bands of every uncertain series, from the history of a case."""
