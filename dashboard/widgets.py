@@ -12,6 +12,7 @@ import streamlit as st
 from rvpp import Case, CaseError, Result, RvppError
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.outputs.export import plan_workbook_bytes
+from rvpp.solving.outcome import Outcome
 from rvpp.outputs.workbook import case_workbook_bytes
 
 from . import state
@@ -86,12 +87,12 @@ def number_formats(frame: pd.DataFrame) -> dict:
 
 def status_line(result: Result) -> None:
     """Say how the solve ended; infeasible or failed solves explain why."""
-    if result.status == "optimal":
+    if result.status is Outcome.OPTIMAL:
         st.success(f"Optimal plan for {result.day:%A %d %B %Y} ({result.case.budgets.strategy} strategy, "
                    f"{result.case.markets.label}).", icon=":material/check_circle:")
     elif result.has_plan:
-        st.warning(f"The solver stopped at its time limit; the plan below is feasible but may not be optimal. "
-                   f"{result.message}", icon=":material/timer:")
+        st.warning(f"The solver stopped at its time limit; the plan below is feasible but may not be optimal "
+                   f"(gap {result.mip_gap:.2%}).", icon=":material/timer:")
     else:
         st.error(f"No plan: {result.status}. {result.message}", icon=":material/error:")
 

@@ -13,6 +13,7 @@ from rvpp.settle.audit import audit_result, protection_exact
 from rvpp.data.case import SolverSettings
 from rvpp.solving.robust import add_price_protection
 from rvpp.solving.highs import run_highs
+from rvpp.solving.outcome import Outcome
 
 from tests.factories import demand, heat, tiny_case, tiny_problem, wind
 
@@ -35,8 +36,8 @@ def test_protection_dual_equals_the_sum_of_the_largest_exposures(exposure, data)
     else:
         m.obj = pyo.Objective(expr=protection, sense=pyo.minimize)
         outcome = run_highs(m, SolverSettings(rel_gap=0.0))
-        assert outcome["status"] == "optimal"
-        value = outcome["objective"]
+        assert outcome.status is Outcome.OPTIMAL
+        value = outcome.objective
     assert value == pytest.approx(protection_exact(np.array(exposure), gamma), rel=1e-9, abs=1e-6)
 
 

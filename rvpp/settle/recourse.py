@@ -41,6 +41,7 @@ from ..model.market import activation, add_market_bids, add_market_limits, add_t
 from ..data.periods import delivery_periods, period_labels
 from ..solving.problem import Problem, Source, source_columns
 from ..solving.highs import run_highs
+from ..solving.outcome import Outcome
 from ..uncertainty.bands import realized_values
 
 FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
@@ -327,14 +328,15 @@ def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalti
     problem = realized_problem(case, real)
     m = build_recourse_model([problem], penalties, bids)
     outcome = run_highs(m, case.solver)
-    record = {"day": real.day.isoformat(), "fingerprint": real.fingerprint, "status": outcome["status"],
-              "solve_s": outcome["seconds"], "mip_gap": outcome["gap"]}
-    record.update(scenario_record(m.scenario[0], problem.dt_h, outcome["has_solution"]))
+    record = {"day": real.day.isoformat(), "fingerprint": real.fingerprint, "status": outcome.status,
+              "solve_s": outcome.seconds, "mip_gap": outcome.gap}
+    record.update(scenario_record(m.scenario[0], problem.dt_h, outcome.usable))
     return record
 
 
 def scenario_record(b: pyo.Block, dt_h: float, solved: bool) -> dict:
-    """Settlement [EUR] and slack energies [MWh] of one solved scenario block."""
+    """Settlement [EUR] and slack energies [MWh] of one solved scenario block (``None`` unless ``solved``
+    is true, i.e. the solve ended usable)."""
     if not solved:
         return {**{f"{k}_eur": None for k in SETTLEMENT}, **{k: None for k in SLACKS}}
     record = {f"{k}_eur": float(pyo.value(getattr(b, k))) for k in SETTLEMENT}
@@ -347,7 +349,7 @@ class StochasticPlan:
     """First-stage bids of the scenario-based benchmark and how the solve ended."""
 
     bids: FirstStage | None
-    status: str
+    status: Outcome
     expected_profit_eur: float | None
     bound_eur: float | None
     mip_gap: float | None
@@ -374,9 +376,9 @@ def solve_stochastic(case: Case, scenarios: Sequence[Realization],
     build_s = time.perf_counter() - started
     outcome = run_highs(m, case.solver)
     bids = None
-    if outcome["has_solution"]:
+    if outcome.usable:
         bids = FirstStage(*(np.array([float(pyo.value(getattr(m, name)[t])) for t in m.T]) for name in FIRST_STAGE))
     flip = (lambda v: None if v is None else -v)
-    return StochasticPlan(bids=bids, status=outcome["status"], expected_profit_eur=flip(outcome["objective"]),
-                          bound_eur=flip(outcome["bound"]), mip_gap=outcome["gap"], solve_s=outcome["seconds"],
-                          build_s=build_s, n_scenarios=len(scenarios), message=outcome["message"])
+    return StochasticPlan(bids=bids, status=outcome.status, expected_profit_eur=flip(outcome.objective),
+                          bound_eur=flip(outcome.bound), mip_gap=outcome.gap, solve_s=outcome.seconds,
+                          build_s=build_s, n_scenarios=len(scenarios), message=outcome.message)

@@ -34,7 +34,7 @@ def explain_infeasibility(problem: Problem) -> str:
     m.shortfall = pyo.Objective(expr=sum(m.slack_plus[i] + m.slack_minus[i] for i in range(len(rows))),
                                 sense=pyo.minimize)
     outcome = run_highs(m, case.solver)
-    if outcome["status"] not in ("optimal", "time_limit") or not outcome["has_solution"]:
+    if not outcome.usable:
         return ("no plan exists even with every balance relaxed; check the units' limits "
                 "(minimum outputs, storage and power-block bounds)")
     by_name: dict[str, list[tuple[object, float]]] = {}

@@ -1,4 +1,4 @@
-"""Run HiGHS through Pyomo's solver interface and report the outcome as plain data."""
+"""Run HiGHS through Pyomo's solver interface and report the outcome as a :class:`SolveOutcome`."""
 
 from __future__ import annotations
 
@@ -8,6 +8,8 @@ import time
 import pyomo.environ as pyo
 from pyomo.contrib.solver.common.factory import SolverFactory
 from pyomo.contrib.solver.common.results import SolutionStatus, TerminationCondition
+
+from .outcome import Outcome, SolveOutcome
 
 # HiGHS options that are not exposed as settings. The RINS and RENS sub-MIP
 # heuristics spend most of the time on these small, tight models (measured: the
@@ -34,14 +36,13 @@ def _thread_option(requested: int) -> tuple[dict, str]:
                 f"{_pool_threads[0]} thread(s)")
 
 
-def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True) -> dict:
-    """Run HiGHS on ``m`` with a fresh solver object; load the incumbent if there is one.
+def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True) -> SolveOutcome:
+    """Run HiGHS on ``m`` with a fresh solver object; load the incumbent if it is usable.
 
     Safe to call from several threads: solves in one process take turns (use
     processes, e.g. :func:`rvpp.solving.batch.solve_many` with a process pool, to run in parallel).
-
-    Returns ``status`` (optimal|time_limit|infeasible|error), ``termination``,
-    ``objective``, ``bound``, ``gap``, ``seconds``, ``has_solution`` and ``message``.
+    A point HiGHS returns with any ending other than optimal, or a limit with a finite
+    bound, is not loaded (see :mod:`rvpp.solving.outcome`).
     """
     threads, note = _thread_option(settings.threads)
     options = {"time_limit": settings.time_limit_s, "rel_gap": settings.rel_gap, **threads}
@@ -51,31 +52,30 @@ def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True) -> dict:
             res = SolverFactory("highs").solve(m, load_solutions=False, raise_exception_on_nonoptimal_result=False,
                                                solver_options=dict(HIGHS_OPTIONS), **options)
     except Exception as exc:  # the solver library failed; report, do not crash the caller
-        return {"status": "error", "termination": type(exc).__name__, "objective": None, "bound": None,
-                "gap": None, "seconds": 0.0, "has_solution": False,
-                "message": f"HiGHS failed: {exc}"}
+        return SolveOutcome.of(Outcome.ERROR, type(exc).__name__, None, None, 0.0, f"HiGHS failed: {exc}")
     seconds = time.perf_counter() - t0
     tc = res.termination_condition
-    has_solution = res.solution_status in (SolutionStatus.optimal, SolutionStatus.feasible)
-    if tc == TerminationCondition.convergenceCriteriaSatisfied and has_solution:
-        status = "optimal"
-    elif tc in (TerminationCondition.maxTimeLimit, TerminationCondition.iterationLimit,
-                TerminationCondition.interrupted):
-        status = "time_limit"
-    elif tc in (TerminationCondition.provenInfeasible, TerminationCondition.locallyInfeasible,
-                TerminationCondition.infeasibleOrUnbounded):
-        status = "infeasible"
-    else:
-        status = "error"
-    objective = res.incumbent_objective if has_solution else None
-    bound = res.objective_bound
-    bound = None if bound is None or abs(bound) == float("inf") else float(bound)
-    gap = None
-    if objective is not None and bound is not None:
-        gap = abs(bound - objective) / max(abs(objective), 1e-9)
-    if has_solution and load:
+    has_point = res.solution_status in (SolutionStatus.optimal, SolutionStatus.feasible)
+    status = _OUTCOMES.get(tc, Outcome.ERROR)
+    if status is Outcome.OPTIMAL and not has_point:
+        status = Outcome.ERROR
+    if status is Outcome.ERROR:
+        note = "; ".join(part for part in (f"HiGHS stopped: {tc.name}", note) if part)
+    outcome = SolveOutcome.of(status, tc.name, res.incumbent_objective if has_point else None,
+                              res.objective_bound, seconds, note)
+    if outcome.usable and load:
         res.solution_loader.load_vars()
-    message = "" if status in ("optimal", "infeasible") else f"HiGHS stopped: {tc.name}"
-    message = "; ".join(part for part in (message, note) if part)
-    return {"status": status, "termination": tc.name, "objective": objective, "bound": bound, "gap": gap,
-            "seconds": seconds, "has_solution": has_solution, "message": message}
+    return outcome
+
+
+_OUTCOMES = {
+    TerminationCondition.convergenceCriteriaSatisfied: Outcome.OPTIMAL,
+    TerminationCondition.maxTimeLimit: Outcome.TIME_LIMIT,
+    TerminationCondition.iterationLimit: Outcome.TIME_LIMIT,
+    TerminationCondition.interrupted: Outcome.TIME_LIMIT,
+    TerminationCondition.objectiveLimit: Outcome.TIME_LIMIT,
+    TerminationCondition.provenInfeasible: Outcome.INFEASIBLE,
+    TerminationCondition.locallyInfeasible: Outcome.INFEASIBLE,
+    TerminationCondition.unbounded: Outcome.UNBOUNDED,
+    TerminationCondition.infeasibleOrUnbounded: Outcome.INFEASIBLE_OR_UNBOUNDED,
+}

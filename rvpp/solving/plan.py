@@ -13,6 +13,7 @@ from collections.abc import Callable
 from ..data.case import Case
 from .diagnose import explain_infeasibility
 from .highs import run_highs
+from .outcome import Outcome
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
 from .extract import extract
@@ -36,30 +37,29 @@ def solve_problem(problem: Problem, progress: Progress | None = None, started: f
     started = time.perf_counter() if started is None else started
     reasons = infeasibility_reasons(problem)
     if reasons:
-        return Result(problem=problem, status="infeasible", termination="not solved",
+        return Result(problem=problem, status=Outcome.INFEASIBLE, termination="not solved",
                       message="; ".join(reasons), build_s=time.perf_counter() - started)
     say(f"building the model ({problem.nt} periods)")
     m = build_model(problem)
     build_s = time.perf_counter() - started
     say("solving with HiGHS")
     outcome = run_highs(m, problem.case.solver)
-    if outcome["status"] in ("optimal", "time_limit") and outcome["has_solution"]:
+    tables, extract_s, message = {}, 0.0, outcome.message
+    if outcome.usable:
         t0 = time.perf_counter()
         tables = extract(m, problem)
         extract_s = time.perf_counter() - t0
-    else:
-        tables, extract_s = {}, 0.0
-        if outcome["status"] == "time_limit":
-            outcome["message"] = "time limit reached before any feasible plan was found"
-        if outcome["status"] == "infeasible":
-            say("explaining the infeasibility")
-            outcome["message"] = "no feasible plan: " + (explain_infeasibility(problem) or
-                                                         "the units' limits cannot all be met")
+    elif outcome.status in (Outcome.INFEASIBLE, Outcome.INFEASIBLE_OR_UNBOUNDED):
+        say("explaining the infeasibility")
+        why = explain_infeasibility(problem)
+        if why:
+            message = "no feasible plan: " + why
+        elif outcome.status is Outcome.INFEASIBLE:
+            message = "no feasible plan: the units' limits cannot all be met"
     say("done")
-    return Result(problem=problem, status=outcome["status"], termination=outcome["termination"],
-                  message=outcome["message"], objective_eur=outcome["objective"], bound_eur=outcome["bound"],
-                  mip_gap=outcome["gap"], build_s=build_s, solve_s=outcome["seconds"], extract_s=extract_s,
-                  **tables)
+    return Result(problem=problem, status=outcome.status, termination=outcome.termination, message=message,
+                  objective_eur=outcome.objective, bound_eur=outcome.bound, mip_gap=outcome.gap, build_s=build_s,
+                  solve_s=outcome.seconds, extract_s=extract_s, **tables)
 
 
 def write_mps(case: Case, path) -> None:

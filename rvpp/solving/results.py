@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from .outcome import Outcome
 from .problem import Problem
 
-STATUSES = ("optimal", "time_limit", "infeasible", "error")
 FLEX_KINDS = ("wind", "pv", "csp", "ed")
 PROTECTION_KEYS = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}
 
@@ -28,7 +28,7 @@ class Result:
     """Outcome of one solve: status, timings, objective and its parts, tidy tables."""
 
     problem: Problem = field(repr=False)
-    status: str
+    status: Outcome
     termination: str
     message: str = ""
     objective_eur: float | None = None
@@ -46,7 +46,7 @@ class Result:
 
     @property
     def has_plan(self) -> bool:
-        return self.objective_eur is not None and not self.market.empty
+        return self.status.usable and self.objective_eur is not None and not self.market.empty
 
     @property
     def cost_keur(self) -> float | None:

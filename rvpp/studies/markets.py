@@ -8,6 +8,7 @@ from concurrent.futures import Executor
 import pandas as pd
 
 from ..data.case import Case
+from ..solving.outcome import Outcome
 from . import figures
 from .runner import Config, Progress, StudyOutput, plan_table, solve_configs
 from .settings import StudySettings
@@ -67,7 +68,7 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
         tables["without_csp"], "Cost without the CSP", "markets")
     out.figures["hpa_price_cost"] = figures.cost_bars_figure(
         tables["hpa_price"], "Cost by HPA tariff [EUR/MWh_th]", "HPA tariff")
-    out.notes += [note(row, result) for row, result in zip(plans.itertuples(), results) if result.status != "optimal"]
+    out.notes += [note(row, result) for row, result in zip(plans.itertuples(), results) if result.status is not Outcome.OPTIMAL]
     out.facts.update(plans=plans, **tables)
     out.seconds = time.perf_counter() - started
     return out

@@ -1,0 +1,82 @@
+"""How a solve ended, as a type: an enum of outcomes and a small frozen record.
+
+A plan (or a settlement) is *usable* only when the solver proved optimality within
+the gap, or stopped on a limit with a feasible incumbent and a finite bound. Every
+other ending carries no numbers: an unbounded model, an "infeasible or unbounded"
+answer from presolve, a limit reached before any feasible point, a solver error.
+Callers branch on :attr:`SolveOutcome.usable` or on the :class:`Outcome` member,
+never on strings. :class:`Outcome` is a ``StrEnum``, so tables, CSV and JSON show its
+plain value (``optimal``, ``time_limit``, ...).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+
+
+class Outcome(StrEnum):
+    """How HiGHS ended a solve."""
+
+    OPTIMAL = "optimal"                  # proven optimal within the relative gap
+    TIME_LIMIT = "time_limit"            # stopped on a limit with a feasible incumbent and a finite bound
+    NO_SOLUTION = "no_solution"          # stopped on a limit before any usable incumbent
+    INFEASIBLE = "infeasible"            # proven infeasible
+    UNBOUNDED = "unbounded"              # proven unbounded
+    INFEASIBLE_OR_UNBOUNDED = "infeasible_or_unbounded"  # presolve could not tell which
+    ERROR = "error"                      # the solver failed or ended for another reason
+
+    @property
+    def usable(self) -> bool:
+        """True when the incumbent may be read as a plan or a settlement."""
+        return self in (Outcome.OPTIMAL, Outcome.TIME_LIMIT)
+
+
+MESSAGES = {
+    Outcome.OPTIMAL: "",
+    Outcome.TIME_LIMIT: "stopped on its time limit with a feasible plan that may not be optimal",
+    Outcome.NO_SOLUTION: "time limit reached before any feasible plan was found",
+    Outcome.INFEASIBLE: "no feasible plan",
+    Outcome.UNBOUNDED: ("the model is unbounded: some decision can grow without limit and improve the "
+                        "objective forever, which points to a missing limit or a price of the wrong sign"),
+    Outcome.INFEASIBLE_OR_UNBOUNDED: ("HiGHS found the model infeasible or unbounded without telling "
+                                      "which; no plan"),
+    Outcome.ERROR: "the solver failed",
+}
+
+
+@dataclass(frozen=True)
+class SolveOutcome:
+    """One solver run: outcome, incumbent objective and bound, relative gap, wall time [s].
+
+    ``objective`` is ``None`` unless the outcome is usable; ``bound`` is ``None`` unless it
+    is finite; ``termination`` keeps the solver interface's own name for the ending.
+    """
+
+    status: Outcome
+    termination: str
+    objective: float | None = None
+    bound: float | None = None
+    gap: float | None = None
+    seconds: float = 0.0
+    message: str = ""
+
+    @property
+    def usable(self) -> bool:
+        return self.status.usable
+
+    @classmethod
+    def of(cls, status: Outcome, termination: str, objective: float | None, bound: float | None,
+           seconds: float, note: str = "") -> "SolveOutcome":
+        """Build a consistent record: numbers only where usable, the gap from objective and bound."""
+        bound = bound if bound is not None and math.isfinite(bound) else None
+        if status is Outcome.TIME_LIMIT and (objective is None or bound is None):
+            status = Outcome.NO_SOLUTION
+        if not status.usable:
+            objective = None
+        gap = None
+        if objective is not None and bound is not None:
+            gap = abs(bound - objective) / max(abs(objective), 1e-9)
+        message = "; ".join(part for part in (MESSAGES[status], note) if part)
+        return cls(status, termination, objective, bound, gap, seconds, message)

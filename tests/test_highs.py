@@ -1,0 +1,70 @@
+"""How a HiGHS run is reported: only an optimal or a limited run with an incumbent and a
+finite bound carries numbers (rvpp.solving.outcome)."""
+
+from __future__ import annotations
+
+import math
+
+import pyomo.environ as pyo
+import pytest
+
+from rvpp.data.case import SolverSettings
+from rvpp.solving.highs import run_highs
+from rvpp.solving.outcome import Outcome, SolveOutcome
+
+
+def _solve(m: pyo.ConcreteModel):
+    return run_highs(m, SolverSettings(rel_gap=0.0, time_limit_s=30))
+
+
+def test_an_optimal_run_reports_objective_bound_and_zero_gap():
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(domain=pyo.NonNegativeIntegers, bounds=(0, 7.5))
+    m.obj = pyo.Objective(expr=3 * m.x, sense=pyo.maximize)
+    outcome = _solve(m)
+    assert isinstance(outcome, SolveOutcome) and outcome.status is Outcome.OPTIMAL and outcome.usable
+    assert outcome.objective == pytest.approx(21.0) and outcome.bound == pytest.approx(21.0)
+    assert outcome.gap == pytest.approx(0.0, abs=1e-12)
+    assert pyo.value(m.x) == pytest.approx(7.0)
+
+
+def test_an_unbounded_model_is_never_usable_even_with_a_point():
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(domain=pyo.NonNegativeReals)
+    m.y = pyo.Var(domain=pyo.Binary)
+    m.c = pyo.Constraint(expr=m.x >= m.y)
+    m.obj = pyo.Objective(expr=m.x + m.y, sense=pyo.maximize)
+    outcome = _solve(m)
+    assert outcome.status in (Outcome.UNBOUNDED, Outcome.INFEASIBLE_OR_UNBOUNDED)
+    assert not outcome.usable and outcome.objective is None and outcome.gap is None
+    assert "unbounded" in outcome.message
+    assert m.x.value is None  # nothing was loaded into the model
+
+
+def test_an_infeasible_model_is_its_own_outcome():
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(domain=pyo.Binary)
+    m.c = pyo.Constraint(expr=m.x >= 2)
+    m.obj = pyo.Objective(expr=m.x)
+    outcome = _solve(m)
+    assert outcome.status in (Outcome.INFEASIBLE, Outcome.INFEASIBLE_OR_UNBOUNDED)
+    assert not outcome.usable and outcome.objective is None
+
+
+@pytest.mark.parametrize("bound", [None, math.inf, -math.inf, math.nan])
+def test_a_limit_without_a_finite_bound_carries_no_plan(bound):
+    outcome = SolveOutcome.of(Outcome.TIME_LIMIT, "maxTimeLimit", 100.0, bound, 5.0)
+    assert outcome.status is Outcome.NO_SOLUTION and not outcome.usable
+    assert outcome.objective is None and outcome.bound is None and outcome.gap is None
+
+
+def test_a_limit_with_incumbent_and_bound_is_usable_with_its_gap():
+    outcome = SolveOutcome.of(Outcome.TIME_LIMIT, "maxTimeLimit", -200.0, -190.0, 5.0)
+    assert outcome.usable and outcome.gap == pytest.approx(10.0 / 200.0)
+    assert "time limit" in outcome.message
+
+
+def test_outcomes_read_as_their_plain_value():
+    assert f"{Outcome.INFEASIBLE_OR_UNBOUNDED}" == "infeasible_or_unbounded"
+    assert Outcome("time_limit") is Outcome.TIME_LIMIT
+    assert [o for o in Outcome if o.usable] == [Outcome.OPTIMAL, Outcome.TIME_LIMIT]
