@@ -1,0 +1,168 @@
+"""Where saved runs and backtest records live: one database, one schema.
+
+The store is written against SQLAlchemy Core, so the same code serves a local SQLite
+file (the default) and a team's PostgreSQL server:
+
+* ``RVPP_STORE_URL``: a SQLAlchemy URL, e.g. ``postgresql+psycopg://user:pw@host/rvpp``;
+* otherwise ``sqlite:///<RVPP_DATA_DIR>/rvpp.sqlite3``, with ``RVPP_DATA_DIR`` defaulting to
+  the folder ``rvpp-data`` in the working directory (git-ignored).
+
+SQLite runs in WAL mode with ``synchronous=NORMAL``: readers never block the writer,
+and every committed transaction survives the process being killed. Each record (a saved
+run, one backtest day) is written in one transaction, so a crash loses at most the
+record being written, never half of one.
+
+Large values (history tables, result tables) are stored once in ``blobs`` under their
+SHA-256 digest, so fifty runs of one case keep one copy of its history.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import os
+from pathlib import Path
+
+import sqlalchemy as sa
+
+from ..errors import RvppError
+
+URL_VARIABLE = "RVPP_STORE_URL"
+DIR_VARIABLE = "RVPP_DATA_DIR"
+DEFAULT_DIR = "rvpp-data"
+SQLITE_FILE = "rvpp.sqlite3"
+BUSY_TIMEOUT_MS = 30_000  # a writer waits this long for another writer's transaction [ms]
+LABEL_LENGTH = 200
+
+metadata = sa.MetaData()
+
+blobs = sa.Table(
+    "blobs", metadata,
+    sa.Column("digest", sa.String(64), primary_key=True),   # sha256 hex of data
+    sa.Column("kind", sa.String(32), nullable=False),       # e.g. history.parquet, tables.zip
+    sa.Column("size", sa.BigInteger, nullable=False),       # [bytes]
+    sa.Column("data", sa.LargeBinary, nullable=False),
+)
+
+runs = sa.Table(
+    "runs", metadata,
+    sa.Column("id", sa.String(32), primary_key=True),
+    sa.Column("label", sa.String(LABEL_LENGTH), nullable=False, unique=True),
+    sa.Column("created_at", sa.String(32), nullable=False),  # ISO 8601, UTC
+    sa.Column("updated_at", sa.String(32), nullable=False),
+    sa.Column("case_name", sa.String(200), nullable=False),
+    sa.Column("delivery_date", sa.String(10), nullable=False),
+    sa.Column("strategy", sa.String(32), nullable=False),
+    sa.Column("markets", sa.String(32), nullable=False),
+    sa.Column("status", sa.String(32), nullable=False),
+    sa.Column("objective_eur", sa.Float, nullable=True),
+    sa.Column("case", sa.JSON, nullable=False),              # case.yaml layout, without the history
+    sa.Column("history_digest", sa.String(64), sa.ForeignKey("blobs.digest"), nullable=False),
+    sa.Column("settings", sa.JSON, nullable=False),          # run switches the case does not hold
+    sa.Column("result", sa.JSON, nullable=False),            # status, timings, objective parts
+    sa.Column("tables_digest", sa.String(64), sa.ForeignKey("blobs.digest"), nullable=True),
+)
+
+backtests = sa.Table(
+    "backtests", metadata,
+    sa.Column("id", sa.String(64), primary_key=True),        # digest of the inputs: same inputs, same id
+    sa.Column("label", sa.String(LABEL_LENGTH), nullable=False),
+    sa.Column("created_at", sa.String(32), nullable=False),
+    sa.Column("case", sa.JSON, nullable=False),
+    sa.Column("history_digest", sa.String(64), sa.ForeignKey("blobs.digest"), nullable=False),
+    sa.Column("settings", sa.JSON, nullable=False),          # days, strategies, budgets, penalties, ...
+    sa.Column("keys_total", sa.Integer, nullable=False),     # records the backtest will hold when done
+)
+
+backtest_records = sa.Table(
+    "backtest_records", metadata,
+    sa.Column("backtest_id", sa.String(64), sa.ForeignKey("backtests.id", ondelete="CASCADE"),
+              primary_key=True),
+    sa.Column("day", sa.String(10), primary_key=True),        # delivery day, ISO date
+    sa.Column("strategy", sa.String(64), primary_key=True),   # preset name or a named variant
+    sa.Column("gamma", sa.String(64), primary_key=True),      # budget key as text ("preset", "0.25", ...)
+    sa.Column("status", sa.String(32), nullable=False),
+    sa.Column("net_cost_eur", sa.Float, nullable=True),
+    sa.Column("recorded_at", sa.String(32), nullable=False),
+    sa.Column("record", sa.JSON, nullable=False),             # every number of the day, plain data
+)
+
+
+class StoreError(RvppError):
+    """The store cannot be opened or refuses an operation (unknown run, label taken, ...)."""
+
+
+def default_url() -> str:
+    """The store URL from the environment (see the module docstring)."""
+    url = os.environ.get(URL_VARIABLE, "").strip()
+    if url:
+        return url
+    folder = Path(os.environ.get(DIR_VARIABLE, "").strip() or DEFAULT_DIR)
+    return f"sqlite:///{(folder / SQLITE_FILE).resolve()}"
+
+
+def connect(url: str | None = None) -> sa.Engine:
+    """An engine on ``url`` (default: :func:`default_url`) with the schema created."""
+    url = url or default_url()
+    try:
+        parsed = sa.make_url(url)
+    except sa.exc.ArgumentError:
+        raise StoreError(f"{URL_VARIABLE}={url!r} is not a database URL such as "
+                         "sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp") from None
+    if parsed.get_backend_name() == "sqlite":
+        engine = _sqlite_engine(parsed)
+    else:
+        engine = sa.create_engine(parsed, pool_pre_ping=True)
+    try:
+        metadata.create_all(engine)
+    except sa.exc.SQLAlchemyError as exc:
+        raise StoreError(f"cannot open the store at {parsed.render_as_string(hide_password=True)}: "
+                         f"{exc.__class__.__name__}: {getattr(exc, 'orig', exc)}") from None
+    return engine
+
+
+def _sqlite_engine(url: sa.URL) -> sa.Engine:
+    if url.database and url.database != ":memory:":
+        Path(url.database).parent.mkdir(parents=True, exist_ok=True)
+    engine = sa.create_engine(url, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
+
+    @sa.event.listens_for(engine, "connect")
+    def _pragmas(connection, _record) -> None:
+        cursor = connection.cursor()
+        cursor.execute("PRAGMA journal_mode=WAL")
+        cursor.execute("PRAGMA synchronous=NORMAL")
+        cursor.execute("PRAGMA foreign_keys=ON")
+        cursor.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+        cursor.close()
+
+    return engine
+
+
+def now() -> str:
+    """The current instant as ISO 8601 in UTC, to the microsecond (sorts as text)."""
+    return dt.datetime.now(dt.timezone.utc).isoformat(timespec="microseconds")
+
+
+def put_blob(connection: sa.Connection, kind: str, data: bytes) -> str:
+    """Store ``data`` once under its digest (inside the caller's transaction); return the digest."""
+    digest = hashlib.sha256(data).hexdigest()
+    exists = connection.execute(sa.select(blobs.c.digest).where(blobs.c.digest == digest)).first()
+    if exists is None:
+        connection.execute(blobs.insert().values(digest=digest, kind=kind, size=len(data), data=data))
+    return digest
+
+
+def get_blob(connection: sa.Connection, digest: str) -> bytes:
+    data = connection.execute(sa.select(blobs.c.data).where(blobs.c.digest == digest)).scalar_one_or_none()
+    if data is None:
+        raise StoreError(f"the store has lost a stored table ({digest[:12]}); the run cannot be opened")
+    return bytes(data)
+
+
+def drop_unused_blobs(connection: sa.Connection) -> int:
+    """Delete blobs no run or backtest refers to; return how many went."""
+    used = sa.union(sa.select(runs.c.history_digest), sa.select(runs.c.tables_digest),
+                    sa.select(backtests.c.history_digest)).subquery()
+    stale = sa.select(blobs.c.digest).where(blobs.c.digest.not_in(
+        sa.select(used.c[0]).where(used.c[0].is_not(None))))
+    return connection.execute(blobs.delete().where(blobs.c.digest.in_(stale))).rowcount

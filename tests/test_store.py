@@ -1,0 +1,212 @@
+"""The store: saved runs and backtest records, on SQLite and on a real PostgreSQL server."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import zipfile
+from io import BytesIO
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import sqlalchemy as sa
+
+from rvpp import audit_result
+from rvpp.store import BacktestStore, RecordKey, RunLibrary, StoreError, connect, pending
+from rvpp.store.engine import metadata
+from tests.factories import ROOT
+from tests.stores import postgres_missing, postgres_server
+
+TABLES = ("market", "units", "csp", "flexibility")
+
+
+@pytest.fixture(scope="module")
+def postgres_url():
+    reason = postgres_missing()
+    if reason:
+        pytest.skip(reason)
+    with postgres_server() as url:
+        yield url
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def url(request, tmp_path):
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path / 'store.sqlite3'}"
+        return
+    server = request.getfixturevalue("postgres_url")
+    yield server
+    metadata.drop_all(connect(server))
+
+
+@pytest.fixture
+def balanced(paper_solve):
+    result = paper_solve(strategy="balanced")
+    assert result.status == "optimal"
+    return result
+
+
+def test_a_saved_run_reopens_equal_to_what_was_saved(url, balanced):
+    library = RunLibrary(url)
+    info = library.save("balanced · DAM+SRM+HPA", balanced.case, balanced, settings={"csp_on": True})
+    saved = library.load(info.id)
+    assert saved.info == info and saved.settings == {"csp_on": True}
+    assert saved.case == balanced.case and saved.case.history.fingerprint == balanced.case.history.fingerprint
+    result = saved.result
+    assert result.status == "optimal" and result.objective_eur == balanced.objective_eur
+    assert result.parts == balanced.parts and result.protection_eur == balanced.protection_eur
+    for name in TABLES:
+        pd.testing.assert_frame_equal(getattr(result, name), getattr(balanced, name))
+    assert audit_result(result) == []
+    assert library.info(info.id).objective_eur == balanced.objective_eur
+
+
+def test_labels_stay_unique_and_renames_refuse_a_taken_label(url, balanced):
+    library = RunLibrary(url)
+    first = library.save("WF1 80 MW", balanced.case, balanced)
+    second = library.save("  WF1   80 MW ", balanced.case, balanced)
+    third = library.save("WF1 80 MW", balanced.case, balanced)
+    assert [first.label, second.label, third.label] == ["WF1 80 MW", "WF1 80 MW (2)", "WF1 80 MW (3)"]
+    with pytest.raises(StoreError, match='"WF1 80 MW" is already used'):
+        library.rename(third.id, "WF1 80 MW")
+    assert library.rename(third.id, "WF1 80 MW, pessimistic").label == "WF1 80 MW, pessimistic"
+    assert library.rename(first.id, "WF1 80 MW").label == "WF1 80 MW"  # its own label is not a conflict
+    with pytest.raises(StoreError, match="label is empty"):
+        library.rename(first.id, "   ")
+    assert sorted(r.label for r in library.list()) == ["WF1 80 MW", "WF1 80 MW (2)", "WF1 80 MW, pessimistic"]
+
+
+def test_labels_with_wildcard_characters_are_matched_literally(url, balanced):
+    library = RunLibrary(url)
+    library.save("100%_solar", balanced.case, balanced)
+    assert library.save("100%", balanced.case, balanced).label == "100%"
+
+
+def test_runs_share_one_copy_of_a_history_and_deleted_runs_are_gone(url, balanced):
+    library = RunLibrary(url)
+    a = library.save("a", balanced.case, balanced)
+    b = library.save("b", balanced.case, None)
+    with library.engine.connect() as connection:
+        kinds = connection.execute(sa.text("SELECT kind, count(*) FROM blobs GROUP BY kind ORDER BY kind")).all()
+    assert [tuple(k) for k in kinds] == [("history.parquet", 1), ("tables.zip", 1)]
+    assert library.load(b.id).result is None and library.info(b.id).status == "not solved"
+    library.delete(a.id)
+    assert [r.id for r in library.list()] == [b.id]
+    with pytest.raises(StoreError, match="no saved run has the id"):
+        library.load(a.id)
+    with pytest.raises(StoreError, match="no saved run has the id"):
+        library.delete(a.id)
+
+
+def test_an_exported_run_holds_its_case_folder_and_plan_files(url, balanced, tmp_path):
+    from rvpp.outputs.bundle import read_case_files
+
+    library = RunLibrary(url)
+    info = library.save("exported", balanced.case, balanced)
+    data = library.export_zip(info.id)
+    with zipfile.ZipFile(BytesIO(data)) as archive:
+        names = set(archive.namelist())
+    assert {"case/case.yaml", "case/history.csv", "plan/summary.json", "plan/market.csv", "plan/plan.xlsx",
+            "run.json"} <= names
+    case_only = BytesIO()
+    with zipfile.ZipFile(BytesIO(data)) as archive, zipfile.ZipFile(case_only, "w") as out:
+        for name in ("case/case.yaml", "case/history.csv"):
+            out.writestr(name, archive.read(name))
+    assert read_case_files({"case.zip": case_only.getvalue()}) == balanced.case
+
+
+def test_backtest_records_resume_where_they_stopped(url, paper_case):
+    store = BacktestStore(url)
+    settings = {"from": "2025-05-01", "to": "2025-05-03", "strategies": ["balanced", "pessimistic"]}
+    keys = [RecordKey(day, s, "preset") for day in ("2025-05-01", "2025-05-02", "2025-05-03")
+            for s in ("balanced", "pessimistic")]
+    ident = store.open(paper_case, settings, keys_total=len(keys), label="May")
+    for key in keys[:3]:
+        store.record(ident, key, {"day": key.day, "strategy": key.strategy, "status": "optimal",
+                                  "net_cost_eur": 100.0 + len(key.day), "penalty_eur": 1.5})
+    again = BacktestStore(url).open(paper_case, settings, keys_total=len(keys))
+    assert again == ident
+    assert pending(keys, store.done(ident)) == keys[3:]
+    other = store.open(paper_case, {**settings, "to": "2025-05-04"}, keys_total=8)
+    assert other != ident and store.done(other) == set()
+    table = store.records(ident)
+    assert list(table["strategy"]) == ["balanced", "pessimistic", "balanced"]
+    assert table["net_cost_eur"].tolist() == [110.0] * 3
+    [info] = [b for b in store.list() if b.id == ident]
+    assert (info.keys_done, info.keys_total, info.label) == (3, 6, "May")
+    store.record(ident, keys[0], {"status": "optimal", "net_cost_eur": 7.0})
+    assert len(store.records(ident)) == 3 and store.records(ident)["net_cost_eur"].iloc[0] == 7.0
+
+
+def test_sqlite_store_runs_in_wal_mode(tmp_path):
+    engine = connect(f"sqlite:///{tmp_path / 'x' / 'store.sqlite3'}")
+    with engine.connect() as connection:
+        assert connection.exec_driver_sql("PRAGMA journal_mode").scalar() == "wal"
+        assert connection.exec_driver_sql("PRAGMA synchronous").scalar() == 1  # NORMAL
+
+
+def test_a_bad_store_url_is_a_named_error():
+    with pytest.raises(StoreError, match="is not a database URL"):
+        connect("not a url at all")
+
+
+def test_the_default_store_lives_in_the_data_folder_from_the_environment(monkeypatch, tmp_path):
+    from rvpp.store import default_url
+
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "mine"))
+    assert default_url() == f"sqlite:///{tmp_path / 'mine' / 'rvpp.sqlite3'}"
+    monkeypatch.setenv("RVPP_STORE_URL", "postgresql+psycopg://team@db/rvpp")
+    assert default_url() == "postgresql+psycopg://team@db/rvpp"
+
+
+SAVER = """
+import sys, time
+import rvpp
+from rvpp.store import RunLibrary
+import rvpp.store.runs as runs
+
+library = RunLibrary(sys.argv[1])
+case = rvpp.with_options(rvpp.load_case(sys.argv[2]), strategy="deterministic")
+result = rvpp.solve(case)
+for i in range(5):
+    library.save(f"variant {i}", case, result)
+real_put = runs.put_blob
+
+def slow_put(connection, kind, data):
+    digest = real_put(connection, kind, data)
+    if kind == "tables.zip":
+        print("inside the save", flush=True)
+        time.sleep(120)
+    return digest
+
+runs.put_blob = slow_put
+library.save("never finished", case, result)
+"""
+
+
+@pytest.mark.slow
+def test_a_save_killed_halfway_loses_nothing_that_was_saved(url, tmp_path):
+    process = subprocess.Popen([sys.executable, "-c", SAVER, url, str(ROOT / "data" / "cases" / "paper")],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+    try:
+        line = process.stdout.readline()
+        assert line.strip() == "inside the save", process.stderr.read()
+        process.send_signal(signal.SIGKILL)
+        process.wait(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    library = RunLibrary(url)
+    runs = library.list()
+    assert sorted(r.label for r in runs) == [f"variant {i}" for i in range(5)]
+    objectives = {library.load(r.id).result.objective_eur for r in runs}
+    assert len(objectives) == 1 and None not in objectives
+    assert library.save("after the crash", library.load(runs[0].id).case).label == "after the crash"
+    if url.startswith("sqlite"):
+        with library.engine.connect() as connection:
+            assert connection.exec_driver_sql("PRAGMA integrity_check").scalar() == "ok"
