@@ -26,12 +26,14 @@ SUMMARY_COLUMNS = {
     "avg_net_cost_keur": st.column_config.NumberColumn("Avg net cost [kEUR]", format="%.1f"),
     "solve_s": st.column_config.NumberColumn("Solve time [s]", format="%.2f"),
     "test_days": st.column_config.NumberColumn("Test days"),
+    "settlements_optimal": st.column_config.TextColumn(
+        "Settlements optimal", help="Settlements that ended optimal, out of those settled; only these are averaged"),
     "realization_set": st.column_config.TextColumn("Realization set"),
 }
 TABLE13 = ["method", "status", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur", "solve_s",
-           "test_days", "realization_set"]
+           "settlements_optimal", "realization_set"]
 TABLE14 = ["n_scenarios", "status", "mip_gap", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur",
-           "solve_s", "test_days", "realization_set"]
+           "solve_s", "settlements_optimal", "realization_set"]
 
 st.title("Out-of-sample: robust strategies against the stochastic benchmark")
 run = state.run_case()
@@ -109,6 +111,9 @@ evaluations = pd.concat([robust.tables["out_of_sample_days"], stochastic.tables[
                         ignore_index=True)
 summaries = pd.concat([robust.tables["table13_out_of_sample"], stochastic.tables["table14_stochastic"]],
                       ignore_index=True)
+
+for warning in robust.warnings + stochastic.warnings:
+    st.warning(warning, icon=":material/warning:")
 
 st.subheader("Same days for every method")
 used = realizations_used(evaluations)

@@ -5,6 +5,7 @@ import streamlit as st
 
 from dashboard import state, studies, widgets
 from rvpp import RvppError
+from rvpp.solving.outcome import Outcome
 from rvpp.studies import StudySettings, figures, sensitivity
 
 state.through_app("pages/sensitivity.py")
@@ -71,7 +72,7 @@ if outputs is None:
     st.stop()
 out = outputs["sensitivity"]
 table = out.tables["sensitivity"]
-without_plan = table[table["status"] != "optimal"]
+without_plan = table[table["status"].map(lambda status: Outcome(status) is not Outcome.OPTIMAL)]
 if not without_plan.empty:
     st.warning("Not optimal: " + "; ".join(f"{r.sources}, Γ = {r.gamma}: {r.status}"
                                            for r in without_plan.itertuples()), icon=":material/warning:")

@@ -16,7 +16,9 @@ import rvpp
 from rvpp.cli import main
 from rvpp.data.history import PRICE_COLUMNS
 from rvpp.studies import out_of_sample, sensitivity, stochastic, stress
-from rvpp.studies.evaluation import evaluation_days, sample_days, training_days
+from rvpp.solving.outcome import Outcome
+from rvpp.studies.evaluation import evaluation_days, sample_days, settlement_warning, summarize, training_days
+from rvpp.studies.report import write_all
 from rvpp.studies.settings import StudySettings
 from rvpp.uncertainty.bands import window_days
 
@@ -212,3 +214,60 @@ def test_stress_screening_matches_the_hand_computed_settlement(case):
         expected = (0.5 * price * min(surplus, lost) + 2.0 * price * max(0.0, lost - surplus)
                     - small.wind[0].om_eur_per_mwh * lost)
         assert row.impact_eur == pytest.approx(expected, rel=1e-6, abs=1e-6)
+
+
+def _settlement(method, day, status, net, penalty=0.0):
+    values = {"market_cost_eur": None if net is None else net - penalty, "penalty_eur": None if net is None else penalty,
+              "net_cost_eur": net}
+    return {"method": method, "day": day, "status": status, "realization_set": "abc", **values}
+
+
+def test_summary_averages_only_optimal_settlements_and_counts_them():
+    evaluations = pd.DataFrame([
+        _settlement("A", "d1", Outcome.OPTIMAL, 1000.0, 100.0),
+        _settlement("A", "d2", Outcome.TIME_LIMIT, 9e6, 9e5),  # usable numbers, but not optimal
+        _settlement("A", "d3", Outcome.OPTIMAL, 3000.0, 300.0),
+        _settlement("B", "d1", "no_solution", None),  # a plain value, as read back from a CSV
+        _settlement("B", "d2", "optimal", 2000.0),
+        _settlement("B", "d3", Outcome.ERROR, None),
+    ])
+    plans = pd.DataFrame({"method": ["A", "B", "C"], "status": [Outcome.OPTIMAL] * 2 + [Outcome.INFEASIBLE]})
+    summary = summarize(evaluations, plans).set_index("method")
+    assert summary.loc["A", "avg_net_cost_keur"] == pytest.approx(2.0)  # (1000 + 3000) / 2, not / 3
+    assert summary.loc["A", "avg_penalty_keur"] == pytest.approx(0.2)
+    assert summary.loc["A", "avg_market_cost_keur"] == pytest.approx(1.8)
+    assert summary.loc["B", "avg_net_cost_keur"] == pytest.approx(2.0)
+    assert list(summary["settlements_optimal"]) == ["2 / 3", "1 / 3", "no plan"]
+    assert list(summary["test_days"].iloc[:2]) == [3, 3] and np.isnan(summary.loc["C", "avg_net_cost_keur"])
+    warning = settlement_warning(evaluations)
+    assert warning.startswith("3 of 6 settlements did not end optimal")
+    assert "A: d2 time_limit" in warning and "B: d1 no_solution, d3 error" in warning
+    assert settlement_warning(evaluations[evaluations["status"] == "optimal"]) is None
+
+
+def test_a_failed_settlement_is_left_out_and_named_first_in_the_report(case, monkeypatch, tmp_path):
+    from rvpp.studies import evaluation
+
+    settle = evaluation.evaluate
+    stopped_day = (case.delivery_date + dt.timedelta(days=1)).isoformat()
+
+    def stopped_on_one_day(*args, **kwargs):
+        record = settle(*args, **kwargs)
+        if record["day"] == stopped_day:  # as if stopped on its time limit with a poor incumbent
+            record.update(status=Outcome.TIME_LIMIT, net_cost_eur=record["net_cost_eur"] + 1e6)
+        return record
+
+    monkeypatch.setattr(evaluation, "evaluate", stopped_on_one_day)
+    settings = SETTINGS.with_changes(strategies=("deterministic",), png=False)
+    out = out_of_sample.run(case, settings)
+    days = out.tables["out_of_sample_days"]
+    summary = out.tables["table13_out_of_sample"].set_index("method")
+    optimal = days[days["day"] != stopped_day]
+    assert summary.loc["deterministic", "avg_net_cost_keur"] == pytest.approx(optimal["net_cost_eur"].mean() / 1000)
+    assert summary.loc["deterministic", "settlements_optimal"] == "2 / 3"
+    write_all([out], tmp_path, case, settings, {"scheduler": "serial"})
+    report = (tmp_path / "report.md").read_text()
+    section = report.split(f"## {out_of_sample.TITLE}\n\n", 1)[1]
+    assert section.splitlines()[0] == (f"**Warning: 1 of 3 settlements did not end optimal and are left out of the "
+                                       f"averages (deterministic: {stopped_day} time_limit).**")
+    assert "| 2 / 3 |" in section.split("\n## ")[0]

@@ -21,6 +21,7 @@ from ..solving.batch import run_many
 from ..data.case import Case
 from ..errors import RvppError
 from ..data.periods import delivery_periods
+from ..solving.outcome import Outcome
 from ..settle.recourse import FirstStage, Penalties, Realization, evaluate, realization, set_fingerprint
 from ..uncertainty.bands import window_days
 
@@ -82,28 +83,67 @@ def evaluate_methods(case: Case, methods: dict[str, FirstStage], reals: Sequence
     tasks = [(name, case, bids, real, penalties) for name, bids in methods.items() for real in reals]
     records = run_many(evaluate_task, tasks, executor, progress)
     table = pd.DataFrame(records)
+    if table.empty:  # no method had bids to settle
+        return table
     table.insert(2, "realization_set", set_fingerprint(reals))
     return table
+
+
+SETTLEMENT_MEANS = {"avg_market_cost_keur": "market_cost_eur", "avg_penalty_keur": "penalty_eur",
+                    "avg_net_cost_keur": "net_cost_eur"}
+
+
+def ended_optimal(statuses: pd.Series) -> pd.Series:
+    """True where a settlement's solve ended :attr:`Outcome.OPTIMAL` (statuses as members or plain values)."""
+    return statuses.map(lambda status: Outcome(status) is Outcome.OPTIMAL).astype(bool)
 
 
 def summarize(evaluations: pd.DataFrame, plans: pd.DataFrame) -> pd.DataFrame:
     """Averages per method (paper Tables 13-14): market cost, penalty, net cost [kEUR].
 
-    ``plans`` has one row per method with ``method``, ``solve_s`` and ``status`` of
-    the first-stage solve (and optional extra columns kept as they are); a method
-    without a plan keeps its row with empty averages.
+    Only settlements that ended optimal enter the averages: a settlement stopped by its
+    time limit (or with no solution) is counted in ``settlements_optimal`` ("29 / 30":
+    optimal out of settled) and left out, so a method's averages then cover fewer days
+    than ``test_days``. ``plans`` has one row per method with ``method``, ``solve_s``
+    and ``status`` of the first-stage solve (and optional extra columns kept as they
+    are); a method without a plan keeps its row with empty averages and ``no plan``.
     """
+    if evaluations.empty:
+        summary = pd.DataFrame({"method": plans["method"]})
+        summary = summary.assign(**{c: float("nan") for c in SETTLEMENT_MEANS}, test_days=0,
+                                 settlements_optimal="no plan", realization_set=None)
+        return plans.merge(summary, on="method", how="left")
+    optimal = ended_optimal(evaluations["status"])
     grouped = evaluations.groupby("method", sort=False)
+    methods = list(grouped.groups)
+    means = evaluations[optimal].groupby("method", sort=False)[list(SETTLEMENT_MEANS.values())].mean()
+    means = means.reindex(methods) / EUR_PER_KEUR
+    counts = optimal.groupby(evaluations["method"], sort=False).sum().reindex(methods)
+    settled = grouped.size().reindex(methods)
     summary = pd.DataFrame({
-        "method": list(grouped.groups),
-        "avg_market_cost_keur": grouped["market_cost_eur"].mean().to_numpy() / EUR_PER_KEUR,
-        "avg_penalty_keur": grouped["penalty_eur"].mean().to_numpy() / EUR_PER_KEUR,
-        "avg_net_cost_keur": grouped["net_cost_eur"].mean().to_numpy() / EUR_PER_KEUR,
-        "test_days": grouped.size().to_numpy(),
-        "evaluations_optimal": grouped["status"].apply(lambda s: int((s == "optimal").sum())).to_numpy(),
-        "realization_set": grouped["realization_set"].first().to_numpy(),
+        "method": methods,
+        **{column: means[source].to_numpy(float) for column, source in SETTLEMENT_MEANS.items()},
+        "test_days": settled.to_numpy(),
+        "settlements_optimal": [f"{int(k)} / {int(n)}" for k, n in zip(counts, settled)],
+        "realization_set": grouped["realization_set"].first().reindex(methods).to_numpy(),
     })
-    return plans.merge(summary, on="method", how="left")
+    merged = plans.merge(summary, on="method", how="left")
+    merged["settlements_optimal"] = merged["settlements_optimal"].fillna("no plan")
+    return merged
+
+
+def settlement_warning(evaluations: pd.DataFrame) -> str | None:
+    """One line naming the settlements that did not end optimal, or ``None`` if every one did."""
+    if evaluations.empty:
+        return None
+    failed = evaluations[~ended_optimal(evaluations["status"])]
+    if failed.empty:
+        return None
+    per_method = "; ".join(
+        f"{method}: {', '.join(f'{row.day} {Outcome(row.status)}' for row in part.itertuples())}"
+        for method, part in failed.groupby("method", sort=False))
+    return (f"{len(failed)} of {len(evaluations)} settlements did not end optimal and are left out of the "
+            f"averages ({per_method}).")
 
 
 def realizations_used(evaluations: pd.DataFrame) -> pd.DataFrame:

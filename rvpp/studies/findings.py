@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..solving.outcome import Outcome
 from .runner import StudyOutput
 from .stress import GREEDY, PAPER
 
@@ -224,7 +225,7 @@ def ro_solves_faster(outputs: Outputs) -> Finding | None:
         return None
     largest = sp.loc[sp["n_scenarios"].idxmax()]
     slowest_ro = ro["solve_s"].max()
-    status = "" if largest["status"] == "optimal" else f", stopped by {largest['status']}"
+    status = "" if Outcome(largest["status"]) is Outcome.OPTIMAL else f", stopped by {largest['status']}"
     return Finding(f"RO solves faster than SP with {int(largest['n_scenarios'])} scenarios", "Case 4, Tables 13-14",
                    bool(slowest_ro < largest["solve_s"]),
                    f"slowest RO plan {slowest_ro:.2f} s; SP N={int(largest['n_scenarios'])} {largest['solve_s']:.1f} s"

@@ -14,7 +14,7 @@ import pandas as pd
 from ..data.case import Case, with_options
 from ..settle.recourse import first_stage, set_fingerprint
 from . import figures
-from .evaluation import evaluate_methods, evaluation_days, realizations, summarize
+from .evaluation import evaluate_methods, evaluation_days, realizations, settlement_warning, summarize
 from .runner import Config, Progress, StudyOutput, solve_configs, stage
 from .settings import StudySettings
 
@@ -45,6 +45,7 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     out = StudyOutput("out_of_sample", TITLE, tables={"table13_out_of_sample": summary,
                                                       "out_of_sample_days": evaluations})
     out.figures["out_of_sample_cost"] = figures.out_of_sample_figure(summary)
+    out.warnings += [w for w in (settlement_warning(evaluations),) if w]
     out.facts.update(summary=summary, evaluations=evaluations, realization_set=set_fingerprint(reals),
                      days=[r.day.isoformat() for r in reals])
     out.seconds = time.perf_counter() - started

@@ -39,9 +39,9 @@ REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
     "sensitivity": ["sources", "gamma", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
                     "csp_up_mwh", "ed_up_mwh", "wind_dn_mwh", "pv_dn_mwh", "csp_dn_mwh", "ed_dn_mwh", "solve_s"],
     "table13_out_of_sample": ["method", "status", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur",
-                              "solve_s", "test_days", "realization_set"],
+                              "solve_s", "settlements_optimal", "realization_set"],
     "table14_stochastic": ["method", "status", "mip_gap", "avg_market_cost_keur", "avg_penalty_keur",
-                           "avg_net_cost_keur", "solve_s", "test_days", "realization_set"],
+                           "avg_net_cost_keur", "solve_s", "settlements_optimal", "realization_set"],
 }
 
 
@@ -160,7 +160,10 @@ def write_report(outputs: Sequence[StudyOutput], folder: Path, case: Case, setti
         lines.append(f"| {i} | {finding.claim} | {finding.paper} | {'yes' if finding.holds else 'no'} | "
                      f"{finding.evidence} |")
     for out in outputs:
-        lines += ["", f"## {out.title}", "", f"Wall time {out.seconds:.1f} s."]
+        lines += ["", f"## {out.title}", ""]
+        for warning in out.warnings:  # the first lines of the section
+            lines += [f"**Warning: {warning}**", ""]
+        lines += [f"Wall time {out.seconds:.1f} s."]
         lines += [f"> {note}" for note in out.notes]
         for name in REPORT_TABLES.get(out.name, ()):
             if name in out.tables:
@@ -190,7 +193,7 @@ def write_run_info(folder: Path, case: Case, settings: StudySettings, outputs: S
             "history_fingerprint": case.history.fingerprint, "settings": asdict(settings),
             "penalties": settings.penalties.describe(case),
             "studies": {out.name: {"seconds": out.seconds, "tables": list(out.tables), "figures": list(out.figures),
-                                   "notes": out.notes} for out in outputs},
+                                   "notes": out.notes, "warnings": out.warnings} for out in outputs},
             "consistency": consistency(outputs),
             "findings": [asdict(f) for f in findings({out.name: out for out in outputs})], **run_info}
     path = folder / "run.json"

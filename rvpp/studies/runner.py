@@ -51,7 +51,11 @@ class Config:
 
 @dataclass
 class StudyOutput:
-    """What a study hands back: tables, figures, facts for the report, notes."""
+    """What a study hands back: tables, figures, facts for the report, notes.
+
+    ``warnings`` say what makes the study's numbers less than complete (e.g. settlements
+    that did not end optimal); they open the study's section of ``report.md``.
+    """
 
     name: str
     title: str
@@ -59,6 +63,7 @@ class StudyOutput:
     figures: dict[str, Any] = field(default_factory=dict)
     facts: dict[str, Any] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
     seconds: float = 0.0
 
 

@@ -16,7 +16,8 @@ from ..solving.batch import run_many
 from ..data.case import Case, with_options
 from ..settle.recourse import StochasticPlan, set_fingerprint, solve_stochastic
 from . import figures
-from .evaluation import EUR_PER_KEUR, evaluate_methods, realizations, sample_days, summarize, training_days
+from .evaluation import (EUR_PER_KEUR, evaluate_methods, realizations, sample_days, settlement_warning, summarize,
+                         training_days)
 from .out_of_sample import shared_realizations
 from .runner import Progress, StudyOutput, stage
 from .settings import StudySettings
@@ -60,6 +61,7 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     summary = summarize(evaluations, plans)
     out = StudyOutput("stochastic", TITLE, tables={"table14_stochastic": summary, "stochastic_days": evaluations})
     out.figures["stochastic_cost"] = figures.out_of_sample_figure(summary)
+    out.warnings += [w for w in (settlement_warning(evaluations),) if w]
     out.facts.update(summary=summary, evaluations=evaluations, realization_set=set_fingerprint(reals))
     out.seconds = time.perf_counter() - started
     return out
