@@ -6,7 +6,8 @@ import streamlit as st
 from dashboard import solving, state, widgets
 from rvpp import RvppError
 from rvpp.data.case import STRATEGIES
-from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
+from rvpp.data.variants import Variant, describe
+from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
 from rvpp.outputs.plots import compare_trades_figure
 
 state.through_app("pages/compare.py")
@@ -14,9 +15,9 @@ state.through_app("pages/compare.py")
 KEUR = st.column_config.NumberColumn(format="%.1f")
 
 
-def save_all(results: dict, market_set: str) -> None:
-    for strategy, result in results.items():
-        state.save_run(f"{strategy} · {market_set}", result)
+def save_all(results: dict) -> None:
+    for result in results.values():
+        state.save_run(describe(result.case), result)
 
 
 st.title("Compare strategies")
@@ -27,7 +28,7 @@ market_sets = st.multiselect(
     "Market sets (columns of the cost table)", MARKET_SETS, default=[run.markets.label], key="compare_sets",
     help="Each market set adds four solves. The paper's Table 10 has all four; Table 11 is the same without "
          "the CSP (switch it off on Portfolio).")
-cases = {(s, m): strategy_case(run, s, m) for m in market_sets for s in STRATEGIES}
+cases = {(s, m): Variant(strategy=s, markets=m).apply(run) for m in market_sets for s in STRATEGIES}
 ready = bool(cases) and all(state.is_requested(c) for c in cases.values())
 clicked = st.button(f"Solve {len(cases)} plans", type="primary", key="compare_solve", disabled=not cases,
                     icon=":material/play_arrow:")
@@ -65,7 +66,7 @@ if cases and (clicked or ready):
         flexibility = flexibility_table(by_strategy)
         st.dataframe(flexibility, column_config=widgets.number_formats(flexibility))
         st.button("Save these plans to the session", key="compare_save", on_click=save_all,
-                  args=(by_strategy, shown))
+                  args=(by_strategy,))
 
 st.subheader("Saved runs")
 runs = state.saved_runs()

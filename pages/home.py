@@ -4,6 +4,7 @@ import streamlit as st
 
 import rvpp
 from dashboard import solving, state, widgets
+from rvpp.data.variants import Variant
 from rvpp.outputs.bundle import read_case_files
 from rvpp.outputs.plots import trades_figure
 
@@ -68,7 +69,7 @@ with right:
         st.caption(description)
 
 st.subheader("What should I bid tomorrow?")
-balanced = rvpp.with_options(state.run_case(), strategy="balanced")
+balanced = Variant(strategy="balanced").apply(state.run_case())
 clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
 if clicked or state.is_requested(balanced):
     state.mark_requested(balanced)

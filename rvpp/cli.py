@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from .data.case import STRATEGIES, load_case, with_options
+from .data.variants import describe
 from .errors import RvppError
 
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
@@ -100,8 +101,7 @@ def _run_solve(args: argparse.Namespace) -> int:
                         budget_mode=args.budget_mode, time_limit_s=args.time_limit, rel_gap=args.gap,
                         threads=args.threads)
     if not args.quiet:
-        print(f"rvpp: case {case.name}, {case.delivery_date}, strategy {case.budgets.strategy}, "
-              f"{case.markets.label}, dt {case.dt_h:g} h", file=sys.stderr)
+        print(f"rvpp: case {case.name}, {case.delivery_date}, {describe(case)}", file=sys.stderr)
     if args.write_mps:
         write_mps(case, args.write_mps)
         say(f"wrote {args.write_mps}")

@@ -21,7 +21,7 @@ import rvpp
 from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
-from rvpp.outputs.compare import strategy_case
+from rvpp.data.variants import Variant
 
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
@@ -313,7 +313,7 @@ def test_results_come_back_from_the_cache_without_a_click():
 def test_compare_costs_and_flexibility_match_the_library(paper_case, paper_solve):
     at = click(open_app("compare"), "compare_solve")
     cost = at.dataframe[0].value
-    assert all(strategy_case(paper_case, s, "DAM+SRM+HPA") == rvpp.with_options(paper_case, strategy=s)
+    assert all(Variant(strategy=s, markets="DAM+SRM+HPA").apply(paper_case) == rvpp.with_options(paper_case, strategy=s)
                for s in STRATEGIES)
     expected = {s: paper_solve(strategy=s) for s in STRATEGIES}
     for strategy, result in expected.items():

@@ -5,15 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table, strategy_case
-
-
-def test_strategy_case_drops_edited_budgets_and_sets_the_markets(paper_case):
-    edited = paper_case.replace(budgets={"overrides": {"WF1": 11}})
-    case = strategy_case(edited, "pessimistic", "DAM+HPA")
-    assert case.budgets.strategy == "pessimistic" and case.budgets.overrides == ()
-    assert case.markets.label == "DAM+HPA"
-    assert strategy_case(edited, "optimistic").markets == paper_case.markets
+from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
 
 
 def test_cost_table_has_the_layout_of_table_10(paper_solve):

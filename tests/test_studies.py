@@ -15,10 +15,11 @@ import pytest
 import rvpp
 from rvpp.cli import main
 from rvpp.data.history import PRICE_COLUMNS
-from rvpp.studies import out_of_sample, sensitivity, stochastic, stress
+from rvpp.studies import markets, out_of_sample, sensitivity, stochastic, stress
 from rvpp.solving.outcome import Outcome
 from rvpp.studies.evaluation import evaluation_days, sample_days, settlement_warning, summarize, training_days
 from rvpp.studies.report import write_all
+from rvpp.studies.runner import plan_table, solve_configs
 from rvpp.studies.settings import StudySettings
 from rvpp.uncertainty.bands import window_days
 
@@ -271,3 +272,48 @@ def test_a_failed_settlement_is_left_out_and_named_first_in_the_report(case, mon
     assert section.splitlines()[0] == (f"**Warning: 1 of 3 settlements did not end optimal and are left out of the "
                                        f"averages (deterministic: {stopped_day} time_limit).**")
     assert "| 2 / 3 |" in section.split("\n## ")[0]
+
+
+# Γ [periods] per strategy at 1-hour periods (paper Table 7), written here for the check.
+TABLE7 = {"deterministic": dict(price=0, wind=0, pv=0, csp=0, ed=0, td=0),
+          "optimistic": dict(price=3, wind=3, pv=2, csp=2, ed=3, td=3),
+          "balanced": dict(price=6, wind=6, pv=4, csp=4, ed=6, td=6),
+          "pessimistic": dict(price=9, wind=9, pv=6, csp=6, ed=9, td=9)}
+
+
+def budgets_named_by(label: str, case) -> dict[str, int]:
+    """Γ per source that a row label claims: its strategy's Table 7 budgets, then its Γ edits."""
+    strategy, markets, *rest = label.split(" · ")
+    kinds = {unit.name: kind for kind, unit in case.units()}
+    budgets = {name: TABLE7[strategy]["price"] for name in PRICE_COLUMNS}
+    budgets.update({name: TABLE7[strategy][kind] for name, kind in kinds.items()
+                    if not (kind == "csp" and "no CSP" in rest)})
+    for part in rest:
+        if part.startswith("Γ=") and part.endswith(" for every source"):
+            budgets = dict.fromkeys(budgets, int(part[2:].split()[0]))
+        elif part.startswith("Γ "):
+            budgets.update({name: int(g) for name, g in (item.split("=") for item in part[2:].split(", "))})
+    return budgets
+
+
+@pytest.mark.slow
+def test_every_study_row_is_labelled_with_the_budgets_it_solved(case):
+    # A session's case with edited budgets: the strategy rows must not keep these edits.
+    edited = case.replace(budgets={"strategy": "optimistic", "overrides": {"WF1": 12, "price_da": 5}})
+    settings = StudySettings(strategies=("balanced",), market_sets=("DAM+SRM+HPA",),
+                             market_sets_without_csp=("DAM+HPA",), hpa_flat_prices=(60.0,), gammas=(0, 6),
+                             sources=("WF1", "price"))
+    configs = markets.configurations(settings) + sensitivity.configurations(edited, settings)
+    results = solve_configs(edited, configs, settings)
+    rows = plan_table(configs, results)
+    assert len(rows) == 8
+    for row, result in zip(rows.itertuples(), results):
+        assert result.status == "optimal", result.message
+        assert budgets_named_by(row.variant, edited) == result.summary()["budgets"], row.variant
+    strategy_rows = rows[rows["table"].notna()]
+    assert len(strategy_rows) == 4 and not strategy_rows["variant"].str.contains("Γ").any()
+    assert (strategy_rows["variant"].str.split(" · ").str[0] == strategy_rows["strategy"]).all()
+    assert set(rows["variant"]) >= {"balanced · DAM+SRM+HPA", "balanced · DAM+HPA · no CSP",
+                                    "balanced · DAM+SRM+HPA · HPA flat 60 EUR/MWh_th",
+                                    "deterministic · DAM+SRM+HPA · Γ WF1=0", "deterministic · DAM+SRM+HPA · Γ WF1=6",
+                                    "deterministic · DAM+SRM+HPA · Γ price_da=6, price_sr_dn=6, price_sr_up=6"}

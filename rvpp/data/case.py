@@ -641,31 +641,21 @@ def with_options(
     budget_encoding: str | None = None,
     pwl_encoding: str | None = None,
 ) -> Case:
-    """A copy of ``case`` with run options applied (what the command line offers)."""
-    changes: dict[str, Any] = {}
+    """A copy of ``case`` with run options applied (what the command line offers).
+
+    Strategy, Γ edits, markets, CSPs, HPA tariff and period length make a
+    :class:`~rvpp.data.variants.Variant` (a strategy sets the case's own Γ edits aside);
+    the date, budget mode and solver settings are changed in the same step.
+    """
+    from .variants import Variant
+
+    variant = Variant(strategy=strategy, gammas=dict(gammas or {}), markets=markets, dt_h=dt_h, csp=csp,
+                      hpa_flat=hpa_flat)
+    changes: dict[str, Any] = variant.changes(case)
     if date is not None:
         changes["delivery_date"] = date
-    if dt_h is not None:
-        changes["dt_h"] = dt_h
-    budgets: dict[str, Any] = {}
-    if strategy is not None:
-        budgets["strategy"] = strategy
     if budget_mode is not None:
-        budgets["mode"] = budget_mode
-    if gammas:
-        budgets["overrides"] = {**case.budgets.override_map, **gammas}
-    if budgets:
-        changes["budgets"] = budgets
-    market_changes: dict[str, Any] = parse_markets(markets) if markets else {}
-    if hpa_flat is not None:
-        market_changes["hpa_tariff_eur_per_mwh"] = [hpa_flat] * 24
-    if market_changes:
-        changes["markets"] = market_changes
-    if not csp:
-        changes["csp"] = []
-        overrides = (changes.get("budgets") or {}).get("overrides", case.budgets.override_map)
-        dropped = {c.name for c in case.csp}
-        changes.setdefault("budgets", {})["overrides"] = {k: v for k, v in overrides.items() if k not in dropped}
+        changes["budgets"] = {**changes.get("budgets", {}), "mode": budget_mode}
     solver = {k: v for k, v in {"time_limit_s": time_limit_s, "rel_gap": rel_gap, "threads": threads,
                                 "budget_encoding": budget_encoding, "pwl_encoding": pwl_encoding}.items()
               if v is not None}

@@ -1,6 +1,7 @@
-"""Plans side by side: the run variants of a comparison and the paper's comparison tables.
+"""Plans side by side: the paper's comparison tables.
 
-* :func:`strategy_case` — a case with a strategy preset and a market set applied;
+The plans compared are variants of one case made with :class:`rvpp.data.variants.Variant`.
+
 * :func:`cost_table` — cost [kEUR] per strategy and market set (paper Table 10 layout);
 * :func:`flexibility_table` — reserve energy per strategy and unit kind (paper Table 9 layout);
 * :func:`kpi_table` — headline numbers of any labelled plans.
@@ -12,19 +13,12 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-from ..data.case import STRATEGIES, Case, with_options
+from ..data.case import STRATEGIES
 from ..solving.results import Result
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # the columns of the paper's Table 10
 KIND_NAMES = {"wind": "WFs", "pv": "PVs", "csp": "CSP", "ed": "EDs"}  # the rows of the paper's Table 9
 PERCENT = 100.0
-
-
-def strategy_case(case: Case, strategy: str, markets: str | None = None) -> Case:
-    """``case`` with the budgets of ``strategy`` (individual Γ edits dropped) and, if given,
-    the market set ``markets`` such as ``"DAM+SRM"``."""
-    changed = with_options(case, markets=markets.replace("+", ",")) if markets else case
-    return changed.replace(budgets={"strategy": strategy, "overrides": {}})
 
 
 def cost_table(results: Mapping[tuple[str, str], Result]) -> pd.DataFrame:

@@ -12,6 +12,7 @@ from concurrent.futures import Executor
 import pandas as pd
 
 from ..data.case import Case, with_options
+from ..data.variants import describe
 from ..settle.recourse import first_stage, set_fingerprint
 from . import figures
 from .evaluation import evaluate_methods, evaluation_days, realizations, settlement_warning, summarize
@@ -33,8 +34,9 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     reals = shared_realizations(case, settings)
     configs = [Config.of({"method": s}, strategy=s) for s in settings.strategies]
     results = solve_configs(case, configs, settings, executor, progress, "robust plans")
-    plans = pd.DataFrame([{"method": dict(c.labels)["method"], "approach": "RO", "status": r.status,
-                           "plan_cost_keur": r.cost_keur, "mip_gap": r.mip_gap, "solve_s": r.solve_s}
+    plans = pd.DataFrame([{"method": dict(c.labels)["method"], "approach": "RO", "variant": describe(r.case),
+                           "status": r.status, "plan_cost_keur": r.cost_keur, "mip_gap": r.mip_gap,
+                           "solve_s": r.solve_s}
                           for c, r in zip(configs, results)])
     bids = {dict(c.labels)["method"]: first_stage(r, settings.fix_commitment)
             for c, r in zip(configs, results) if r.has_plan}

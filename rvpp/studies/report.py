@@ -32,11 +32,11 @@ REPORT_TABLES = {  # the tables shown in report.md; every table is in tables/ an
     "stress": ("stress",),
 }
 REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
-    "strategies": ["strategy", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
+    "strategies": ["strategy", "variant", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
                    "sr_up_mwh", "sr_dn_mwh", "solve_s", "audit_violations"],
-    "case1_summary": ["strategy", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
+    "case1_summary": ["strategy", "variant", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
                       "sr_up_mwh", "sr_dn_mwh", "solve_s", "audit_violations"],
-    "sensitivity": ["sources", "gamma", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
+    "sensitivity": ["sources", "gamma", "variant", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
                     "csp_up_mwh", "ed_up_mwh", "wind_dn_mwh", "pv_dn_mwh", "csp_dn_mwh", "ed_dn_mwh", "solve_s"],
     "table13_out_of_sample": ["method", "status", "avg_market_cost_keur", "avg_penalty_keur", "avg_net_cost_keur",
                               "solve_s", "settlements_optimal", "realization_set"],

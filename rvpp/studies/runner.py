@@ -1,9 +1,10 @@
 """The shared runner: a study is a list of configurations solved by one function.
 
 A :class:`Config` names its labels (e.g. ``strategy``, ``markets``) and the
-:func:`~rvpp.data.case.with_options` changes that make its case. :func:`solve_configs`
-solves them through :func:`rvpp.solving.batch.solve_many` (serially or on any executor), solves
-identical cases once, and :func:`plan_row` turns every plan into one flat record.
+:class:`~rvpp.data.variants.Variant` that makes its case. :func:`solve_configs` solves
+them through :func:`rvpp.solving.batch.solve_many` (serially or on any executor), solves
+identical cases once, and :func:`plan_row` turns every plan into one flat record whose
+``variant`` column describes the case it solved (:func:`~rvpp.data.variants.describe`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ import pandas as pd
 
 from ..settle.audit import audit_result
 from ..solving.batch import solve_many
-from ..data.case import Case, with_options
+from ..data.case import Case
+from ..data.variants import Variant, describe
 from ..solving.results import FLEX_KINDS, Result
 from .settings import StudySettings
 
@@ -36,17 +38,18 @@ def stage(progress: Progress | None, name: str) -> Callable[[int, int], None]:
 
 @dataclass(frozen=True)
 class Config:
-    """One solve of a study: labels for the tables and the options that make its case."""
+    """One solve of a study: labels for the tables and the variant that makes its case."""
 
     labels: tuple[tuple[str, Any], ...]
-    options: tuple[tuple[str, Any], ...] = ()
+    variant: Variant = Variant()
 
     @classmethod
-    def of(cls, labels: dict[str, Any], **options: Any) -> "Config":
-        return cls(tuple(labels.items()), tuple(options.items()))
+    def of(cls, labels: dict[str, Any], **variant: Any) -> "Config":
+        """``Config.of({"strategy": "balanced"}, strategy="balanced", markets="DAM+SRM")``."""
+        return cls(tuple(labels.items()), Variant(**variant))
 
     def case(self, base: Case, settings: StudySettings) -> Case:
-        return with_options(base, threads=settings.threads, **dict(self.options))
+        return self.variant.apply(base, solver={"threads": settings.threads})
 
 
 @dataclass
@@ -78,13 +81,15 @@ def solve_configs(base: Case, configs: Sequence[Config], settings: StudySettings
 
 
 def plan_row(config: Config, result: Result) -> dict[str, Any]:
-    """One flat record of a plan: labels, status, cost, trades and reserves by unit kind.
+    """One flat record of a plan: labels, the variant solved, status, cost, trades and
+    reserves by unit kind.
 
-    Energies are ``Σt x·dt`` [MWh] / [MWh_th]; ``audit_violations`` counts the rules of
+    ``variant`` describes the case the plan was solved for (strategy, markets and any Γ
+    edit, e.g. ``balanced · DAM+SRM+HPA · Γ WF1=12``). Energies are ``Σt x·dt`` [MWh] / [MWh_th]; ``audit_violations`` counts the rules of
     MODEL_SPEC the plan breaks (:func:`rvpp.settle.audit.audit_result`; 0 expected).
     """
     row: dict[str, Any] = dict(config.labels)
-    row.update({"status": result.status, "cost_keur": result.cost_keur, "profit_eur": result.objective_eur,
+    row.update({"variant": describe(result.case), "status": result.status, "cost_keur": result.cost_keur, "profit_eur": result.objective_eur,
                 "mip_gap": result.mip_gap, "solve_s": result.solve_s})
     if not result.has_plan:
         return row

@@ -1,0 +1,108 @@
+"""One way to derive a variant of a case, and the label of what a run solved.
+
+A :class:`Variant` names what a run changes in a case: the strategy preset, the Γ
+edits, the market set, the period length, the CSPs kept and a flat HPA tariff. The
+command line (``solve``), the dashboard's pages and every study derive their runs with
+:meth:`Variant.apply`, and a table row is labelled with :func:`describe` of the case it
+solved, so the label always names the budgets actually in force, e.g.
+``balanced · DAM+SRM+HPA · Γ WF1=12``.
+
+A strategy given by the variant is the strategy *as published* (paper Table 7): the
+case's own Γ edits are set aside and only the variant's ``gammas`` apply on top of the
+preset. Without a strategy, the case keeps its strategy and Γ edits and the variant's
+``gammas`` are added to them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from .case import Case, parse_markets
+
+SEPARATOR = " · "
+
+
+@dataclass(frozen=True)
+class Variant:
+    """What a run changes in a case; ``None`` (or ``csp=True``) keeps the case's own setting.
+
+    ``strategy``: a preset of paper Table 7 (the case's Γ edits are then dropped);
+    ``gammas``: Γ per source [periods], as ``{name: Γ}`` or sorted pairs;
+    ``markets``: a market set such as ``"DAM+SRM"`` or ``"DAM,SRM"``; ``dt_h``: period
+    length [h]; ``csp``: ``False`` removes every CSP (and its Γ edit); ``hpa_flat``: one
+    HPA tariff for every hour [EUR/MWh_th].
+    """
+
+    strategy: str | None = None
+    gammas: tuple[tuple[str, int], ...] = ()
+    markets: str | None = None
+    dt_h: float | None = None
+    csp: bool = True
+    hpa_flat: float | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.gammas, Mapping):
+            object.__setattr__(self, "gammas", tuple(sorted(self.gammas.items())))
+
+    def changes(self, case: Case) -> dict[str, Any]:
+        """The :meth:`Case.replace` changes that make this variant of ``case``."""
+        changes: dict[str, Any] = {}
+        if self.dt_h is not None:
+            changes["dt_h"] = self.dt_h
+        budgets: dict[str, Any] = {}
+        if self.strategy is not None:
+            budgets = {"strategy": self.strategy, "overrides": dict(self.gammas)}
+        elif self.gammas:
+            budgets = {"overrides": {**case.budgets.override_map, **dict(self.gammas)}}
+        markets: dict[str, Any] = parse_markets(self.markets) if self.markets else {}
+        if self.hpa_flat is not None:
+            markets["hpa_tariff_eur_per_mwh"] = [self.hpa_flat] * 24
+        if markets:
+            changes["markets"] = markets
+        if not self.csp and case.csp:
+            changes["csp"] = []
+            dropped = {c.name for c in case.csp}
+            overrides = budgets.get("overrides", case.budgets.override_map)
+            budgets["overrides"] = {k: v for k, v in overrides.items() if k not in dropped}
+        if budgets:
+            changes["budgets"] = budgets
+        return changes
+
+    def apply(self, case: Case, **more: Any) -> Case:
+        """This variant of ``case``; ``more`` are further :meth:`Case.replace` changes made in
+        the same step (e.g. ``solver={"threads": 1}``)."""
+        changes = {**self.changes(case), **more}
+        return case.replace(**changes) if changes else case
+
+    def label(self, case: Case) -> str:
+        """The label of this variant of ``case`` (see :func:`describe`)."""
+        return describe(self.apply(case))
+
+
+def describe(case: Case) -> str:
+    """What a case solves, in one line: strategy, markets, then what differs from a plain run.
+
+    ``balanced · DAM+SRM+HPA``; Γ edits follow as ``Γ WF1=12, price_da=3`` (or ``Γ=6 for
+    every source`` when one value covers every source); then ``no CSP``, ``HPA flat 60
+    EUR/MWh_th``, ``15-min periods`` and ``planner-chosen hours`` where they apply.
+    """
+    parts = [case.budgets.strategy, case.markets.label]
+    overrides = case.budgets.override_map
+    if overrides:
+        values = set(overrides.values())
+        if len(values) == 1 and set(overrides) == set(case.sources()) and len(overrides) > 1:
+            parts.append(f"Γ={values.pop()} for every source")
+        else:
+            parts.append("Γ " + ", ".join(f"{name}={gamma}" for name, gamma in overrides.items()))
+    if not case.csp:
+        parts.append("no CSP")
+    tariff = set(case.markets.hpa_tariff_eur_per_mwh)
+    if case.markets.hpa and len(tariff) == 1:
+        parts.append(f"HPA flat {tariff.pop():g} EUR/MWh_th")
+    if case.dt_h != 1.0:
+        parts.append(f"{case.dt_h * 60:g}-min periods")
+    if case.budgets.mode != "paper":
+        parts.append("planner-chosen hours")
+    return SEPARATOR.join(parts)
