@@ -38,6 +38,7 @@ STRATEGY_BUDGETS_H = {
     "pessimistic": {"price": 9, "wind": 9, "pv": 6, "csp": 6, "ed": 9, "td": 9},
 }
 assert tuple(STRATEGY_BUDGETS_H) == STRATEGIES
+MARGIN = 1e-6  # [MW], [MWh]: a limit counts as broken before solving only beyond the solver's tolerance
 
 
 @dataclass(frozen=True, eq=False)
@@ -154,8 +155,9 @@ def problem_from_bands(case: Case, periods: pd.DatetimeIndex, bands: pd.DataFram
 def top_gamma_deviation(deviation: np.ndarray, gamma: int) -> np.ndarray:
     """Paper-mode deviation: ``dev`` in the Γ largest-deviation periods, 0 elsewhere.
 
-    Ties are broken towards earlier periods (any tie-break gives the same bound set
-    except when tied values straddle the Γ boundary; the model handles that case).
+    Ties are broken towards earlier periods. When tied values straddle the Γ boundary
+    the model may deviate in any of the tied periods (:func:`budget_split`); this
+    single pattern is for display.
     """
     y = np.zeros_like(deviation, dtype=float)
     if gamma > 0:
@@ -164,13 +166,38 @@ def top_gamma_deviation(deviation: np.ndarray, gamma: int) -> np.ndarray:
     return y
 
 
+def budget_split(deviation: np.ndarray, gamma: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """Where paper mode may put Γ deviations (MODEL_SPEC §5): ``(sure, tied, count)``.
+
+    ``sure`` marks the periods that deviate under every tie-break (deviation above the
+    Γ-th largest); ``count`` more deviate among the periods marked ``tied`` (deviation
+    equal to the Γ-th largest), and the model may choose which. Nothing is tied when
+    that deviation is 0 (a zero deviation changes no bound).
+    """
+    dev = np.asarray(deviation, dtype=float)
+    nothing = np.zeros(len(dev), dtype=bool)
+    if gamma <= 0:
+        return nothing, nothing, 0
+    if gamma >= len(dev):
+        return dev > 0.0, nothing, 0
+    threshold = np.sort(dev)[::-1][gamma - 1]
+    sure = dev > threshold
+    if threshold <= 0.0:
+        return sure, nothing, 0
+    return sure, dev == threshold, gamma - int(sure.sum())
+
+
 def infeasibility_reasons(problem: Problem) -> list[str]:
-    """Causes of infeasibility that can be named before solving (empty if none found)."""
+    """Causes of infeasibility that can be named before solving (empty if none found).
+
+    Only what no plan can meet is refused: where Γ splits tied deviations, a bound is
+    refused only if every choice of the tied periods breaks it.
+    """
     case, hours = problem.case, problem.nt * problem.dt_h
     labels = problem.labels
     reasons = []
     needs_heat = [td.name for td in case.td
-                  if td.q_min_mwh_th > 0 or td.h_min_mw_th > 0 or problem.sources[td.name].nominal.max() > 0]
+                  if td.q_min_mwh_th > 0 or td.h_min_mw_th > 0 or problem.sources[td.name].nominal.max() > MARGIN]
     if needs_heat and not case.csp and not case.markets.hpa:
         who = f"thermal demand {needs_heat[0]} needs" if len(needs_heat) == 1 else (
             f"thermal demands {', '.join(needs_heat[:-1])} and {needs_heat[-1]} need")
@@ -178,27 +205,41 @@ def infeasibility_reasons(problem: Problem) -> list[str]:
                        "enable the HPA or add a CSP")
     paper = case.budgets.mode == "paper"
 
-    def bound(name: str, sign: float) -> np.ndarray:
+    def first_break(name: str, sign: float, breaks) -> tuple[int, float, str] | None:
+        """``(period index, bound, note)`` where every plan breaks the limit, or ``None``.
+
+        ``breaks(bound)`` marks the periods whose bound breaks the limit; a deviation
+        (``sign``: +1 for consumptions, −1 for availabilities) only makes a bound worse.
+        """
         src = problem.sources[name]
-        y = top_gamma_deviation(src.deviation, src.gamma) if paper else 0 * src.deviation
-        return src.nominal + sign * y
+        sure, tied, count = budget_split(src.deviation, src.gamma if paper else 0)
+        deviated = src.nominal + sign * src.deviation
+        bound = np.where(sure, deviated, src.nominal)
+        if (broken := breaks(bound)).any():
+            t = int(np.flatnonzero(broken)[0])
+            return t, float(bound[t]), ""
+        spoiled = tied & breaks(deviated)
+        if int((tied & ~spoiled).sum()) < count:
+            t = int(np.flatnonzero(spoiled)[0])
+            return t, float(deviated[t]), (f" in every choice of the {count} deviating periods among the "
+                                           f"{int(tied.sum())} tied at a deviation of {src.deviation[t]:.2f}")
+        return None
 
     demands = [(f'ed "{d.name}"', d.name, "consumption", d.p_max_mw, "p_max_mw", d.e_min_mwh, "e_min_mwh", "MW")
                for d in case.ed]
     demands += [(f'td "{k.name}"', k.name, "heat", k.h_max_mw_th, "h_max_mw_th", k.q_min_mwh_th,
                  "q_min_mwh_th", "MW_th") for k in case.td]
     for label, name, what, cap, cap_field, energy, energy_field, unit in demands:
-        need = bound(name, +1)
-        if (over := need > cap + 1e-9).any():
-            t = int(np.flatnonzero(over)[0])
-            reasons.append(f"{label}: required {what} {need[t]:.2f} {unit} at {labels[t]} exceeds {cap_field}={cap:g}")
-        if energy > cap * hours + 1e-9:
+        if found := first_break(name, +1, lambda need, cap=cap: need > cap + MARGIN):
+            t, need, note = found
+            reasons.append(f"{label}: required {what} {need:.2f} {unit} at {labels[t]} exceeds {cap_field}={cap:g}"
+                           + note)
+        if energy > cap * hours + MARGIN:
             reasons.append(f"{label}: {energy_field}={energy:g} exceeds {cap_field} x {hours:g} h = "
                            f"{cap * hours:g} {unit.replace('MW', 'MWh')}")
     for unit in case.ndres:
-        avail = bound(unit.name, -1)
-        if (short := avail < unit.p_min_mw - 1e-9).any():
-            t = int(np.flatnonzero(short)[0])
-            reasons.append(f'{unit.kind} "{unit.name}": available power {avail[t]:.2f} MW at {labels[t]} is '
-                           f"below p_min_mw={unit.p_min_mw:g}")
+        if found := first_break(unit.name, -1, lambda avail, floor=unit.p_min_mw: avail < floor - MARGIN):
+            t, avail, note = found
+            reasons.append(f'{unit.kind} "{unit.name}": available power {avail:.2f} MW at {labels[t]} is '
+                           f"below p_min_mw={unit.p_min_mw:g}" + note)
     return reasons
