@@ -16,12 +16,15 @@ import rvpp
 from rvpp.cli import main
 from rvpp.data.history import PRICE_COLUMNS
 from rvpp.studies import markets, out_of_sample, sensitivity, stochastic, stress
+from rvpp.settle.recourse import FirstStage
 from rvpp.solving.outcome import Outcome
 from rvpp.studies.evaluation import evaluation_days, sample_days, settlement_warning, summarize, training_days
 from rvpp.studies.report import write_all
 from rvpp.studies.runner import plan_table, solve_configs
 from rvpp.studies.settings import StudySettings
 from rvpp.uncertainty.bands import window_days
+
+from tests.factories import demand, tiny_case, tiny_problem, wind
 
 CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 SETTINGS = StudySettings(strategies=("deterministic", "pessimistic"), test_days=3, scenario_counts=(1, 2),
@@ -317,3 +320,30 @@ def test_every_study_row_is_labelled_with_the_budgets_it_solved(case):
                                     "balanced · DAM+SRM+HPA · HPA flat 60 EUR/MWh_th",
                                     "deterministic · DAM+SRM+HPA · Γ WF1=0", "deterministic · DAM+SRM+HPA · Γ WF1=6",
                                     "deterministic · DAM+SRM+HPA · Γ price_da=6, price_sr_dn=6, price_sr_up=6"}
+
+
+def test_paper_mode_stress_ranks_prices_by_exposure_not_by_deviation():
+    # DAM price deviations fall over the day (24 − t EUR/MWh down, 2·(24 − t) up), so
+    # ranking by deviation alone would pick the first periods. The plan sells 1 MW in
+    # periods 1-12 and 10 MW in 13-20, buys 5 MW in 21-24: the exposures λ_neg·p (selling)
+    # and λ_pos·(−p) (buying) are largest in 13, 14, 15 (110, 100, 90 EUR); period 1 loses
+    # 23 EUR and the buying periods at most 2·3·5 = 30 EUR.
+    # The SR-up price deviates 9 EUR/MW in period 2 and 1 in period 7, where the band is 20 MW.
+    t = np.arange(1, 25)
+    down = 24.0 - t
+    case = tiny_case([wind(om=0)], ed_units=[demand(p_max=100)], srm=True,
+                     overrides={"price_da": 3, "price_sr_up": 1, "price_sr_dn": 2, "W": 2})
+    wind_dev = np.where(t == 5, 4.0, np.where(t == 9, 3.0, 1.0))
+    problem = tiny_problem(case, price_da=(50 - down, 50, 50 + 2 * down),
+                           price_sr_up=(np.where(t == 2, 1.0, np.where(t == 7, 9.0, 10.0)), 10, 10),
+                           W=(30 - wind_dev, 30, 30), D=(10, 10, 10))
+    p_da = np.select([t <= 12, t <= 20], [1.0, 10.0], -5.0)
+    r_up = np.where(t == 7, 20.0, 1.0)
+    bids = FirstStage(p_da=p_da, r_sr_up=r_up, r_sr_dn=np.zeros(24), h_hpa=np.zeros(24))
+    exposure = stress.price_exposure(problem.sources["price_da"], bids, 1.0)
+    assert exposure[12] == 11 * 10 and exposure[20] == 2 * 3 * 5 and exposure[0] == 23 * 1
+    pattern = stress.paper_pattern(problem, bids)
+    assert pattern["price_da"] == [13, 14, 15]  # deviations alone would give [1, 2, 3]
+    assert pattern["price_sr_up"] == [7]  # 1 x 20 MW beats 9 x 1 MW in period 2
+    assert "price_sr_dn" not in pattern  # no down band offered: nothing at stake
+    assert pattern["W"] == [5, 9]  # availabilities: the largest deviations [MW]

@@ -11,11 +11,15 @@ adverse bound in at most Γ periods) that raises the settled net cost:
    ranks the periods;
 2. pattern: each source deviates in the Γ periods whose screening raised the net cost
    most; the combined pattern is settled once with the study's settings (commitment
-   free unless ``fix_commitment``), next to the paper-mode pattern (the Γ largest
-   deviations) for comparison.
+   free unless ``fix_commitment``), next to the paper-mode pattern for comparison: each
+   price in the Γ periods of the plan's largest exposure (price deviation times the
+   quantity at stake, the periods the price protection of MODEL_SPEC §4 guards), each
+   availability and consumption in its Γ largest-deviation periods (MODEL_SPEC §5).
 
 The pattern is found greedily, so its net cost is a **lower bound** on the worst case
-within the budget set, not the worst case itself.
+within the budget set, not the worst case itself. Only settlements that ended optimal
+give numbers: a screening solve that did not is left out of the ranking, a pattern
+settlement that did not shows ``n/a``, and the study's warning names them.
 """
 
 from __future__ import annotations
@@ -28,8 +32,10 @@ import pandas as pd
 
 from ..solving.batch import run_many
 from ..data.case import Case, with_options
-from ..solving.problem import Problem, top_gamma_deviation
-from ..settle.recourse import Realization, first_stage, nominal_realization
+from ..data.variants import describe
+from ..solving.outcome import Outcome
+from ..solving.problem import Problem, Source, top_gamma_deviation
+from ..settle.recourse import FirstStage, Realization, first_stage, nominal_realization
 from .evaluation import EUR_PER_KEUR, evaluate_task
 from .runner import Config, Progress, StudyOutput, solve_configs, stage
 from .settings import StudySettings
@@ -84,14 +90,39 @@ def greedy_pattern(problem: Problem, impacts: pd.DataFrame) -> dict[str, list[in
     return pattern
 
 
-def paper_pattern(problem: Problem) -> dict[str, list[int]]:
-    """Per source, the Γ largest-deviation periods (paper mode, MODEL_SPEC §5)."""
+def price_exposure(src: Source, bids: FirstStage, dt_h: float) -> np.ndarray:
+    """Loss [EUR] per period if the price moves against the plan by its full deviation (MODEL_SPEC §4).
+
+    DAM: ``λ_neg·p_da·dt`` where the plan sells, ``λ_pos·(−p_da)·dt`` where it buys; SR:
+    ``λ_neg·r_sr·dt`` of the band offered.
+    """
+    if src.kind == "price_da":
+        p = bids.p_da
+        return np.maximum.reduce([src.deviation * p, -src.deviation_up * p, np.zeros_like(p)]) * dt_h
+    band = bids.r_sr_up if src.name == "price_sr_up" else bids.r_sr_dn
+    return src.deviation * band * dt_h
+
+
+def paper_pattern(problem: Problem, bids: FirstStage) -> dict[str, list[int]]:
+    """Per source, the Γ periods where paper mode lets it deviate against ``bids``.
+
+    A price deviates in the Γ periods of largest exposure (the worst case its protection
+    prices, MODEL_SPEC §4; periods without exposure never), an availability or a
+    consumption in its Γ largest-deviation periods (MODEL_SPEC §5). Ties go to the
+    earlier periods.
+    """
     pattern = {}
     for name, src in problem.sources.items():
-        chosen = np.flatnonzero(top_gamma_deviation(src.deviation, src.gamma)) + 1
+        size = price_exposure(src, bids, problem.dt_h) if src.is_price else src.deviation
+        chosen = np.flatnonzero(top_gamma_deviation(size, src.gamma)) + 1
         if len(chosen):
             pattern[name] = [int(t) for t in chosen]
     return pattern
+
+
+def optimal_value(record: dict, key: str) -> float:
+    """A settlement figure [EUR] if the settlement ended optimal, else NaN."""
+    return float(record[key]) if Outcome(record["status"]) is Outcome.OPTIMAL else float("nan")
 
 
 def run(case: Case, settings: StudySettings, executor: Executor | None = None,
@@ -103,6 +134,13 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
     results = {dict(c.labels)["strategy"]: r
                for c, r in zip(configs, solve_configs(case, configs, settings, executor, progress, "stress plans"))}
     plans = {s: r for s, r in results.items() if r.has_plan}
+    out = StudyOutput("stress", TITLE)
+    out.notes.append("The greedy pattern is a lower bound on the worst-case net cost within each budget set.")
+    out.notes += [f"{s}: no plan to stress ({r.status}: {r.message})" for s, r in results.items() if not r.has_plan]
+    if not plans:
+        out.facts.update(stress=pd.DataFrame())
+        out.seconds = time.perf_counter() - started
+        return out
     settle_case = with_options(case, threads=settings.threads)
     bids = {s: first_stage(r, settings.fix_commitment) for s, r in plans.items()}
     screening_bids = {s: first_stage(r, fix_commitment=True) for s, r in plans.items()}
@@ -114,11 +152,12 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
              for s, name, t in screens]
     records = run_many(evaluate_task, tasks, executor, stage(progress, "stress screening"))
     screening = pd.DataFrame([{"strategy": s, "source": name, "t": t, "status": rec["status"],
-                               "net_cost_eur": rec["net_cost_eur"]} for (s, name, t), rec in zip(screens, records)])
+                               "net_cost_eur": optimal_value(rec, "net_cost_eur")}
+                              for (s, name, t), rec in zip(screens, records)])
     base_net = screening[screening["source"] == ""].set_index("strategy")["net_cost_eur"]
     screening = screening[screening["source"] != ""].reset_index(drop=True)
     screening["impact_eur"] = screening["net_cost_eur"] - screening["strategy"].map(base_net)
-    patterns = {s: {NOMINAL: {}, PAPER: paper_pattern(r.problem),
+    patterns = {s: {NOMINAL: {}, PAPER: paper_pattern(r.problem, bids[s]),
                     GREEDY: greedy_pattern(r.problem, screening[screening["strategy"] == s])}
                 for s, r in plans.items()}
     final = [(s, label, pattern) for s, by_label in patterns.items() for label, pattern in by_label.items()]
@@ -126,13 +165,21 @@ def run(case: Case, settings: StudySettings, executor: Executor | None = None,
                                          settings.penalties) for s, _, pattern in final],
                         executor, stage(progress, "stress patterns"))
     table = pd.DataFrame([{
-        "strategy": s, "pattern": label, "status": rec["status"], "deviations": sum(map(len, pattern.values())),
-        "market_cost_keur": rec["market_cost_eur"] / EUR_PER_KEUR, "penalty_keur": rec["penalty_eur"] / EUR_PER_KEUR,
-        "net_cost_keur": rec["net_cost_eur"] / EUR_PER_KEUR, "plan_cost_keur": plans[s].cost_keur,
+        "strategy": s, "variant": describe(plans[s].case), "pattern": label, "status": rec["status"],
+        "deviations": sum(map(len, pattern.values())),
+        "market_cost_keur": optimal_value(rec, "market_cost_eur") / EUR_PER_KEUR,
+        "penalty_keur": optimal_value(rec, "penalty_eur") / EUR_PER_KEUR,
+        "net_cost_keur": optimal_value(rec, "net_cost_eur") / EUR_PER_KEUR, "plan_cost_keur": plans[s].cost_keur,
         "periods": "; ".join(f"{name}: {','.join(map(str, ts))}" for name, ts in pattern.items()),
     } for (s, label, pattern), rec in zip(final, outcomes)])
-    out = StudyOutput("stress", TITLE, tables={"stress": table, "stress_screening": screening})
-    out.notes.append("The greedy pattern is a lower bound on the worst-case net cost within each budget set.")
+    out.tables = {"stress": table, "stress_screening": screening}
+    failed = [f"{row.strategy} {row.pattern}: {row.status}" for row in table.itertuples()
+              if Outcome(row.status) is not Outcome.OPTIMAL]
+    failed_screens = sum(Outcome(rec["status"]) is not Outcome.OPTIMAL for rec in records)
+    if failed or failed_screens:
+        out.warnings.append(f"{len(failed)} of {len(table)} pattern settlements and {failed_screens} of "
+                            f"{len(records)} screening settlements did not end optimal; their numbers are left "
+                            "out" + (f" ({'; '.join(failed)})" if failed else ""))
     out.facts.update(stress=table)
     out.seconds = time.perf_counter() - started
     return out
