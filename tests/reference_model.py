@@ -2,24 +2,30 @@
 
 Builds MODEL_SPEC §3-§9 for one delivery day directly with HiGHS through highspy's
 modelling API and returns its optimal objective [EUR]. It shares no code with the
-model package: unit parameters come from the :class:`rvpp.data.case.Case`, and the data
-that depend on the uncertainty characterization (§6) and on the budget placement (§5)
-come from a plan's exported tables (``docs/exports.md``):
+library beyond the case's own data: unit parameters and the hourly history come from
+the :class:`rvpp.data.case.Case`, and everything derived from them is computed here
+from the specification:
 
-* ``market``: price bands per period (``price_da_mid``, ``price_da_pos``,
-  ``price_da_neg``, ``price_sr_up_hi``, ``price_sr_up_neg``, ``price_sr_dn_hi``,
-  ``price_sr_dn_neg``) and the HPA tariff ``tariff_hpa``;
-* ``units``: ``bound_mw`` per unit and period, the robust availability (wind, pv) or
-  requirement (ed, td) that already includes the budgeted deviations;
-* ``csp``: ``sf_bound_mw``, the robust solar-field availability;
-* ``summary``: ``dt_h``, ``periods`` and the price budgets ``budgets[price_*]``.
+* the delivery day's periods in local time (MODEL_SPEC §1);
+* the forecast bands (§6): the window of the ``window_days`` days before the delivery
+  day in local time, per local clock hour the ``q_lo`` percentile, the median and the
+  ``q_hi`` percentile (numpy's default linear interpolation); a period takes the band of
+  the clock hour it starts in;
+* the nominal values and deviations of §6's table, availabilities clipped to
+  ``[0, nameplate]``;
+* the budgets of the strategy (paper Table 7, hours scaled by ``1/dt``, at most the
+  number of periods) with the case's Γ edits;
+* the placement of the budgeted deviations (§5): each availability or consumption
+  deviates in its Γ largest-deviation periods; where tied deviations straddle the Γ
+  boundary, binaries choose which of the tied periods deviate (ties may be broken either
+  way, and the optimum takes the best choice).
 
-Only data are read from the tables, never decisions (unless a caller asks to fix the
-first-stage bid, see :func:`reference_optimum`). The price protection (§4) is the
+Only a caller asking to fix the first-stage bid reads a plan's decisions
+(:func:`reference_optimum` with ``market``). The price protection (§4) is the
 Bertsimas-Sim dual written here from scratch; the power-block curve (STU5) is encoded
-with one binary per segment in multiple-choice form; the turbine's minimum up and
-down times follow the paper's Appendix A. A few valid inequalities, each justified
-where it is added, speed up the solve without changing the optimum.
+with one binary per segment in multiple-choice form; the turbine's minimum up and down
+times follow the paper's Appendix A. A few valid inequalities, each justified where it
+is added, speed up the solve without changing the optimum.
 
 Symbols in docstrings follow MODEL_SPEC; labels such as (TS7) or (MILP-STU1) are the
 paper's equation labels.
@@ -27,9 +33,8 @@ paper's equation labels.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import datetime as dt
 from dataclasses import dataclass
-from typing import Any
 
 import highspy
 import numpy as np
@@ -37,62 +42,115 @@ import pandas as pd
 
 SCENARIOS = ("none", "up", "dn")
 MIP_REL_GAP = 1e-7
-PRICE_COLUMNS = ("price_da_mid", "price_da_pos", "price_da_neg", "price_sr_up_hi", "price_sr_up_neg",
-                 "price_sr_dn_hi", "price_sr_dn_neg", "tariff_hpa")
 BINARY = highspy.HighsVarType.kInteger
+PRICES = ("price_da", "price_sr_up", "price_sr_dn")
+# Γ in hours per strategy and source kind (paper Table 7; MODEL_SPEC §6).
+TABLE7 = {"deterministic": dict(price=0, wind=0, pv=0, csp=0, ed=0, td=0),
+          "optimistic": dict(price=3, wind=3, pv=2, csp=2, ed=3, td=3),
+          "balanced": dict(price=6, wind=6, pv=4, csp=4, ed=6, td=6),
+          "pessimistic": dict(price=9, wind=9, pv=6, csp=6, ed=9, td=9)}
+
+
+@dataclass(frozen=True)
+class Uncertain:
+    """An availability (``sign`` −1) or consumption (+1): nominal and deviation per period [MW], Γ."""
+
+    nominal: np.ndarray
+    deviation: np.ndarray
+    gamma: int
+    sign: float
 
 
 @dataclass(frozen=True)
 class DayData:
-    """Data of one delivery day taken from a plan's exported tables.
+    """Data of one delivery day derived from the case and its history.
 
-    ``price``: market.csv price columns per period [EUR/MWh or EUR/MW per h];
-    ``gamma``: price budgets Γ [periods]; ``bound``: robust bound per unit name
-    (wind/pv/ed/td ``bound_mw``, CSP solar field ``sf_bound_mw``) [MW or MW_th].
+    ``price``: nominal and deviations per period (``price_da_mid``, ``price_da_pos``,
+    ``price_da_neg``, ``price_sr_up_hi``, ``price_sr_up_neg``, ``price_sr_dn_hi``,
+    ``price_sr_dn_neg``) [EUR/MWh or EUR/MW per h] and ``tariff_hpa`` [EUR/MWh_th];
+    ``gamma``: price budgets Γ [periods]; ``uncertain``: per unit name (the CSP's solar
+    field under the CSP's name).
     """
 
     nt: int
     dt: float
     price: dict[str, np.ndarray]
     gamma: dict[str, int]
-    bound: dict[str, np.ndarray]
+    uncertain: dict[str, Uncertain]
 
 
 class ReferenceNotOptimal(RuntimeError):
     """The reference model ended without a proven optimum; the message is HiGHS' status."""
 
 
-def day_data(tables: Mapping[str, Any]) -> DayData:
-    """Read the data (never the decisions) of ``tables`` (keys market, units, csp, summary)."""
-    summary = tables["summary"]
-    market = tables["market"].sort_values("t")
-    nt = len(market)
-    if nt != int(summary["periods"]):
-        raise ValueError(f"market table has {nt} rows but summary says {summary['periods']} periods")
-    price = {col: market[col].to_numpy(dtype=float) for col in PRICE_COLUMNS}
-    gamma = {name: int(summary["budgets"][name]) for name in ("price_da", "price_sr_up", "price_sr_dn")}
-    bound = {}
-    units = tables["units"]
-    for name, rows in units[units["kind"].isin(["wind", "pv", "ed", "td"])].groupby("unit"):
-        bound[name] = rows.sort_values("t")["bound_mw"].to_numpy(dtype=float)
-    csp = tables.get("csp")
-    if csp is not None and len(csp):
-        for name, rows in csp.groupby("unit"):
-            bound[name] = rows.sort_values("t")["sf_bound_mw"].to_numpy(dtype=float)
-    return DayData(nt=nt, dt=float(summary["dt_h"]), price=price, gamma=gamma, bound=bound)
+def local_periods(case) -> pd.DatetimeIndex:
+    """Local start times of the delivery day's periods (23 or 25 hours on clock-change days)."""
+    day = pd.Timestamp(case.delivery_date)
+    first, last = (d.tz_localize(case.timezone).tz_convert("UTC") for d in (day, day + pd.Timedelta(days=1)))
+    return pd.date_range(first, last, freq=pd.Timedelta(hours=case.dt_h), inclusive="left").tz_convert(case.timezone)
 
 
-def reference_optimum(case, tables: Mapping[str, Any], *, fix_market: bool = False) -> float:
-    """Optimal objective [EUR] of MODEL_SPEC §3-§9 for ``case`` with the data of ``tables``.
+def hourly_band(case, column: str, scale: float, hours: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``(lo, mid, hi)`` per period of the clock ``hours`` from the window before the day (§6)."""
+    frame = case.history.frame
+    local = frame.index.tz_convert(case.timezone)
+    first = case.delivery_date - dt.timedelta(days=case.uncertainty.window_days)
+    days = np.array(local.date)
+    window = (days >= first) & (days < case.delivery_date)
+    values, clock = frame[column].to_numpy(float)[window] * scale, np.asarray(local.hour)[window]
+    quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
+    by_hour = {h: np.quantile(values[clock == h], quantiles) for h in set(hours)}
+    table = np.array([by_hour[h] for h in hours])
+    return table[:, 0], table[:, 1], table[:, 2]
 
-    With ``fix_market`` the first-stage decisions ``p_da``, ``r_sr_up``, ``r_sr_dn`` and
-    ``h_hpa`` are fixed to the plan's values in ``tables["market"]``: the result is then
-    the best profit the reference physics allows for that bid (it raises if the bid is
-    infeasible for the reference model).
+
+def budgets(case, nt: int) -> dict[str, int]:
+    """Γ [periods] per source: Table 7 hours scaled by ``1/dt``, at most ``nt``, then the case's edits."""
+    preset, per_hour = TABLE7[case.budgets.strategy], round(1 / case.dt_h)
+    gamma = {name: preset["price"] * per_hour for name in PRICES}
+    gamma.update({unit.name: preset[kind] * per_hour for kind, unit in case.units()})
+    gamma = {name: min(g, nt) for name, g in gamma.items()}
+    return {**gamma, **dict(case.budgets.overrides)}
+
+
+def day_data(case) -> DayData:
+    """Bands, budgets and tariffs of the case's delivery day (MODEL_SPEC §1, §6), from its history."""
+    hours = np.asarray(local_periods(case).hour)
+    nt = len(hours)
+    gamma = budgets(case, nt)
+    lo, mid, hi = hourly_band(case, "price_da", 1.0, hours)
+    price = {"price_da_mid": mid, "price_da_pos": hi - mid, "price_da_neg": mid - lo}
+    for name in ("price_sr_up", "price_sr_dn"):
+        lo, _, hi = hourly_band(case, name, 1.0, hours)
+        price[f"{name}_hi"], price[f"{name}_neg"] = hi, hi - lo
+    price["tariff_hpa"] = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in hours], dtype=float)
+    uncertain = {}
+    for kind, unit in case.units():
+        if kind == "csp":
+            column, scale, cap = unit.solar_field.series or unit.name, unit.solar_field.series_scale, \
+                unit.solar_field.p_max_mw_th
+        else:
+            column, scale, cap = unit.series or unit.name, unit.series_scale, getattr(unit, "p_max_mw", None)
+        lo, _, hi = hourly_band(case, column, scale, hours)
+        if kind in ("wind", "pv", "csp"):
+            top, bottom = np.clip(hi, 0.0, cap), np.clip(lo, 0.0, cap)
+            uncertain[unit.name] = Uncertain(top, top - bottom, gamma[unit.name], -1.0)
+        else:
+            uncertain[unit.name] = Uncertain(lo, hi - lo, gamma[unit.name], +1.0)
+    return DayData(nt=nt, dt=case.dt_h, price=price, gamma={n: gamma[n] for n in PRICES}, uncertain=uncertain)
+
+
+def reference_optimum(case, market: pd.DataFrame | None = None) -> float:
+    """Optimal objective [EUR] of MODEL_SPEC §3-§9 for ``case``.
+
+    With ``market`` (a plan's market table) the first-stage decisions ``p_da``,
+    ``r_sr_up``, ``r_sr_dn`` and ``h_hpa`` are fixed to the plan's values: the result is
+    then the best profit the reference physics allows for that bid (it raises if the bid
+    is infeasible for the reference model).
     """
-    model = ReferenceModel(case, day_data(tables))
-    if fix_market:
-        model.fix_market(tables["market"].sort_values("t"))
+    model = ReferenceModel(case, day_data(case))
+    if market is not None:
+        model.fix_market(market.sort_values("t"))
     return model.solve()
 
 
@@ -143,6 +201,51 @@ class ReferenceModel:
 
     def _sum(self, items):
         return self.h.qsum(list(items))
+
+    def _series_beyond(self, low: float, high, bounds: list, lower: bool) -> list:
+        """Variables in ``[low, high]`` per period that also satisfy ``x[t] ≥ bounds[t]`` (``lower``)
+        or ``x[t] ≤ bounds[t]``: a column bound where the bound is a number, a row where it
+        holds a budget binary."""
+        highs = np.broadcast_to(np.asarray(high, dtype=float), (self.d.nt,))
+        columns = []
+        for t, bound in enumerate(bounds):
+            number = isinstance(bound, float)
+            lb = max(low, bound) if number and lower else low
+            ub = min(highs[t], bound) if number and not lower else highs[t]
+            x = self.h.addVariable(lb=float(lb), ub=float(ub))
+            if not number:
+                self.h.addConstr(x - bound >= 0) if lower else self.h.addConstr(x - bound <= 0)
+            columns.append(x)
+        return columns
+
+    def _robust_bound(self, name: str) -> list:
+        """Bound per period with the budgeted deviations of MODEL_SPEC §5 [MW] or [MW_th].
+
+        ``nominal + sign·dev`` in the Γ periods of largest deviation, the nominal value
+        elsewhere. Deviations above the Γ-th largest deviate for sure; when more periods
+        tie at the Γ-th largest than the budget has left, binaries ``χ`` (``Σ χ`` = what is
+        left) choose which of them deviate, and a bound there is an expression.
+        """
+        src = self.d.uncertain[name]
+        dev = src.deviation
+        bound = list(src.nominal.astype(float))
+        if src.gamma <= 0 or dev.max() <= 0.0:
+            return bound
+        threshold = np.sort(dev)[::-1][min(src.gamma, self.d.nt) - 1]
+        sure = [t for t in self.T if dev[t] > threshold]
+        tied = [t for t in self.T if dev[t] == threshold] if threshold > 0 else []
+        left = min(src.gamma, self.d.nt) - len(sure)
+        for t in sure:
+            bound[t] += src.sign * dev[t]
+        if left >= len(tied):
+            for t in tied:
+                bound[t] += src.sign * dev[t]
+        elif left > 0:
+            chi = {t: self.h.addVariable(lb=0, ub=1, type=BINARY) for t in tied}
+            self.h.addConstr(self._sum(chi.values()) == left)
+            for t in tied:
+                bound[t] = bound[t] + src.sign * dev[t] * chi[t]
+        return bound
 
     # ----------------------------------------------------------------- markets
 
@@ -202,13 +305,13 @@ class ReferenceModel:
         ``p + r_up ≤ P_robust[t]``, ``P_min ≤ p - r_dn``, ``r_up ≤ min(T_sr·ramp_up, share·P_max)``,
         ``r_dn ≤ min(T_sr·ramp_dn, share·P_max)`` [MW]; O&M ``C_r·p·dt`` [EUR].
         """
-        avail = self.d.bound[unit.name]
+        avail = self._robust_bound(unit.name)
         share_cap = unit.reserve_share * unit.p_max_mw
         p = self._series(0.0, np.inf)
         r_up = self._reserve_series(min(self.t_sr_min * unit.ramp_up_mw_per_min, share_cap))
         r_dn = self._reserve_series(min(self.t_sr_min * unit.ramp_dn_mw_per_min, share_cap))
         for t in self.T:
-            self.h.addConstr(p[t] + r_up[t] <= avail[t])
+            self.h.addConstr(p[t] + r_up[t] - avail[t] <= 0)
             self.h.addConstr(p[t] - r_dn[t] >= unit.p_min_mw)
             for s in SCENARIOS:
                 self.injection[s][t].append(p[t] + _act(s, r_up[t], r_dn[t]))
@@ -222,7 +325,7 @@ class ReferenceModel:
         Up reserve is a consumption decrease.
         """
         dt = self.d.dt
-        p = self._series(self.d.bound[unit.name], np.inf)
+        p = self._series_beyond(0.0, np.inf, self._robust_bound(unit.name), lower=True)
         r_up = self._reserve_series(self.t_sr_min * unit.ramp_up_mw_per_min)
         r_dn = self._reserve_series(self.t_sr_min * unit.ramp_dn_mw_per_min)
         for t in self.T:
@@ -239,7 +342,7 @@ class ReferenceModel:
 
         ``max(H_robust[t], H_min) ≤ h ≤ H_max`` [MW_th]; ``Q_min ≤ Σt h·dt`` [MWh_th].
         """
-        h = self._series(np.maximum(self.d.bound[unit.name], unit.h_min_mw_th), unit.h_max_mw_th)
+        h = self._series_beyond(unit.h_min_mw_th, unit.h_max_mw_th, self._robust_bound(unit.name), lower=True)
         for t in self.T:
             self.heat_demand[t].append(h[t])
         self.h.addConstr(self._sum(self.d.dt * h[t] for t in self.T) >= unit.q_min_mwh_th)
@@ -249,8 +352,9 @@ class ReferenceModel:
     def _csp(self, unit) -> None:
         """CSP plant: solar field, storage, power block, turbine commitment (§8)."""
         pb, ts = unit.power_block, unit.storage
+        field = self._robust_bound(unit.name)  # [MW_th]
         c = {
-            "p_sf": self._series(0.0, self.d.bound[unit.name]),  # (MILP-STU1) [MW_th]
+            "p_sf": self._series_beyond(0.0, np.inf, field, lower=False),  # (MILP-STU1)
             "h": self._series(0.0, np.inf),                       # heat to thermal demands [MW_th]
             "p_ch": self._series(0.0, np.inf),
             "p_dis": self._series(0.0, np.inf),
@@ -272,7 +376,8 @@ class ReferenceModel:
         self._segment_order({s: curves[s][1] for s in SCENARIOS})
         self._turbine_output(unit, c, e)
         self._storage(ts, c)
-        self._charge_from_field(c, self.d.bound[unit.name])
+        nominal = self.d.uncertain[unit.name].nominal
+        self._charge_from_field(c, [b if isinstance(b, float) else nominal[t] for t, b in enumerate(field)])
         for t in self.T:
             self.heat_supply[t].append(c["h"][t])
         dt = self.d.dt
@@ -434,7 +539,8 @@ class ReferenceModel:
 
         ``p_pb ≥ r_ts_dn + Ppb_min·u ≥ 0`` (STU4), and in charging mode ``p_dis = 0`` (TS3),
         so (STU2) gives ``p_ch ≤ p_sf``; in discharging mode ``p_ch = 0`` (TS2). Hence
-        ``p_ch ≤ p_sf`` and ``p_ch ≤ Psf_robust[t]·u_ch`` hold in every feasible point.
+        ``p_ch ≤ p_sf`` and ``p_ch ≤ avail[t]·u_ch`` hold in every feasible point, with
+        ``avail`` the robust availability (the nominal one where a budget binary decides).
         """
         for t in self.T:
             self.h.addConstr(c["p_ch"][t] <= c["p_sf"][t])
