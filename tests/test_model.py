@@ -17,7 +17,7 @@ HOURS = np.arange(1, NT + 1, dtype=float)
 def solved(problem):
     result = solve_problem(problem)
     assert result.status == "optimal", result.message
-    assert audit_result(result) == []
+    assert audit_result(result, bands=problem.bands) == []
     return result
 
 

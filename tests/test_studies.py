@@ -340,8 +340,6 @@ def test_paper_mode_stress_ranks_prices_by_exposure_not_by_deviation():
     p_da = np.select([t <= 12, t <= 20], [1.0, 10.0], -5.0)
     r_up = np.where(t == 7, 20.0, 1.0)
     bids = FirstStage(p_da=p_da, r_sr_up=r_up, r_sr_dn=np.zeros(24), h_hpa=np.zeros(24))
-    exposure = stress.price_exposure(problem.sources["price_da"], bids, 1.0)
-    assert exposure[12] == 11 * 10 and exposure[20] == 2 * 3 * 5 and exposure[0] == 23 * 1
     pattern = stress.paper_pattern(problem, bids)
     assert pattern["price_da"] == [13, 14, 15]  # deviations alone would give [1, 2, 3]
     assert pattern["price_sr_up"] == [7]  # 1 x 20 MW beats 9 x 1 MW in period 2

@@ -30,6 +30,14 @@ Positive = Annotated[float, Field(gt=0.0)]
 UnitName = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,39}$")]
 
 STRATEGIES = ("deterministic", "optimistic", "balanced", "pessimistic")
+# Γ in hours per strategy and source kind (paper Table 7; MODEL_SPEC §6); "price" is each of
+# the DAM, SR-up and SR-down prices. A solve scales them to periods (x 1/dt).
+STRATEGY_BUDGETS_H = {
+    "deterministic": {"price": 0, "wind": 0, "pv": 0, "csp": 0, "ed": 0, "td": 0},
+    "optimistic": {"price": 3, "wind": 3, "pv": 2, "csp": 2, "ed": 3, "td": 3},
+    "balanced": {"price": 6, "wind": 6, "pv": 4, "csp": 4, "ed": 6, "td": 6},
+    "pessimistic": {"price": 9, "wind": 9, "pv": 6, "csp": 6, "ed": 9, "td": 9},
+}
 Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
 MARKET_NAMES = ("DAM", "SRM", "HPA")
 RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}

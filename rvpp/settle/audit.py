@@ -1,11 +1,16 @@
 """Independent audit of a plan against MODEL_SPEC §4-§9.
 
 The audit reads only the exported tables (``market``, ``units``, ``csp``), the summary
-and the case parameters; it never touches the optimisation model. It re-checks every
-balance in all three activation scenarios, the market limits, every unit's bounds,
-the power-block curve, the storage energy recursion and reserve margins, the turbine
-commitment and minimum up/down times, the placement of the budgets χ, the price
-protection (sum of the Γ largest exposures) and the objective.
+and the case; it never touches the optimisation model nor the preparation of the day
+(:mod:`rvpp.solving.problem`, :mod:`rvpp.uncertainty`). What the plan had to respect
+is derived here from the case and its history with the audit's own arithmetic
+(:func:`audit_day`): the forecast bands of MODEL_SPEC §6 (:func:`band`), the nominal
+values and deviations, the budgets of paper Table 7, and the power-block curve as a
+piecewise-linear interpolation of the breakpoints. It re-checks every balance in all
+three activation scenarios, the market limits, every unit's bounds, the power-block
+curve, the storage energy recursion and reserve margins, the turbine commitment and
+minimum up/down times, the budgets Γ and the placement of χ, the price protection (sum
+of the Γ largest exposures) and the objective.
 
 Use :func:`audit_result` on a :class:`~rvpp.solving.results.Result`, or :func:`audit_export`
 on a folder written by ``python -m rvpp solve``.
@@ -13,6 +18,7 @@ on a folder written by ``python -m rvpp solve``.
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,9 +26,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..data.case import Case
-from ..model.curve import on_curve
-from ..solving.problem import Problem, prepare
+from ..data.case import STRATEGY_BUDGETS_H, Case
+from ..data.history import PRICE_COLUMNS
+from ..data.periods import delivery_periods
 
 TOLERANCE = 1e-4  # [MW], [MWh]: exported values carry 6 decimals
 MONEY_TOLERANCE = 1e-2  # [EUR]: one cent on any objective part
@@ -41,6 +47,126 @@ class Violation:
     def __str__(self) -> str:
         where = " ".join(x for x in (self.unit or "", f"t={self.t}" if self.t is not None else "") if x)
         return f"{self.check} [{where}] broken by {self.excess:.6g}" + (f": {self.detail}" if self.detail else "")
+
+
+# ----------------------------------------------------------------------------- what the plan had to respect
+
+
+@dataclass(frozen=True, eq=False)
+class Series:
+    """One uncertain series as the audit derives it (MODEL_SPEC §6 table).
+
+    ``kind``: ``price_da``, ``price_sr``, ``production`` (bad direction down) or
+    ``consumption`` (up); ``deviation``: the adverse deviation (for the DAM price the
+    downward one), ``deviation_up``: the DAM price's upward deviation; ``gamma`` [periods].
+    """
+
+    kind: str
+    unit_kind: str | None
+    nominal: np.ndarray
+    deviation: np.ndarray
+    gamma: int
+    deviation_up: np.ndarray | None = None
+
+    @property
+    def is_price(self) -> bool:
+        return self.unit_kind is None
+
+
+@dataclass(frozen=True, eq=False)
+class AuditDay:
+    """The delivery day of ``case``: periods, every uncertain series, the HPA tariff."""
+
+    case: Case
+    nt: int
+    dt_h: float
+    sources: dict[str, Series]
+    tariff_hpa: np.ndarray
+
+    def periods_for_hours(self, hours: float) -> int:
+        return int(round(hours / self.dt_h))
+
+
+def band(case: Case, column: str, scale: float, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(lo, mid, hi)`` of one history column per period, the period's clock hour in ``hours``.
+
+    MODEL_SPEC §6 (the paper's climatology): over the ``window_days`` whole local days
+    before the delivery day, per local clock hour, the ``q_lo`` percentile, the median and
+    the ``q_hi`` percentile (numpy's linear interpolation) of ``scale`` x the column. Other
+    ways to draw a band (e.g. from a point forecast and its past errors) belong here.
+    """
+    frame = case.history.frame
+    local = frame.index.tz_convert(case.timezone)
+    days = np.array(local.date)
+    first = case.delivery_date - dt.timedelta(days=case.uncertainty.window_days)
+    window = (days >= first) & (days < case.delivery_date)
+    values = frame[column].to_numpy(float)[window] * scale
+    clock = np.asarray(local.hour)[window]
+    quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
+    per_hour = {h: np.quantile(values[clock == h], quantiles) for h in set(hours)}
+    lo, mid, hi = np.array([per_hour[h] for h in hours]).T
+    return lo, mid, hi
+
+
+def budgets(case: Case, nt: int) -> dict[str, int]:
+    """Γ [periods] per source: the strategy's Table 7 hours scaled by ``1/dt`` (at most ``nt``),
+    then the case's edits."""
+    preset, per_hour = STRATEGY_BUDGETS_H[case.budgets.strategy], int(round(1.0 / case.dt_h))
+    gammas = {name: min(preset["price"] * per_hour, nt) for name in PRICE_COLUMNS}
+    gammas.update({unit.name: min(preset[kind] * per_hour, nt) for kind, unit in case.units()})
+    return {**gammas, **case.budgets.override_map}
+
+
+def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
+    """What a plan of the case's delivery day must respect (MODEL_SPEC §1, §6).
+
+    ``bands``: ``(source, lo|mid|hi)`` per period, to audit a plan made from given
+    bands instead of those of the history (:func:`band`).
+    """
+    periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
+    hours, nt = np.asarray(periods.hour), len(periods)
+    gammas = budgets(case, nt)
+
+    def lo_mid_hi(name: str, column: str, scale: float):
+        if bands is not None:
+            return tuple(bands[(name, stat)].to_numpy(float) for stat in ("lo", "mid", "hi"))
+        return band(case, column, scale, hours)
+
+    sources = {}
+    lo, mid, hi = lo_mid_hi("price_da", "price_da", 1.0)
+    sources["price_da"] = Series("price_da", None, mid, mid - lo, gammas["price_da"], deviation_up=hi - mid)
+    for name in ("price_sr_up", "price_sr_dn"):
+        lo, _, hi = lo_mid_hi(name, name, 1.0)
+        sources[name] = Series("price_sr", None, hi, hi - lo, gammas[name])
+    for kind, unit in case.units():
+        if kind == "csp":
+            field = unit.solar_field
+            lo, _, hi = lo_mid_hi(unit.name, field.series or unit.name, field.series_scale)
+            top, bottom = np.clip(hi, 0.0, field.p_max_mw_th), np.clip(lo, 0.0, field.p_max_mw_th)
+        else:
+            lo, _, hi = lo_mid_hi(unit.name, unit.series or unit.name, unit.series_scale)
+        if kind in ("wind", "pv"):
+            top, bottom = np.clip(hi, 0.0, unit.p_max_mw), np.clip(lo, 0.0, unit.p_max_mw)
+        if kind in ("wind", "pv", "csp"):
+            sources[unit.name] = Series("production", kind, top, top - bottom, gammas[unit.name])
+        else:
+            sources[unit.name] = Series("consumption", kind, lo, hi - lo, gammas[unit.name])
+    tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in hours], dtype=float)
+    return AuditDay(case=case, nt=nt, dt_h=case.dt_h, sources=sources, tariff_hpa=tariff)
+
+
+def curve_output_mw(pb, thermal_mw: np.ndarray) -> np.ndarray:
+    """Electrical output [MW] of an online power block at thermal input [MW_th] (paper STU5).
+
+    Linear interpolation between the breakpoints ``(P_n, η_n·P_n)``, the input held to
+    ``[p_in_min, p_in_max]``.
+    """
+    inputs = np.array([p for p, _ in pb.breakpoints], dtype=float)
+    outputs = np.array([p * eta for p, eta in pb.breakpoints], dtype=float)
+    return np.interp(np.clip(thermal_mw, pb.p_in_min_mw_th, pb.p_in_max_mw_th), inputs, outputs)
+
+
+# ----------------------------------------------------------------------------- entry points
 
 
 class _Auditor:
@@ -71,11 +197,16 @@ def _activation(s: str, up, dn):
     return up if s == "up" else (-dn if s == "dn" else 0.0 * up)
 
 
-def audit_result(result, tol: float = TOLERANCE) -> list[Violation]:
-    """Audit a solved :class:`~rvpp.solving.results.Result` (empty list: every rule holds)."""
+def audit_result(result, tol: float = TOLERANCE, bands: pd.DataFrame | None = None) -> list[Violation]:
+    """Audit a solved :class:`~rvpp.solving.results.Result` (empty list: every rule holds).
+
+    ``bands``: audit against these ``(source, lo|mid|hi)`` bands instead of the history's
+    (for a plan solved from given bands, e.g. ``result.problem.bands`` of a hand-made problem).
+    """
     if not result.has_plan:
         return [Violation("plan", None, None, float("nan"), f"no plan to audit ({result.status})")]
-    return audit_tables(result.problem, result.market, result.units, result.csp, result.summary(), tol)
+    return audit_tables(audit_day(result.case, bands), result.market, result.units, result.csp, result.summary(),
+                        tol)
 
 
 def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list[Violation]:
@@ -93,9 +224,8 @@ def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list
         uncertainty=settings["uncertainty"], csp=[c for c in case.csp if c.name in kept],
         budgets={"strategy": summary["strategy"], "mode": summary["budget_mode"],
                  "overrides": summary["budgets"]})
-    problem = prepare(run)
     tables = {name: _read_table(folder / f"{name}.csv") for name in ("market", "units", "csp")}
-    return audit_tables(problem, tables["market"], tables["units"], tables["csp"], summary, tol)
+    return audit_tables(audit_day(run), tables["market"], tables["units"], tables["csp"], summary, tol)
 
 
 def _read_table(path: Path) -> pd.DataFrame:
@@ -106,11 +236,12 @@ def _read_table(path: Path) -> pd.DataFrame:
         return pd.DataFrame()
 
 
-def audit_tables(problem: Problem, market: pd.DataFrame, units: pd.DataFrame, csp: pd.DataFrame,
+def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: pd.DataFrame,
                  summary: dict | None = None, tol: float = TOLERANCE) -> list[Violation]:
-    """Audit plan tables against the parameters of ``problem``."""
+    """Audit plan tables against the day of :func:`audit_day`; with ``summary`` also the
+    budgets it states and the objective."""
     a = _Auditor(tol)
-    case, nt = problem.case, problem.nt
+    case, nt = day.case, day.nt
     if len(market) != nt:
         a.fail("market.rows", f"{len(market)} rows for {nt} periods")
         return a.violations
@@ -126,20 +257,24 @@ def audit_tables(problem: Problem, market: pd.DataFrame, units: pd.DataFrame, cs
     if a.violations:
         return a.violations
 
-    _audit_market(a, problem, market)
-    _audit_balances(a, problem, market, by_unit, by_csp)
-    _audit_ndres(a, problem, by_unit)
-    _audit_demands(a, problem, by_unit)
+    _audit_market(a, day, market)
+    _audit_balances(a, day, market, by_unit, by_csp)
+    _audit_ndres(a, day, by_unit)
+    _audit_demands(a, day, by_unit)
     for unit in case.csp:
-        _audit_csp(a, problem, unit, by_unit[unit.name], by_csp[unit.name])
-    _audit_budgets(a, problem, by_unit, by_csp)
+        _audit_csp(a, day, unit, by_unit[unit.name], by_csp[unit.name])
+    _audit_budgets(a, day, by_unit, by_csp)
     if summary is not None:
-        _audit_objective(a, problem, market, by_unit, by_csp, summary)
+        for name, gamma in summary["budgets"].items():
+            if name not in day.sources or gamma != day.sources[name].gamma:
+                expected = day.sources[name].gamma if name in day.sources else "no such source"
+                a.fail("budget.gamma", f"summary states Γ={gamma}, the case gives {expected}", name)
+        _audit_objective(a, day, market, by_unit, by_csp, summary)
     return a.violations
 
 
-def _audit_market(a: _Auditor, problem: Problem, market: pd.DataFrame) -> None:
-    case = problem.case
+def _audit_market(a: _Auditor, day: AuditDay, market: pd.DataFrame) -> None:
+    case = day.case
     generation = sum(u.p_max_mw for u in case.ndres) + sum(c.p_max_mw for c in case.csp)
     demand = sum(d.p_max_mw for d in case.ed)
     cap = case.markets.kappa * max(0.0, generation - demand) if case.markets.srm else 0.0
@@ -152,19 +287,19 @@ def _audit_market(a: _Auditor, problem: Problem, market: pd.DataFrame) -> None:
     a.leq("market.hpa_nonnegative", -hpa, 0.0)
     if not case.markets.hpa:
         a.eq("market.hpa_off", hpa, 0.0)
-    da, sr_up, sr_dn = (problem.sources[n] for n in ("price_da", "price_sr_up", "price_sr_dn"))
+    da, sr_up, sr_dn = (day.sources[n] for n in ("price_da", "price_sr_up", "price_sr_dn"))
     for column, expected in (("price_da_mid", da.nominal), ("price_da_neg", da.deviation),
                              ("price_da_pos", da.deviation_up), ("price_sr_up_hi", sr_up.nominal),
                              ("price_sr_up_neg", sr_up.deviation), ("price_sr_dn_hi", sr_dn.nominal),
-                             ("price_sr_dn_neg", sr_dn.deviation), ("tariff_hpa", problem.tariff_hpa)):
+                             ("price_sr_dn_neg", sr_dn.deviation), ("tariff_hpa", day.tariff_hpa)):
         a.eq(f"market.{column}", market[column].to_numpy(float), expected)
 
 
-def _audit_balances(a: _Auditor, problem: Problem, market: pd.DataFrame, by_unit: dict, by_csp: dict) -> None:
-    case = problem.case
+def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: dict, by_csp: dict) -> None:
+    case = day.case
     p_da, sr_up, sr_dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
     for s in ("none", "up", "dn"):
-        supply = np.zeros(problem.nt)
+        supply = np.zeros(day.nt)
         for unit in case.ndres:
             u = by_unit[unit.name]
             supply += u["p_mw"].to_numpy() + _activation(s, u["r_up_mw"].to_numpy(), u["r_dn_mw"].to_numpy())
@@ -177,30 +312,30 @@ def _audit_balances(a: _Auditor, problem: Problem, market: pd.DataFrame, by_unit
     heat = market["h_hpa_mw"].to_numpy(float).copy()
     for unit in case.csp:
         heat += by_csp[unit.name]["heat_to_td_mw"].to_numpy()
-    need = sum((by_unit[k.name]["p_mw"].to_numpy() for k in case.td), np.zeros(problem.nt))
+    need = sum((by_unit[k.name]["p_mw"].to_numpy() for k in case.td), np.zeros(day.nt))
     a.eq("heat_balance", heat, need)
 
 
-def _reserve_cap(problem: Problem, ramp: float, share_cap: float = float("inf")) -> float:
-    markets = problem.case.markets
+def _reserve_cap(day: AuditDay, ramp: float, share_cap: float = float("inf")) -> float:
+    markets = day.case.markets
     return min(markets.reserve_duration_min * ramp, share_cap) if markets.srm else 0.0
 
 
-def _audit_ndres(a: _Auditor, problem: Problem, by_unit: dict) -> None:
-    for unit in problem.case.ndres:
+def _audit_ndres(a: _Auditor, day: AuditDay, by_unit: dict) -> None:
+    for unit in day.case.ndres:
         u, n = by_unit[unit.name], unit.name
         p, up, dn, bound = (u[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw", "bound_mw"))
         share = unit.reserve_share * unit.p_max_mw
         a.leq("ndres.available", p + up, bound, n)
         a.leq("ndres.minimum", unit.p_min_mw, p - dn, n)
         a.leq("ndres.nonnegative", -np.minimum.reduce([p, up, dn]), 0.0, n)
-        a.leq("ndres.reserve_up_cap", up, _reserve_cap(problem, unit.ramp_up_mw_per_min, share), n)
-        a.leq("ndres.reserve_dn_cap", dn, _reserve_cap(problem, unit.ramp_dn_mw_per_min, share), n)
+        a.leq("ndres.reserve_up_cap", up, _reserve_cap(day, unit.ramp_up_mw_per_min, share), n)
+        a.leq("ndres.reserve_dn_cap", dn, _reserve_cap(day, unit.ramp_dn_mw_per_min, share), n)
 
 
-def _audit_demands(a: _Auditor, problem: Problem, by_unit: dict) -> None:
-    dt = problem.dt_h
-    for ed in problem.case.ed:
+def _audit_demands(a: _Auditor, day: AuditDay, by_unit: dict) -> None:
+    dt = day.dt_h
+    for ed in day.case.ed:
         u, n = by_unit[ed.name], ed.name
         p, up, dn, bound = (u[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw", "bound_mw"))
         a.leq("ed.required", bound, p, n)
@@ -208,11 +343,11 @@ def _audit_demands(a: _Auditor, problem: Problem, by_unit: dict) -> None:
         a.leq("ed.ceiling", p + dn, ed.p_max_mw, n)
         a.leq("ed.flex_up", up, ed.flex_up * p, n)
         a.leq("ed.flex_dn", dn, ed.flex_dn * p, n)
-        a.leq("ed.reserve_up_cap", up, _reserve_cap(problem, ed.ramp_up_mw_per_min), n)
-        a.leq("ed.reserve_dn_cap", dn, _reserve_cap(problem, ed.ramp_dn_mw_per_min), n)
+        a.leq("ed.reserve_up_cap", up, _reserve_cap(day, ed.ramp_up_mw_per_min), n)
+        a.leq("ed.reserve_dn_cap", dn, _reserve_cap(day, ed.ramp_dn_mw_per_min), n)
         a.leq("ed.nonnegative", -np.minimum(up, dn), 0.0, n)
         a.leq("ed.energy", ed.e_min_mwh, float(np.sum((p - up) * dt)), n, scale=ed.e_min_mwh)
-    for td in problem.case.td:
+    for td in day.case.td:
         u, n = by_unit[td.name], td.name
         h, bound = u["p_mw"].to_numpy(float), u["bound_mw"].to_numpy(float)
         a.leq("td.required", bound, h, n)
@@ -221,8 +356,8 @@ def _audit_demands(a: _Auditor, problem: Problem, by_unit: dict) -> None:
         a.leq("td.energy", td.q_min_mwh_th, float(np.sum(h * dt)), n, scale=td.q_min_mwh_th)
 
 
-def _audit_csp(a: _Auditor, problem: Problem, unit, rows: pd.DataFrame, c: pd.DataFrame) -> None:
-    n, ts, pb, dt = unit.name, unit.storage, unit.power_block, problem.dt_h
+def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataFrame) -> None:
+    n, ts, pb, dt = unit.name, unit.storage, unit.power_block, day.dt_h
     col = {name: c[name].to_numpy(float) for name in c.columns if name not in ("start", "clock", "unit")}
     u, v_su, v_sd, mode = col["online"], col["startup"], col["shutdown"], col["charging"]
     for name, values in (("online", u), ("startup", v_su), ("shutdown", v_sd), ("charging", mode)):
@@ -232,8 +367,8 @@ def _audit_csp(a: _Auditor, problem: Problem, unit, rows: pd.DataFrame, c: pd.Da
     a.leq("csp.sf_available", col["p_sf_mw"], col["sf_bound_mw"], n)
     a.leq("csp.sf_nonnegative", -col["p_sf_mw"], 0.0, n)
     # Power-block thermal input (STU2), with the start-up heat of the periods after a start.
-    startup_periods = pb.startup_periods(problem.dt_h)
-    starting = np.array([v_su[max(0, t - startup_periods + 1): t + 1].sum() for t in range(problem.nt)])
+    startup_periods = pb.startup_periods(day.dt_h)
+    starting = np.array([v_su[max(0, t - startup_periods + 1): t + 1].sum() for t in range(day.nt)])
     heat_in = (col["p_sf_mw"] - col["heat_to_td_mw"] / unit.heat_efficiency + col["ts_discharge_mw"]
                - col["ts_charge_mw"] - pb.startup_fraction * pb.p_in_max_mw_th * starting)
     a.eq("csp.heat_split", col["p_pb_mw"], heat_in, n)
@@ -244,17 +379,16 @@ def _audit_csp(a: _Auditor, problem: Problem, unit, rows: pd.DataFrame, c: pd.Da
     a.leq("csp.input_ceiling", col["p_pb_mw"] + r_up, pb.p_in_max_mw_th * u, n)
     a.leq("csp.input_floor", pb.p_in_min_mw_th * u, col["p_pb_mw"] - r_dn, n)
     # Conversion curve in each activation scenario (STU5) and the turbine nameplate.
-    curve = on_curve(pb)
     for s in ("none", "up", "dn"):
         x = col["p_pb_mw"] + _activation(s, r_up, r_dn)
         e = col[f"e_{s}_mw"]
-        expected = np.where(u > 0.5, curve(np.clip(x, curve.knots[0], curve.knots[-1])), 0.0)
+        expected = np.where(u > 0.5, curve_output_mw(pb, x), 0.0)
         a.eq(f"csp.pb_curve[{s}]", e, expected, n)
         a.leq(f"csp.pb_input_range[{s}]", x, pb.p_in_max_mw_th * u, n)
         a.leq(f"csp.pb_input_range[{s}]", pb.p_in_min_mw_th * u, x, n)
         a.leq(f"csp.turbine_cap[{s}]", e, pb.p_el_max_mw * u, n)
     # Electrical reserves (STU6-STU7) and the unit rows of units.csv.
-    cap = _reserve_cap(problem, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
+    cap = _reserve_cap(day, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
     a.leq("csp.reserve_up_cap", col["e_up_mw"] - col["e_none_mw"], cap, n)
     a.leq("csp.reserve_dn_cap", col["e_none_mw"] - col["e_dn_mw"], cap, n)
     a.eq("csp.units_p", rows["p_mw"].to_numpy(float), col["e_none_mw"], n)
@@ -286,36 +420,36 @@ def _audit_csp(a: _Auditor, problem: Problem, unit, rows: pd.DataFrame, c: pd.Da
     a.leq("csp.ts_reserve_energy_dn", float(np.sum(r_dn * ts.eta_ch * dt)), sigma_dn * span, n, scale=span)
     a.leq("csp.ts_margin_low", ts.e_min_mwh_th + sigma_up * span, energy, n, scale=span)
     a.leq("csp.ts_margin_high", energy, ts.e_max_mwh_th - sigma_dn * span, n, scale=span)
-    _audit_commitment(a, problem, unit, u, v_su, v_sd)
+    _audit_commitment(a, day, unit, u, v_su, v_sd)
 
 
-def _audit_commitment(a: _Auditor, problem: Problem, unit, u, v_su, v_sd) -> None:
+def _audit_commitment(a: _Auditor, day: AuditDay, unit, u, v_su, v_sd) -> None:
     """Transitions and minimum up/down times by run lengths (Appendix A)."""
     n, pb = unit.name, unit.power_block
     state = np.round(u).astype(int)
     previous = np.concatenate([[1 if pb.initially_on else 0], state[:-1]])
     a.eq("csp.commitment_transition", state - previous, np.round(v_su) - np.round(v_sd), n)
-    for name, value, need in (("min_up", 1, problem.periods_for_hours(pb.min_up_h)),
-                              ("min_down", 0, problem.periods_for_hours(pb.min_down_h))):
+    for name, value, need in (("min_up", 1, day.periods_for_hours(pb.min_up_h)),
+                              ("min_down", 0, day.periods_for_hours(pb.min_down_h))):
         t = 0
-        while t < problem.nt:
+        while t < day.nt:
             if state[t] != value:
                 t += 1
                 continue
             end = t
-            while end < problem.nt and state[end] == value:
+            while end < day.nt and state[end] == value:
                 end += 1
             started_today = previous[t] != value
-            if started_today and end < problem.nt and end - t < need:
+            if started_today and end < day.nt and end - t < need:
                 a.fail(f"csp.{name}", f"run of {end - t} periods from t={t + 1} is shorter than {need}",
                        n, t + 1, float(need - (end - t)))
             t = end
 
 
-def _audit_budgets(a: _Auditor, problem: Problem, by_unit: dict, by_csp: dict) -> None:
+def _audit_budgets(a: _Auditor, day: AuditDay, by_unit: dict, by_csp: dict) -> None:
     """χ sums to Γ, lands on the largest deviations (paper mode), and bounds follow."""
-    paper = problem.case.budgets.mode == "paper"
-    for name, src in problem.sources.items():
+    paper = day.case.budgets.mode == "paper"
+    for name, src in day.sources.items():
         if src.is_price:
             continue
         table = by_csp[name] if src.unit_kind == "csp" else by_unit[name]
@@ -342,32 +476,38 @@ def protection_exact(exposure: np.ndarray, gamma: int) -> float:
     return float(np.sort(np.asarray(exposure, float))[::-1][:gamma].sum())
 
 
-def price_exposures(problem: Problem, market: pd.DataFrame) -> dict[str, np.ndarray]:
-    """Per-period loss [EUR] if each price moves adversely by its full deviation."""
-    dt = problem.dt_h
+def price_exposures(day, market: pd.DataFrame) -> dict[str, np.ndarray]:
+    """Per-period loss [EUR] if each price moves adversely by its full deviation (MODEL_SPEC §4).
+
+    DAM ``λ_neg·p_da·dt`` where the plan sells, ``λ_pos·(−p_da)·dt`` where it buys; SR
+    ``λ_neg·r_sr·dt``. ``day``: an :class:`AuditDay` or any object with the same
+    ``dt_h`` and ``sources`` (e.g. a :class:`~rvpp.solving.problem.Problem`, to draw a
+    plan's exposures); ``market``: the columns ``p_da_mw``, ``r_sr_up_mw``, ``r_sr_dn_mw``.
+    """
+    dt = day.dt_h
     p = market["p_da_mw"].to_numpy(float)
-    da = problem.sources["price_da"]
+    da = day.sources["price_da"]
     return {
         "price_da": np.maximum.reduce([da.deviation * p * dt, -da.deviation_up * p * dt, np.zeros_like(p)]),
-        "price_sr_up": problem.sources["price_sr_up"].deviation * market["r_sr_up_mw"].to_numpy(float) * dt,
-        "price_sr_dn": problem.sources["price_sr_dn"].deviation * market["r_sr_dn_mw"].to_numpy(float) * dt,
+        "price_sr_up": day.sources["price_sr_up"].deviation * market["r_sr_up_mw"].to_numpy(float) * dt,
+        "price_sr_dn": day.sources["price_sr_dn"].deviation * market["r_sr_dn_mw"].to_numpy(float) * dt,
     }
 
 
-def _audit_objective(a: _Auditor, problem: Problem, market: pd.DataFrame, by_unit: dict, by_csp: dict,
+def _audit_objective(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: dict, by_csp: dict,
                      summary: dict) -> None:
-    case, dt = problem.case, problem.dt_h
-    da, up, dn = (problem.sources[n].nominal for n in ("price_da", "price_sr_up", "price_sr_dn"))
+    case, dt = day.case, day.dt_h
+    da, up, dn = (day.sources[n].nominal for n in ("price_da", "price_sr_up", "price_sr_dn"))
     revenue_dam = float(np.sum(da * market["p_da_mw"].to_numpy(float) * dt))
     revenue_sr = float(np.sum((up * market["r_sr_up_mw"].to_numpy(float) + dn * market["r_sr_dn_mw"].to_numpy(float))
                               * dt))
-    cost_hpa = float(np.sum(problem.tariff_hpa * market["h_hpa_mw"].to_numpy(float) * dt))
+    cost_hpa = float(np.sum(day.tariff_hpa * market["h_hpa_mw"].to_numpy(float) * dt))
     opex = sum(float(np.sum(u.om_eur_per_mwh * by_unit[u.name]["p_mw"].to_numpy(float) * dt)) for u in case.ndres)
     opex += sum(float(np.sum(c.om_eur_per_mwh * (by_csp[c.name]["e_none_mw"].to_numpy(float)
                                                  + by_csp[c.name]["heat_to_td_mw"].to_numpy(float)) * dt))
                 for c in case.csp)
-    exposures = price_exposures(problem, market)
-    protection = {name: protection_exact(exposures[name], problem.sources[name].gamma) for name in exposures}
+    exposures = price_exposures(day, market)
+    protection = {name: protection_exact(exposures[name], day.sources[name].gamma) for name in exposures}
     keys = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}
     scale = MONEY_TOLERANCE / a.tol
     for name, key in keys.items():

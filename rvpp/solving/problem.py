@@ -24,20 +24,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..data.case import STRATEGIES, Case
+from ..data.case import STRATEGY_BUDGETS_H, Case
 from ..errors import CaseError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods, period_labels
 from ..uncertainty.bands import forecast_bands
 
-# Γ in hours per strategy (paper Table 7; MODEL_SPEC §6).
-STRATEGY_BUDGETS_H = {
-    "deterministic": {"price": 0, "wind": 0, "pv": 0, "csp": 0, "ed": 0, "td": 0},
-    "optimistic": {"price": 3, "wind": 3, "pv": 2, "csp": 2, "ed": 3, "td": 3},
-    "balanced": {"price": 6, "wind": 6, "pv": 4, "csp": 4, "ed": 6, "td": 6},
-    "pessimistic": {"price": 9, "wind": 9, "pv": 6, "csp": 6, "ed": 9, "td": 9},
-}
-assert tuple(STRATEGY_BUDGETS_H) == STRATEGIES
 MARGIN = 1e-6  # [MW], [MWh]: a limit counts as broken before solving only beyond the solver's tolerance
 
 

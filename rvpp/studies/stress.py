@@ -34,7 +34,8 @@ from ..solving.batch import run_many
 from ..data.case import Case, with_options
 from ..data.variants import describe
 from ..solving.outcome import Outcome
-from ..solving.problem import Problem, Source, top_gamma_deviation
+from ..solving.problem import Problem, top_gamma_deviation
+from ..settle.audit import price_exposures
 from ..settle.recourse import FirstStage, Realization, first_stage, nominal_realization
 from .evaluation import EUR_PER_KEUR, evaluate_task
 from .runner import Config, Progress, StudyOutput, solve_configs, stage
@@ -90,19 +91,6 @@ def greedy_pattern(problem: Problem, impacts: pd.DataFrame) -> dict[str, list[in
     return pattern
 
 
-def price_exposure(src: Source, bids: FirstStage, dt_h: float) -> np.ndarray:
-    """Loss [EUR] per period if the price moves against the plan by its full deviation (MODEL_SPEC §4).
-
-    DAM: ``λ_neg·p_da·dt`` where the plan sells, ``λ_pos·(−p_da)·dt`` where it buys; SR:
-    ``λ_neg·r_sr·dt`` of the band offered.
-    """
-    if src.kind == "price_da":
-        p = bids.p_da
-        return np.maximum.reduce([src.deviation * p, -src.deviation_up * p, np.zeros_like(p)]) * dt_h
-    band = bids.r_sr_up if src.name == "price_sr_up" else bids.r_sr_dn
-    return src.deviation * band * dt_h
-
-
 def paper_pattern(problem: Problem, bids: FirstStage) -> dict[str, list[int]]:
     """Per source, the Γ periods where paper mode lets it deviate against ``bids``.
 
@@ -111,9 +99,11 @@ def paper_pattern(problem: Problem, bids: FirstStage) -> dict[str, list[int]]:
     consumption in its Γ largest-deviation periods (MODEL_SPEC §5). Ties go to the
     earlier periods.
     """
+    market = pd.DataFrame({"p_da_mw": bids.p_da, "r_sr_up_mw": bids.r_sr_up, "r_sr_dn_mw": bids.r_sr_dn})
+    exposures = price_exposures(problem, market)
     pattern = {}
     for name, src in problem.sources.items():
-        size = price_exposure(src, bids, problem.dt_h) if src.is_price else src.deviation
+        size = exposures[name] if src.is_price else src.deviation
         chosen = np.flatnonzero(top_gamma_deviation(size, src.gamma)) + 1
         if len(chosen):
             pattern[name] = [int(t) for t in chosen]
