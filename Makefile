@@ -25,6 +25,7 @@ test: install
 bench: install
 	$(BIN)/python benchmarks/solve_times.py
 	$(BIN)/python benchmarks/studies.py
+	$(BIN)/python benchmarks/history.py
 
 reproduce: install
 	$(BIN)/python -m rvpp study reproduce --out out/reproduce

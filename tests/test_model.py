@@ -148,11 +148,55 @@ def test_markets_switched_off_fix_their_decisions_to_zero():
     assert "no heat source" in failed.message and "H" in failed.message
 
 
+def csp(min_up_h=0.0, min_down_h=0.0, startup_duration_h=None):
+    """A CSP without storage: 100 MW_th field, power block 10-100 MW_th at 50 % (5-50 MW), start-up
+    heat 0.2 x 100 = 20 MW_th, no operating cost."""
+    return {"name": "C", "om_eur_per_mwh": 0.0, "heat_efficiency": 1.0, "ramp_mw_per_min": 25, "reserve_share": 0.5,
+            "solar_field": {"p_max_mw_th": 100.0},
+            "storage": {"e_min_mwh_th": 0.0, "e_max_mwh_th": 1.0, "p_ch_max_mw_th": 0.0, "p_dis_max_mw_th": 0.0,
+                        "eta_ch": 1.0, "eta_dis": 1.0},
+            "power_block": {"p_in_max_mw_th": 100.0, "p_in_min_mw_th": 10.0, "p_el_max_mw": 50.0,
+                            "breakpoints": [[0, 0], [10, 0.5], [100, 0.5]], "min_up_h": min_up_h,
+                            "min_down_h": min_down_h, "startup_fraction": 0.2,
+                            "startup_duration_h": startup_duration_h}}
+
+
+@pytest.mark.parametrize("rules, online, profit", [
+    # Free turbine: start an hour before each two-hour peak (the start-up heat is cheaper
+    # at minimum output, −50 EUR, than in a peak, −1,000 EUR), stop in between (staying on
+    # at minimum for 3 h would cost 150 EUR, a restart 50 EUR).
+    ({}, [4, 5, 6, 10, 11, 12], 2 * (-50 + 2 * 5000)),
+    # Minimum up 4 h, down 3 h: runs 3-6 and 10-13 (each 4 h, 3 h apart) with two hours at
+    # minimum per run; running 4-12 through would cost four hours at minimum.
+    (dict(min_up_h=4, min_down_h=3), [3, 4, 5, 6, 10, 11, 12, 13], 2 * (-100 + 2 * 5000)),
+    # Start-up heat drawn for 2 h: a restart at 10 would draw 20 MW_th in the peak at 11
+    # (−1,000 EUR), so the turbine runs 3-12 through, drawing the start-up heat in 3 and 4.
+    (dict(min_up_h=4, min_down_h=3, startup_duration_h=2), list(range(3, 13)), -100 - 200 + 4 * 5000),
+])
+def test_turbine_schedule_follows_minimum_times_and_startup_heat(rules, online, profit):
+    # DAM 100 EUR/MWh in hours 5-6 and 11-12, −10 elsewhere; the field gives 100 MW_th all day.
+    price = np.where(np.isin(HOURS, (5, 6, 11, 12)), 100.0, -10.0)
+    case = tiny_case(csp_units=[csp(**rules)])
+    result = solved(tiny_problem(case, C=(100, 100, 100), price_da=(price, price, price)))
+    assert result.objective_eur == pytest.approx(profit, rel=1e-9)
+    table = result.csp.set_index("t")
+    assert list(table.index[table["online"] == 1]) == online
+    starts = [t for t in online if t - 1 not in online]
+    drawing = {t + k for t in starts for k in range(int(rules.get("startup_duration_h") or 1))}
+    heat_drawn = table["p_sf_mw"] - table["p_pb_mw"]
+    np.testing.assert_allclose(heat_drawn[sorted(drawing)], 20.0, atol=1e-6)
+    np.testing.assert_allclose(heat_drawn.drop(sorted(drawing)), 0.0, atol=1e-6)
+    peak = np.isin(table.index, (5, 6, 11, 12))
+    expected_output = np.where(np.isin(table.index, online), np.where(peak, 50.0, 5.0), 0.0)
+    expected_output[peak & table.index.isin(sorted(drawing))] = 40.0
+    np.testing.assert_allclose(table["e_none_mw"], expected_output, atol=1e-6)
+
+
 def test_impossible_requirements_are_named_before_solving():
     case = tiny_case([wind(om=10, p_min_mw=5)], ed_units=[demand(p_min=0, p_max=100, e_min=3000)],
                      td_units=[heat(h_max=10)], hpa=True)
     result = solve_problem(tiny_problem(case, W=(3, 3, 3), D=(10, 10, 10), H=(12, 12, 12)))
-    assert result.status == "infeasible" and result.solve_s == 0.0
+    assert result.status == "infeasible" and result.termination == "not solved"
     assert result.message.split("; ") == [
         'ed "D": e_min_mwh=3000 exceeds p_max_mw x 24 h = 2400 MWh',
         'td "H": required heat 12.00 MW_th at 00:00 exceeds h_max_mw_th=10',

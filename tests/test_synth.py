@@ -1,7 +1,6 @@
 """Tests of the synthetic history generator (rvpp.data.synth)."""
 
 import dataclasses
-import time
 from pathlib import Path
 
 import numpy as np
@@ -212,12 +211,6 @@ def test_write_history_round_trip(tmp_path):
     assert (instants == written["timestamp"].dt.tz_convert("UTC")).all()
     np.testing.assert_array_equal(stored[EXPECTED_COLUMNS[1:]].to_numpy(),
                                   written[EXPECTED_COLUMNS[1:]].to_numpy())
-
-
-def test_generation_is_fast():
-    started = time.perf_counter()
-    synth.build_history()
-    assert time.perf_counter() - started < 15.0
 
 
 # --- calibration on the March window ---------------------------------------------
