@@ -5,13 +5,17 @@ from __future__ import annotations
 import datetime as dt
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 
 import rvpp
 from rvpp.errors import RvppError
-from rvpp.settle.recourse import (Penalties, Realization, evaluate, first_stage, nominal_realization, realization,
-                           realized_problem, set_fingerprint, solve_stochastic, values_fingerprint)
+from rvpp.settle.recourse import (FirstStage, Penalties, Realization, evaluate, first_stage, nominal_realization,
+                                  realization, realized_problem, set_fingerprint, solve_stochastic, values_fingerprint)
 from rvpp.solving.plan import solve_problem
+
+from tests.factories import heat, tiny_case, wind
 
 CASE_DIR = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 REL = 1e-6  # relative tolerance on EUR figures of LP-sized recourse problems
@@ -173,3 +177,98 @@ def test_kept_commitment_settles_a_day_without_sun(paper):
     record = evaluate(paper, first_stage(plan, fix_commitment=True), dark)
     assert record["status"] == "optimal"
     assert record["deficit_mwh"] > 0
+
+
+# ----------------------------------------------------------------------------- hand-built settlements
+
+HOURS = np.arange(1, 25)
+
+
+def settle(case, bids: dict, values: dict, penalties=Penalties()):
+    """Settle hand-given bids (MW per hour) against hand-given realized values (per hour) of ``case``."""
+    per_hour = round(1 / case.dt_h)
+    nt = 24 * per_hour
+    first = FirstStage(*(np.repeat(np.broadcast_to(np.asarray(bids.get(k, 0.0), float), (24,)), per_hour)
+                         for k in ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")))
+    frame = pd.DataFrame({name: np.repeat(np.broadcast_to(np.asarray(v, float), (24,)), per_hour)
+                          for name, v in {"price_sr_up": 0.0, "price_sr_dn": 0.0, **values}.items()},
+                         index=pd.RangeIndex(1, nt + 1, name="t"))
+    record = evaluate(case, first, Realization(day=case.delivery_date, values=frame), penalties)
+    assert record["status"] == "optimal"
+    assert record["net_cost_eur"] == pytest.approx(record["market_cost_eur"] + record["penalty_eur"], abs=1e-6)
+    return record
+
+
+def assert_settlement(record, **expected):
+    """Every settlement figure [EUR] and slack energy [MWh] named, the others zero."""
+    figures = ("market_cost_eur", "penalty_eur", "net_cost_eur", "revenue_dam_eur", "revenue_sr_eur", "cost_hpa_eur",
+               "cost_opex_eur", "penalty_deficit_eur", "penalty_surplus_eur", "penalty_reserve_eur",
+               "penalty_heat_eur", "deficit_mwh", "surplus_mwh", "reserve_up_short_mwh", "reserve_dn_short_mwh",
+               "unserved_heat_mwh")
+    for name in figures:
+        assert record[name] == pytest.approx(expected.get(name, 0.0), abs=1e-6), name
+
+
+@pytest.mark.parametrize("dt_h", [1.0, 0.25])
+def test_surplus_is_sold_at_the_surplus_price_only_where_it_beats_the_operating_cost(dt_h):
+    # Bid 20 MW every hour; the wind farm (O&M 10 EUR/MWh) could give 30. At 50 EUR/MWh
+    # (hours 1-12) the 10 MW surplus earns m_sur·λ = 25 > 10 and is produced; at 10 EUR/MWh
+    # (hours 13-24) it would earn 5 < 10, so the farm is curtailed to the bid.
+    case = tiny_case([wind(om=10)], dt_h=dt_h)
+    price = np.where(HOURS <= 12, 50.0, 10.0)
+    record = settle(case, {"p_da": 20.0}, {"price_da": price, "W": 30.0})
+    revenue = 12 * 50 * 20 + 12 * 10 * 20          # 14,400
+    opex = 10 * (12 * 30 + 12 * 20)                 # 6,000
+    surplus = -0.5 * 50 * 10 * 12                   # -3,000
+    assert_settlement(record, revenue_dam_eur=revenue, cost_opex_eur=opex, market_cost_eur=opex - revenue,
+                      penalty_surplus_eur=surplus, penalty_eur=surplus, net_cost_eur=opex - revenue + surplus,
+                      surplus_mwh=120.0)
+
+
+def test_reserve_that_cannot_be_delivered_pays_the_shortfall_price():
+    # Bid 20 MW with 5 MW up and 5 MW down bands; the farm can give 22 MW, so up reserve
+    # can cover only 2 MW: 3 MW short every hour at m_sr·λup = 2 x 10 = 20 EUR/MW, cheaper
+    # than a deficit (m_def·λ − O&M = 90 EUR/MWh). The down band is fully covered.
+    case = tiny_case([wind(om=10, share=0.1)], srm=True)
+    record = settle(case, {"p_da": 20.0, "r_sr_up": 5.0, "r_sr_dn": 5.0},
+                    {"price_da": 50.0, "price_sr_up": 10.0, "price_sr_dn": 4.0, "W": 22.0})
+    revenue_dam, revenue_sr, opex = 24 * 50 * 20, 24 * (10 * 5 + 4 * 5), 24 * 10 * 20   # 24,000, 1,680, 4,800
+    market = opex - revenue_dam - revenue_sr                                            # -20,880
+    shortfall = 24 * 2.0 * 10 * 3                                                       # 1,440
+    assert_settlement(record, revenue_dam_eur=revenue_dam, revenue_sr_eur=revenue_sr, cost_opex_eur=opex,
+                      market_cost_eur=market, penalty_reserve_eur=shortfall, penalty_eur=shortfall,
+                      net_cost_eur=market + shortfall, reserve_up_short_mwh=72.0)
+
+
+@pytest.mark.parametrize("c_heat, price", [(None, 2 * 80.0), (300.0, 300.0)])
+def test_heat_the_hpa_bid_does_not_cover_is_unserved_at_its_price(c_heat, price):
+    # 10 MW_th bought every hour at 80 EUR/MWh_th; the demand needs 12 in hours 1-12 (2
+    # unserved) and 8 in hours 13-24 (it takes the 10 bought). c_heat defaults to twice
+    # the highest tariff.
+    case = tiny_case(td_units=[heat(h_max=100)], hpa=True, tariff=80.0)
+    need = np.where(HOURS <= 12, 12.0, 8.0)
+    record = settle(case, {"h_hpa": 10.0}, {"price_da": 50.0, "H": need}, Penalties(c_heat_eur_per_mwh=c_heat))
+    hpa, unserved = 24 * 80 * 10, price * 2 * 12                                         # 19,200
+    assert_settlement(record, cost_hpa_eur=hpa, market_cost_eur=hpa, penalty_heat_eur=unserved,
+                      penalty_eur=unserved, net_cost_eur=hpa + unserved, unserved_heat_mwh=24.0)
+
+
+def test_a_shortfall_of_energy_and_reserve_and_heat_adds_up():
+    # Hours 1-12: the farm gives 12 MW against a 20 MW bid with a 5 MW up band: 8 MW
+    # deficit at m_def·λ = 100 EUR/MWh and the whole 5 MW band short at 2 x 10 (cheaper
+    # than a further 5 MW deficit); in hours 13-24 the farm gives exactly the bid and its
+    # band (25 MW), so nothing is left over. Heat: 10 MW_th bought, 11 needed.
+    case = tiny_case([wind(om=10, share=0.1)], td_units=[heat(h_max=100)], srm=True, hpa=True, tariff=80.0)
+    available = np.where(HOURS <= 12, 12.0, 25.0)
+    record = settle(case, {"p_da": 20.0, "r_sr_up": 5.0, "h_hpa": 10.0},
+                    {"price_da": 50.0, "price_sr_up": 10.0, "W": available, "H": 11.0},
+                    Penalties(c_heat_eur_per_mwh=200.0))
+    revenue_dam, revenue_sr, hpa = 24 * 50 * 20, 24 * 10 * 5, 24 * 80 * 10
+    opex = 10 * (12 * 12 + 12 * 20)
+    deficit, shortfall, unserved = 12 * 2.0 * 50 * 8, 12 * 2.0 * 10 * 5, 24 * 200.0 * 1
+    market = hpa + opex - revenue_dam - revenue_sr
+    assert_settlement(record, revenue_dam_eur=revenue_dam, revenue_sr_eur=revenue_sr, cost_hpa_eur=hpa,
+                      cost_opex_eur=opex, market_cost_eur=market, penalty_deficit_eur=deficit,
+                      penalty_reserve_eur=shortfall, penalty_heat_eur=unserved,
+                      penalty_eur=deficit + shortfall + unserved, net_cost_eur=market + deficit + shortfall + unserved,
+                      deficit_mwh=96.0, reserve_up_short_mwh=60.0, unserved_heat_mwh=24.0)
