@@ -10,6 +10,7 @@ import pandas as pd
 import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
+from rvpp.data.variants import describe
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.outputs.export import plan_workbook_bytes
 from rvpp.solving.outcome import Outcome
@@ -160,17 +161,9 @@ def case_summary(case: Case) -> None:
 
 
 def run_label(case: Case) -> str:
-    """Short description of a run: strategy, markets, CSP, budget mode, period length."""
-    parts = [case.budgets.strategy, case.markets.label]
-    if case.budgets.overrides:
-        parts.append(f"{len(case.budgets.overrides)} Γ edited")
-    if not case.csp:
-        parts.append("no CSP")
-    if case.budgets.mode != "paper":
-        parts.append("planner-chosen Γ")
-    if case.dt_h != 1.0:
-        parts.append(f"{case.dt_h * 60:g}-min periods")
-    return ", ".join(parts)
+    """Short description of a run (:func:`rvpp.data.variants.describe`), e.g.
+    ``balanced · DAM+SRM+HPA · Γ WF1=12``."""
+    return describe(case)
 
 
 def sidebar(case: Case) -> None:

@@ -21,6 +21,7 @@ PLAN_COLUMNS = {
     "table": st.column_config.TextColumn("Table"),
     "strategy": st.column_config.TextColumn("Strategy"),
     "column": st.column_config.TextColumn("Column"),
+    "variant": st.column_config.TextColumn("Variant solved", help="Strategy, markets and what else the plan changes"),
     "status": st.column_config.TextColumn("Status"),
     "cost_keur": st.column_config.NumberColumn("Cost [kEUR]", format="%.1f"),
     "profit_eur": st.column_config.NumberColumn("Profit [EUR]", format="%.0f"),

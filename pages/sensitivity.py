@@ -15,6 +15,7 @@ ONE_AT_A_TIME = "Chosen sources one at a time"
 COLUMNS = {
     "sources": st.column_config.TextColumn("Sources swept"),
     "gamma": st.column_config.NumberColumn("Γ [periods]"),
+    "variant": st.column_config.TextColumn("Variant solved", help="Strategy, markets and the Γ edits of the plan"),
     "status": st.column_config.TextColumn("Status"),
     "cost_keur": st.column_config.NumberColumn("Cost [kEUR]", format="%.1f"),
     "profit_eur": st.column_config.NumberColumn("Profit [EUR]", format="%.0f"),
