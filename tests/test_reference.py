@@ -109,16 +109,37 @@ def test_plan_tables_carry_the_bands_the_reference_derives(solved, name):
         assert result.summary()["budgets"][name_] == src.gamma
 
 
-@pytest.mark.slow
-def test_budgets_splitting_tied_quarter_hours_match_the_reference(paper_case):
-    # At 15 minutes every hour's band repeats four times, so these Γ split ties: both
-    # models may choose which of the tied quarter-hours deviate.
-    case = with_options(paper_case, dt_h=0.25, date="2025-04-15", strategy="deterministic", rel_gap=GAP,
-                        gammas={"WF1": 2, "PV1": 6, "ED_service": 3, "TD_industry": 5})
-    result = solve(case)
-    assert result.status == "optimal", result.message
-    reference = reference_optimum(case)
-    assert relative_difference(result.objective_eur, reference) <= REL_TOL, (result.objective_eur, reference)
+def tied_wind(paper_case, odd_day_value_at_13: float):
+    """The paper case without its CSP on 2025-04-15, WF1's history 30 MW except at 08:00 and
+    13:00 local, where it alternates 20 / 40 MW by day (13:00: 20 / ``odd_day_value_at_13``).
+
+    Its band then deviates 20 MW at 08:00 and at 13:00 (and nowhere else) and Γ = 1 must
+    pick one of them. The DAM price is 67.3 EUR/MWh at 08:00 and 38.3 at 13:00.
+    """
+    frame = paper_case.history.frame
+    local = frame.index.tz_convert(paper_case.timezone)
+    odd = np.array([d.toordinal() % 2 == 1 for d in local.date])
+    wind = np.full(len(frame), 30.0)
+    wind[local.hour == 8] = np.where(odd, 40.0, 20.0)[local.hour == 8]
+    wind[local.hour == 13] = np.where(odd, odd_day_value_at_13, 20.0)[local.hour == 13]
+    case = paper_case.replace(history=paper_case.history.with_columns({"WF1": wind}))
+    return with_options(case, date="2025-04-15", strategy="deterministic", csp=False, gammas={"WF1": 1},
+                        rel_gap=GAP)
+
+
+def test_a_tie_at_the_budget_boundary_is_broken_in_the_plans_favour_in_both_models(paper_case):
+    tied, untied = tied_wind(paper_case, 40.0), tied_wind(paper_case, 39.9)
+    results = {name: solve(case) for name, case in (("tied", tied), ("untied", untied))}
+    chi = {name: r.units.query("unit == 'WF1'").set_index("t")["chi"] for name, r in results.items()}
+    assert all(r.status == "optimal" for r in results.values())
+    # Tied: losing the 20 MW at 13:00 (t=14, cheap) beats losing them at 08:00 (t=9), the
+    # earlier of the tied periods; once 13:00 deviates a little less, 08:00 must deviate.
+    assert list(chi["tied"][chi["tied"] > 0.5].index) == [14]
+    assert list(chi["untied"][chi["untied"] > 0.5].index) == [9]
+    assert results["untied"].objective_eur < results["tied"].objective_eur - 100.0
+    for name, case in (("tied", tied), ("untied", untied)):
+        reference = reference_optimum(case)
+        assert relative_difference(results[name].objective_eur, reference) <= REL_TOL, (name, reference)
 
 
 def test_heat_without_hpa_is_infeasible_for_both(solved, paper_case):
