@@ -13,14 +13,15 @@ from __future__ import annotations
 import datetime as dt
 import math
 from collections.abc import Iterator, Mapping
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Annotated, Any, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..errors import CaseError
+from ..errors import CaseError, CaseFileError
+from .files import MIB, decode_text, excerpt, inside_folder, read_file, relative_path
 from .history import PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
@@ -34,6 +35,9 @@ Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
 MARKET_NAMES = ("DAM", "SRM", "HPA")
 RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}
 CASE_FILE = "case.yaml"
+MAX_CASE_YAML_BYTES = MIB  # a case.yaml of 100 units is about 80 KiB
+MAX_YAML_DEPTH = 32        # nesting levels (a case uses five)
+MAX_YAML_VALUES = 100_000  # values once aliases are expanded (a case of 100 units holds about 10,000)
 
 
 class _Frozen(BaseModel):
@@ -574,24 +578,120 @@ def _rule(kind: str, ctx: dict, msg: str) -> str:
 
 
 def load_case(path: str | Path) -> Case:
-    """Read a case folder (or its ``case.yaml``) and validate it."""
+    """Read a case folder (or its ``case.yaml``) and validate it.
+
+    The history CSV named by ``history:`` must lie inside the case folder: an absolute
+    path, a ``..`` step or a link out of the folder raises
+    :class:`~rvpp.errors.CasePathError` before any file is opened, so a case is a
+    portable folder and never reads files beside it.
+    """
     path = Path(path)
-    file = path / CASE_FILE if path.is_dir() else path
-    if not file.is_file():
-        raise CaseError(f"no {CASE_FILE} found at {path}")
     try:
-        data = yaml.safe_load(file.read_text(encoding="utf-8"))
+        file = path / CASE_FILE if path.is_dir() else path
+        found = file.is_file()
+    except (OSError, ValueError):  # no permission, a NUL in the name
+        found = False
+    if not found:
+        raise CaseError(f"no {CASE_FILE} found at {excerpt(path, 200)}")
+    data = read_case_yaml(read_file(file, file.name, max_bytes=MAX_CASE_YAML_BYTES), file.name)
+    relative = history_path(data, file.name)
+    history = History.read_csv(inside_folder(file.parent, relative, "history", file.name), source=str(relative))
+    return parse_case(data, history)
+
+
+def history_path(data: Mapping[str, Any], file: str) -> PurePosixPath:
+    """The ``history:`` of a case, checked to stay inside the case folder (nothing is opened)."""
+    return relative_path(data.get("history"), "history", file)
+
+
+def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:
+    """The settings in the bytes of a ``case.yaml`` named ``file`` (not yet validated).
+
+    The file must be UTF-8 text of at most ``MAX_CASE_YAML_BYTES``, nested at most
+    ``MAX_YAML_DEPTH`` levels and at most ``MAX_YAML_VALUES`` values once its aliases
+    are expanded; its top level must be a mapping. Raises :class:`CaseFileError`.
+    """
+    if len(data) > MAX_CASE_YAML_BYTES:
+        raise CaseFileError(f"{file}: is larger than {MAX_CASE_YAML_BYTES // 1024} KiB; a case.yaml is usually "
+                            "a few KiB")
+    text = decode_text(data, file)
+    try:
+        _check_yaml_shape(text, file)
+        loader = _CaseLoader(text)
+        try:
+            loaded = loader.get_single_data()
+        finally:
+            loader.dispose()
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise CaseError(f"{file.name}: not valid YAML{where} ({getattr(exc, 'problem', exc)})") from None
-    if not isinstance(data, Mapping):
-        raise CaseError(f"{file.name}: the top level must be a mapping of settings")
-    history_name = data.get("history")
-    if not isinstance(history_name, str):
-        raise CaseError(f'{file.name}: "history" must name the history CSV file of the case')
-    history = History.read_csv(file.parent / history_name)
-    return parse_case(data, history)
+        problem = getattr(exc, "problem", None) or exc
+        raise CaseFileError(f"{file}: not valid YAML{where} ({excerpt(problem, 120)})") from None
+    if not isinstance(loaded, Mapping):
+        got = "the file is empty" if loaded is None else f"it holds {_kind_of(loaded)}"
+        raise CaseFileError(f"{file}: the top level must be a mapping of settings (name:, markets:, units:, ...); "
+                            f"{got}")
+    return dict(loaded)
+
+
+_YamlBase = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when available: fast and iterative
+
+
+class _CaseLoader(_YamlBase):
+    """PyYAML's safe loader (plain data only: no Python objects)."""
+
+
+def _check_yaml_shape(text: str, file: str) -> None:
+    """Refuse YAML nested too deep or too large once aliases are expanded (a "billion laughs"),
+    from the parser's events, before any value is built."""
+    total = 0
+    sizes: dict[str, int] = {}
+    stack: list[list] = [[None, 0]]  # [anchor, expanded values so far] of each open collection
+    for event in yaml.parse(text, Loader=_YamlBase):
+        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            if len(stack) > MAX_YAML_DEPTH:
+                raise CaseFileError(f"{file}: nested more than {MAX_YAML_DEPTH} levels deep (line "
+                                    f"{event.start_mark.line + 1}); a case needs a few levels")
+            stack.append([event.anchor, 1])
+            added = 1
+        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            anchor, size = stack.pop()
+            if anchor is not None:
+                sizes[anchor] = size
+            stack[-1][1] += size
+            continue
+        elif isinstance(event, yaml.ScalarEvent):
+            if event.anchor is not None:
+                sizes[event.anchor] = 1
+            stack[-1][1] += 1
+            added = 1
+        elif isinstance(event, yaml.AliasEvent):
+            if event.anchor not in sizes:
+                raise CaseFileError(f"{file}: alias *{excerpt(event.anchor)} at line {event.start_mark.line + 1} "
+                                    "refers to a value not defined before it (or to itself)")
+            added = sizes[event.anchor]
+            stack[-1][1] += added
+        else:
+            continue
+        total += added
+        if total > MAX_YAML_VALUES:
+            raise CaseFileError(f"{file}: holds more than {MAX_YAML_VALUES:,} values once its aliases (*name) are "
+                                "expanded; a case holds a few thousand")
+
+
+def _kind_of(value: Any) -> str:
+    """What a YAML value is, in the words of the format: a list, a mapping, text, a number."""
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, str):
+        return "text"
+    if isinstance(value, (list, tuple)):
+        return "a list"
+    if isinstance(value, Mapping):
+        return "a mapping"
+    return "a " + type(value).__name__
 
 
 def save_case(case: Case, folder: str | Path, history_file: str = "history.csv") -> Path:
