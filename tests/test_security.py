@@ -366,3 +366,20 @@ def test_a_csv_header_is_quoted_only_as_a_short_printable_excerpt():
     assert err.problems == ['history.csv: no "timestamp" column (found "tim?estamp_xxxxxxxxxxxxxxxxxx…", '
                             '"price_da")']
     assert "\x1b" not in str(err)
+
+
+def test_server_folders_are_off_unless_the_operator_turns_them_on(monkeypatch):
+    from dashboard import state
+
+    monkeypatch.delenv(state.SERVER_FOLDERS, raising=False)
+    assert not state.server_folders_allowed()
+    with pytest.raises(CasePathError) as info:
+        state.load_folder("/etc")
+    assert info.value.problems == ["loading a case folder from the server's disk is turned off; upload the case "
+                                   "instead (the server's operator can turn folders on by starting it with "
+                                   "RVPP_ALLOW_SERVER_FOLDERS=1)"]
+    for value, allowed in (("0", False), ("yes", False), ("1", True)):
+        monkeypatch.setenv(state.SERVER_FOLDERS, value)
+        assert state.server_folders_allowed() is allowed
+    with pytest.raises(CaseError, match="no shipped case '/etc'"):
+        state.load_shipped("/etc")
