@@ -109,8 +109,8 @@ def decode_text(data: bytes, name: str) -> str:
     """The UTF-8 text of file ``name``; a leading byte-order mark is dropped.
 
     Anything else raises :class:`CaseFileError` saying what the file seems to be, e.g.
-    ``history.csv: not UTF-8 text: byte 1234 (line 5) is 0xE9, which looks like
-    Latin-1/Windows-1252; save the file as UTF-8``.
+    ``history.csv: not UTF-8 text: byte 1234 (line 5, column 17) is 0xE9, which looks
+    like Latin-1/Windows-1252; save the file as UTF-8`` (bytes, lines and columns count from 1).
     """
     kind = sniff(data)
     if kind is not None:
@@ -122,9 +122,10 @@ def decode_text(data: bytes, name: str) -> str:
     except UnicodeDecodeError as exc:
         at = exc.start
         line = data.count(b"\n", 0, at) + 1
+        column = at - data.rfind(b"\n", 0, at)
         guess = "looks like Latin-1/Windows-1252" if _is_cp1252(data) else "is not valid UTF-8"
-        raise CaseFileError(f"{name}: not UTF-8 text: byte {at} (line {line}) is 0x{data[at]:02X}, which "
-                            f"{guess}; save the file as UTF-8") from None
+        raise CaseFileError(f"{name}: not UTF-8 text: byte {at + 1} (line {line}, column {column}) is "
+                            f"0x{data[at]:02X}, which {guess}; save the file as UTF-8") from None
 
 
 def _is_cp1252(data: bytes) -> bool:

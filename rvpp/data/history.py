@@ -42,7 +42,7 @@ class History:
         """Read a history CSV from disk (``source``: the name shown in messages)."""
         path = Path(path)
         source = source or path.name
-        if not path.is_file():
+        if not path.exists():
             raise CaseError(f'history file "{source}" does not exist')
         return cls.from_csv(read_file(path, source), source)
 
