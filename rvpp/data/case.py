@@ -873,12 +873,17 @@ def save_case(case: Case, folder: str | Path, history_file: str = "history.csv")
 
 def parse_markets(text: str) -> dict[str, bool]:
     """``"DAM,SRM"`` -> ``{"srm": True, "hpa": False}``; the DAM is always required."""
+    if not isinstance(text, str):
+        raise CaseError(f"markets={excerpt(text)!r} must be text such as DAM,SRM,HPA")
     names = [part.strip().upper() for part in text.replace("+", ",").split(",") if part.strip()]
+    if not names:
+        raise CaseError(f"markets={excerpt(text)!r} names no market; give a comma-separated subset of "
+                        f"{','.join(MARKET_NAMES)}, e.g. DAM,SRM")
     unknown = [n for n in names if n not in MARKET_NAMES]
     if unknown:
-        raise CaseError(f"markets: unknown market {unknown[0]!r}; choose from {', '.join(MARKET_NAMES)}")
+        raise CaseError(f"markets: unknown market {excerpt(unknown[0])!r}; choose from {', '.join(MARKET_NAMES)}")
     if "DAM" not in names:
-        raise CaseError(f"markets={text!r} must include DAM (the day-ahead market is always on)")
+        raise CaseError(f"markets={excerpt(text)!r} must include DAM (the day-ahead market is always on)")
     return {"srm": "SRM" in names, "hpa": "HPA" in names}
 
 
@@ -914,7 +919,7 @@ def with_options(
         budgets["overrides"] = {**case.budgets.override_map, **gammas}
     if budgets:
         changes["budgets"] = budgets
-    market_changes: dict[str, Any] = parse_markets(markets) if markets else {}
+    market_changes: dict[str, Any] = parse_markets(markets) if markets is not None else {}
     if hpa_flat is not None:
         market_changes["hpa_tariff_eur_per_mwh"] = [hpa_flat] * 24
     if market_changes:
