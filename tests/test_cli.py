@@ -14,6 +14,7 @@ import pytest
 from rvpp import load_case
 from rvpp.settle.audit import audit_export
 from rvpp.cli import main
+from rvpp.outputs.export import PLAN_FILES
 
 from tests.factories import PAPER
 
@@ -264,3 +265,46 @@ def test_the_command_line_runs_as_a_program_with_exit_code_1(tmp_path):
     assert done.returncode == 1
     assert done.stderr == ("error: --gap: 'nan' is not allowed; give a number in [0, 1) "
                            "(see python -m rvpp solve --help)\n")
+
+
+# ----------------------------------------------------------------------------- outputs: nothing stale, nothing half-written
+
+
+def test_an_infeasible_run_leaves_only_its_summary_and_your_own_files(tmp_path, capsys):
+    out = tmp_path / "plan"
+    assert run(capsys, "solve", "--quiet", "--out", str(out))[0] == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(PLAN_FILES)
+    (out / "notes.txt").write_text("my notes")
+    (out / "model.mps").write_text("not rvpp's plan")
+    code, err = run(capsys, "solve", "--no-csp", "--markets", "DAM,SRM", "--quiet", "--out", str(out))
+    assert code == 1 and _one_error(err)[0].startswith("error: infeasible: ")
+    assert sorted(p.name for p in out.iterdir()) == ["model.mps", "notes.txt", "summary.json"]
+    assert json.loads((out / "summary.json").read_text())["status"] == "infeasible"
+    assert (out / "notes.txt").read_text() == "my notes"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]  # no temporary folder left beside it
+
+
+def test_a_failure_while_writing_leaves_the_earlier_plan_as_it_was(tmp_path, paper_solve, monkeypatch):
+    from rvpp.outputs import export
+
+    out = tmp_path / "plan"
+    export.write_plan(paper_solve(), out)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(result, target):
+        raise OSError(28, "No space left on device", str(target))
+
+    monkeypatch.setattr(export, "write_workbook", broken)
+    with pytest.raises(OSError):
+        export.write_plan(paper_solve(strategy="pessimistic"), out)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
+
+
+def test_a_new_output_folder_appears_complete(tmp_path, paper_solve):
+    from rvpp.outputs.export import write_plan
+
+    written = write_plan(paper_solve(), tmp_path / "deep" / "plan")
+    assert [p.name for p in written] == [*(f"{t}.csv" for t in ("market", "units", "csp", "flexibility")),
+                                         "plan.xlsx", "summary.json"]
+    assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["plan"]
