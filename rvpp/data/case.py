@@ -21,7 +21,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import CaseError, CaseFileError
-from .files import MIB, decode_text, excerpt, inside_folder, read_file, relative_path
+from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
 from .history import PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
@@ -438,13 +438,13 @@ class Case(_Frozen):
         known = set(PRICE_COLUMNS) | set(names)
         for source, _ in self.budgets.overrides:
             if source not in known:
-                problems.append(f"budgets.overrides: unknown source {source!r}; sources are "
+                problems.append(f"budgets.overrides: unknown source {excerpt(source)!r}; sources are "
                                 f"{', '.join(PRICE_COLUMNS)} and the unit names ({', '.join(names)})")
         columns = set(self.history.columns)
         for kind, unit in self.units():
             if unit.column not in columns:
-                problems.append(f'{kind} "{unit.name}": history column {unit.column!r} is missing from '
-                                f"{self.history.source} (columns: {', '.join(sorted(columns))})")
+                problems.append(f'{kind} "{unit.name}": history column {excerpt(unit.column)!r} is missing from '
+                                f"{self.history.source} (columns: {excerpt_names(sorted(columns), 20)})")
         for price in PRICE_COLUMNS:
             if price not in columns:
                 problems.append(f"{self.history.source}: price column {price!r} is missing")

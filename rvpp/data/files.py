@@ -95,6 +95,13 @@ def excerpt(value: Any, limit: int = EXCERPT_CHARS) -> str:
     return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
+def excerpt_names(names, shown: int = 8) -> str:
+    """Names for a message (e.g. a CSV header): the first ``shown``, each cut short, quoted."""
+    names = list(names)
+    text = ", ".join(f'"{excerpt(name, 30)}"' for name in names[:shown])
+    return (text + (f" and {len(names) - shown} more" if len(names) > shown else "")) if names else "none"
+
+
 def sniff(data: bytes) -> str | None:
     """What ``data`` seems to be when it is not text, e.g. ``"a PDF document"``; ``None`` for text."""
     for magic, kind in MAGIC:

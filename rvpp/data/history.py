@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import CaseError, CaseFileError, UploadLimitError
-from .files import decode_text, excerpt, read_file
+from .files import decode_text, excerpt, excerpt_names, read_file
 
 PRICE_COLUMNS = ("price_da", "price_sr_up", "price_sr_dn")
 HOUR = pd.Timedelta(hours=1)
@@ -157,7 +157,7 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
         frame = frame.reset_index(names="timestamp")
     frame = frame.set_axis([str(c) for c in frame.columns], axis="columns")
     if "timestamp" not in frame.columns:
-        raise CaseError(f'{source}: no "timestamp" column (found {_names(frame.columns)})')
+        raise CaseError(f'{source}: no "timestamp" column (found {excerpt_names(frame.columns)})')
     if len(frame) == 0:
         raise CaseError(f"{source}: no rows")
     stamps = _parse_timestamps(frame["timestamp"], source)
@@ -188,12 +188,6 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
     out = pd.DataFrame(numeric, index=stamps.tz_convert("UTC"))
     out.index.name = "timestamp"
     return out
-
-
-def _names(columns: pd.Index, shown: int = 8) -> str:
-    """Column names for a message: the first few, each cut short."""
-    names = ", ".join(f'"{excerpt(c, 30)}"' for c in columns[:shown])
-    return names + (f" and {len(columns) - shown} more" if len(columns) > shown else "") if names else "none"
 
 
 def _as_written(column: pd.Series) -> list[pd.Timestamp]:
