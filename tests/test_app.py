@@ -232,7 +232,7 @@ def test_markets_flat_tariff_preset_and_an_invalid_tariff(paper_case, paper_solv
     at.session_state["markets_tariff_1"] = {"edited_rows": {3: {"tariff_eur_per_mwh": -5.0}}, "added_rows": [],
                                             "deleted_rows": []}
     at.run()
-    assert "hpa_tariff_eur_per_mwh.3=-5 must be >= 0" in errors(at)
+    assert "markets: hpa_tariff_eur_per_mwh hour 03:00 = -5 must be >= 0" in errors(at)
     assert case_of(at).markets.hpa_tariff_eur_per_mwh == (70.0,) * 24
     at.switch_page("pages/results.py").run()
     click(at, "results_solve")

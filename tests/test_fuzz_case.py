@@ -172,7 +172,7 @@ def test_run_options_apply_or_are_refused_by_rule(paper_case, hpa_flat, time_lim
 
 
 @pytest.mark.slow
-@settings(max_examples=1500, **FAST)
+@settings(max_examples=800, **FAST)
 @given(data=mutated_cases(), text=damaged_texts())
 def test_many_more_mutations_load_or_are_refused_by_rule(short_history, short_csv, data, text):
     _check_mutation(data, short_history)

@@ -254,8 +254,10 @@ def open_zip(data: bytes, name: str, limits: UploadLimits, expected: str = "a zi
     return archive
 
 
-def unzip(archive: zipfile.ZipFile, member: zipfile.ZipInfo, name: str, budget: UploadBudget) -> bytes:
-    """The inflated bytes of ``member``, counted against the budget while they are read."""
+def unzip(archive: zipfile.ZipFile, member: zipfile.ZipInfo, name: str, budget: UploadBudget,
+          keep: bool = True) -> bytes:
+    """The inflated bytes of ``member``, counted against the budget while they are read
+    (``keep=False``: only counted and checked, nothing kept)."""
     where = f'{name}, member "{excerpt(member.filename, 80)}"'
     chunks = []
     try:
@@ -263,7 +265,8 @@ def unzip(archive: zipfile.ZipFile, member: zipfile.ZipInfo, name: str, budget: 
             while chunk := stream.read(CHUNK_BYTES):
                 budget.count_unzipped(len(chunk), name)
                 budget.check_time(f"unpacking {where}")
-                chunks.append(chunk)
+                if keep:
+                    chunks.append(chunk)
     except zipfile.BadZipFile:
         raise UploadError(f"{where}: is damaged (its data does not match the zip's records)") from None
     except (NotImplementedError, RuntimeError, EOFError, OSError, zlib.error) as exc:

@@ -273,7 +273,7 @@ def _read_sheets(data: bytes, label: str, budget: UploadBudget) -> dict[str, pd.
     limits = budget.limits
     with open_zip(data, label, limits, expected="an Excel workbook (.xlsx)") as archive:
         for member in archive.infolist():
-            unzip(archive, member, label, budget)
+            unzip(archive, member, label, budget, keep=False)
     try:
         book = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True, keep_links=False)
     except Exception as exc:  # openpyxl raises many types for a zip that is not a workbook
