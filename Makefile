@@ -4,6 +4,10 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cksum requirements.txt | cut -d' ' -f1)
 PORT ?= 8501
+# `make run` is the local, single-user dashboard: it listens on this machine only and may load
+# case folders from its disk. To serve others, set ADDRESS=0.0.0.0 FOLDERS=0 (docs/dashboard.md).
+ADDRESS ?= 127.0.0.1
+FOLDERS ?= 1
 
 .PHONY: install run test bench data reproduce clean
 
@@ -17,7 +21,8 @@ $(STAMP): requirements.txt
 install: $(STAMP)
 
 run: install
-	$(BIN)/streamlit run app.py --server.port $(PORT) --server.headless true
+	RVPP_ALLOW_SERVER_FOLDERS=$(FOLDERS) $(BIN)/streamlit run app.py --server.port $(PORT) \
+		--server.address $(ADDRESS) --server.headless true
 
 test: install
 	$(BIN)/python -m pytest -n 2

@@ -10,18 +10,21 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 import streamlit as st
 
 import rvpp
 from rvpp import Case, Result
+from rvpp.errors import CasePathError
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_CASE = ROOT / "data" / "cases" / "paper"
 CASES_DIR = ROOT / "data" / "cases"
 MAX_SAVED_RUNS = 12
 MAX_CACHED_FOLDERS = 16
+SERVER_FOLDERS = "RVPP_ALLOW_SERVER_FOLDERS"  # "1": the Home page may load any case folder on the server
 
 CASE = "case"              # the current, valid case (every edit goes through the case model)
 ORIGIN = "case_origin"     # the case as loaded: what "reset" and the tariff preset go back to
@@ -84,10 +87,32 @@ def load(case: Case, source: str) -> None:
         del st.session_state[key]
 
 
+def server_folders_allowed() -> bool:
+    """Whether the server was started with ``RVPP_ALLOW_SERVER_FOLDERS=1`` (off by default:
+    anyone who can open the dashboard could otherwise read case folders on the server)."""
+    return os.environ.get(SERVER_FOLDERS, "").strip() == "1"
+
+
 def load_folder(folder: str | Path) -> Case:
-    """Load a case folder and make it the current case."""
+    """Load a case folder on the server and make it the current case.
+
+    Refused with :class:`rvpp.errors.CasePathError` unless :func:`server_folders_allowed`.
+    """
+    if not server_folders_allowed():
+        raise CasePathError(
+            "loading a case folder from the server's disk is turned off; upload the case instead (the server's "
+            f"operator can turn folders on by starting it with {SERVER_FOLDERS}=1)")
     case = _load(str(Path(folder).resolve()))
     load(case, source=str(folder))
+    return case
+
+
+def load_shipped(name: str) -> Case:
+    """Load a case shipped with the project (one of :func:`known_case_folders`)."""
+    if name not in known_case_folders():
+        raise rvpp.CaseError(f"no shipped case {name!r}; the shipped cases are {', '.join(known_case_folders())}")
+    case = _load(str(CASES_DIR / Path(name).name))
+    load(case, source=name)
     return case
 
 

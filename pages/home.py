@@ -33,9 +33,10 @@ def load_upload() -> None:
     st.session_state["home_load_problems"] = []
 
 
-def load_folder(folder: str) -> None:
+def load_from(load, name: str) -> None:
+    """Load a shipped case or a server folder with ``load``; keep its problems for the page."""
     try:
-        state.load_folder(folder)
+        load(name)
     except rvpp.CaseError as err:
         st.session_state["home_load_problems"] = err.problems
         return
@@ -89,13 +90,17 @@ else:
     st.caption("One click solves the current case with the balanced budgets of the paper's Table 7.")
 
 st.subheader("Load another case")
-shipped, folder_tab, upload_tab, download_tab = st.tabs(["Shipped cases", "Folder", "Upload", "Download"])
+folders = state.server_folders_allowed()  # off unless the server was started with RVPP_ALLOW_SERVER_FOLDERS=1
+shipped, upload_tab, download_tab, *folder_tab = st.tabs(["Shipped cases", "Upload", "Download",
+                                                          *(["Folder"] if folders else [])])
 with shipped:
     choice = st.selectbox("Case", state.known_case_folders(), key="home_shipped")
-    st.button("Load", key="home_load_shipped", on_click=load_folder, args=(choice,))
-with folder_tab:
-    folder = st.text_input("Case folder on this machine (holding case.yaml)", key="home_folder")
-    st.button("Load folder", key="home_load_folder", on_click=load_folder, args=(folder,), disabled=not folder)
+    st.button("Load", key="home_load_shipped", on_click=load_from, args=(state.load_shipped, choice))
+for tab in folder_tab:
+    with tab:
+        folder = st.text_input("Case folder on this machine (holding case.yaml)", key="home_folder")
+        st.button("Load folder", key="home_load_folder", on_click=load_from, args=(state.load_folder, folder),
+                  disabled=not folder)
 with upload_tab:
     st.file_uploader("A zip of a case folder, case.yaml with its history CSV, or an Excel case workbook",
                      type=UPLOAD_TYPES, accept_multiple_files=True, key="home_upload")

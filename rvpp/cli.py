@@ -1,46 +1,155 @@
 """Command line: ``python -m rvpp solve|data|study ...``.
 
-Bad input ends with a one-line message and exit code 2, never a traceback; a solve
-without a plan (infeasible, solver error) exits with 1.
+Every failure ends with exit code 1 and one line ``error: ...`` that names the option,
+file or field and the rule, never a traceback: a bad option, a case that breaks a rule,
+a file that cannot be read or written, and a solve without a plan (infeasible, solver
+error). Success exits with 0.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import re
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
-from .data.case import STRATEGIES, load_case, with_options
+from .data.case import MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
+from .data.files import excerpt
+from .data.periods import ALLOWED_DT_H
 from .data.variants import describe
 from .errors import RvppError
 
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
+FAILURE = 1
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (``error: --gap: ...``) and exit code 1."""
+
+    def error(self, message: str) -> None:
+        message = re.sub(r"^argument ([^:]+): ", r"\1: ", message)
+        self.exit(FAILURE, f"error: {message} (see {self.prog} --help)\n")
+
+
+@dataclass(frozen=True)
+class Number:
+    """An option's value: a finite number within bounds (``whole``: an integer), as an argparse ``type``.
+
+    Anything else raises :class:`argparse.ArgumentTypeError` naming the value and the
+    allowed range, e.g. ``'nan' is not allowed; give a number > 0 [s]``.
+    """
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+    whole: bool = False
+    unit: str = ""
+
+    def __call__(self, text: str) -> float | int:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{excerpt(text)!r} is not a number; give {self.rule}") from None
+        if not math.isfinite(value) or (self.whole and not value.is_integer()) or not self._within(value):
+            raise argparse.ArgumentTypeError(f"{excerpt(text)!r} is not allowed; give {self.rule}")
+        return int(value) if self.whole else value
+
+    def _within(self, value: float) -> bool:
+        above = self.low is None or (value > self.low if self.low_open else value >= self.low)
+        below = self.high is None or (value < self.high if self.high_open else value <= self.high)
+        return above and below
+
+    @property
+    def rule(self) -> str:
+        kind = "a whole number" if self.whole else "a number"
+        unit = f" [{self.unit}]" if self.unit else ""
+        if self.low is not None and self.high is not None:
+            return (f"{kind} in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}"
+                    f"{')' if self.high_open else ']'}{unit}")
+        if self.low is not None:
+            return f"{kind} {'>' if self.low_open else '>='} {self.low:g}{unit}"
+        return f"a finite {kind[2:]}{unit}"
+
+
+def choice_of(values: tuple[float, ...], unit: str):
+    """An argparse ``type`` accepting one of ``values`` (numbers), e.g. the period lengths."""
+    allowed = ", ".join(f"{v:g}" for v in values)
+
+    def convert(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if value not in values:
+            raise argparse.ArgumentTypeError(f"{excerpt(text)!r} is not allowed; give one of {allowed} [{unit}]")
+        return value
+    return convert
+
+
+def listed(convert, what: str):
+    """An argparse ``type`` for a comma-separated list: every item given, none empty, each through
+    ``convert`` (which may raise ``argparse.ArgumentTypeError`` or ``ValueError``)."""
+    def parse(text: str) -> tuple:
+        items = [part.strip() for part in text.split(",")]
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"is empty; give {what}")
+        empty = [i for i, item in enumerate(items, start=1) if not item]
+        if empty:
+            raise argparse.ArgumentTypeError(f"{excerpt(text)!r}: item {empty[0]} is empty; give {what}")
+        try:
+            return tuple(convert(item) for item in items)
+        except (argparse.ArgumentTypeError, ValueError, RvppError) as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return parse
+
+
+def _market_list(text: str) -> str:
+    """``--markets``: a comma-separated subset of DAM,SRM,HPA including DAM, checked now."""
+    try:
+        parse_markets(text)
+    except RvppError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def path_option(text: str) -> Path:
+    """An argparse ``type`` for a file or folder: an empty value is refused, not read as "."."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty; give a file or folder")
+    return Path(text)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a bad option (1, message already printed)
+        return exc.code if isinstance(exc.code, int) else FAILURE
     if not hasattr(args, "run"):
-        parser.print_help()
-        return 2
+        parser.print_help(sys.stderr)
+        return FAILURE
     try:
         return args.run(args)
     except RvppError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
-        return 2
+        return FAILURE
+    except OSError as exc:  # writing the outputs: a full disk, no permission, a file where a folder belongs
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"error: cannot write{where} ({exc.strerror or exc})", file=sys.stderr)
+        return FAILURE
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m rvpp", description=(
+    parser = Parser(prog="python -m rvpp", description=(
         "Robust day-ahead bids for a renewable-only virtual power plant (DAM, aFRR reserve, heat purchase)."))
     commands = parser.add_subparsers(title="commands")
 
     solve = commands.add_parser("solve", help="compute the plan of one delivery day and export it",
                                 description="Compute the robust plan of one delivery day and write it to --out.")
-    solve.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case folder (default: the paper case)")
+    solve.add_argument("--case", type=path_option, default=DEFAULT_CASE, help="case folder (default: the paper case)")
     solve.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
     solve.add_argument("--strategy", choices=STRATEGIES, help="budget preset (default: the case's)")
     solve.add_argument("--gamma", action="append", default=[], metavar="SOURCE=N",
@@ -49,23 +158,26 @@ def _parser() -> argparse.ArgumentParser:
     solve.add_argument("--budget-mode", choices=("paper", "planner_chosen"),
                        help="paper (default): deviations in the largest-deviation periods; planner_chosen: "
                             "the variant as printed, for teaching")
-    solve.add_argument("--markets", help="comma-separated subset of DAM,SRM,HPA (DAM always)")
+    solve.add_argument("--markets", type=_market_list, help="comma-separated subset of DAM,SRM,HPA (DAM always)")
     solve.add_argument("--no-csp", action="store_true", help="remove every CSP from the portfolio")
-    solve.add_argument("--hpa-flat", type=float, metavar="EUR_PER_MWH", help="flat HPA tariff for every hour")
-    solve.add_argument("--dt", type=float, choices=(1.0, 0.5, 0.25), help="period length in hours")
-    solve.add_argument("--time-limit", type=float, metavar="S", help="solver time limit in seconds")
-    solve.add_argument("--gap", type=float, help="relative MIP gap (default 1e-4)")
-    solve.add_argument("--threads", type=int, help="HiGHS threads (0 = HiGHS default)")
-    solve.add_argument("--out", type=Path, default=Path("out"), help="output folder (default: ./out)")
-    solve.add_argument("--write-mps", type=Path, metavar="FILE", help="also write the MILP as an MPS file")
+    solve.add_argument("--hpa-flat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
+                       help="flat HPA tariff for every hour")
+    solve.add_argument("--dt", type=choice_of(ALLOWED_DT_H, "h"), help="period length in hours: 1, 0.5 or 0.25")
+    solve.add_argument("--time-limit", type=Number(0, low_open=True, unit="s"), metavar="S",
+                       help="solver time limit in seconds")
+    solve.add_argument("--gap", type=Number(0, 1, high_open=True), help="relative MIP gap in [0, 1) (default 1e-4)")
+    solve.add_argument("--threads", type=Number(0, MAX_THREADS, whole=True),
+                       help="HiGHS threads (0 = HiGHS default)")
+    solve.add_argument("--out", type=path_option, default=Path("out"), help="output folder (default: ./out)")
+    solve.add_argument("--write-mps", type=path_option, metavar="FILE", help="also write the MILP as an MPS file")
     solve.add_argument("--quiet", action="store_true", help="print only errors")
     solve.set_defaults(run=_run_solve)
 
     data = commands.add_parser("data", help="build the default dataset")
     data_commands = data.add_subparsers(title="data commands")
     build = data_commands.add_parser("build", help="regenerate the synthetic history of the paper case")
-    build.add_argument("--seed", type=int, help="random seed (default: the published one)")
-    build.add_argument("--out", type=Path, default=DEFAULT_CASE / "history.csv", help="CSV to write")
+    build.add_argument("--seed", type=Number(0, whole=True), help="random seed >= 0 (default: the published one)")
+    build.add_argument("--out", type=path_option, default=DEFAULT_CASE / "history.csv", help="CSV to write")
     build.set_defaults(run=_run_data_build)
 
     from .studies.cli import add_study_commands
@@ -77,16 +189,21 @@ def _parser() -> argparse.ArgumentParser:
 def _parse_gammas(items: list[str]) -> dict[str, int]:
     gammas = {}
     for item in items:
+        shown = excerpt(item)
         name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise RvppError(f"--gamma {item!r} must look like SOURCE=N, e.g. price_da=6 or WF1=3")
+        name = name.strip()
+        if not sep or not name:
+            raise RvppError(f"--gamma {shown!r} must look like SOURCE=N, e.g. price_da=6 or WF1=3")
         try:
             gamma = int(value)
         except ValueError:
-            raise RvppError(f"--gamma {item!r}: N={value!r} must be a whole number of periods") from None
+            raise RvppError(f"--gamma {shown!r}: N={excerpt(value)!r} must be a whole number of periods") from None
         if gamma < 0:
-            raise RvppError(f"--gamma {item!r}: N={gamma} must be >= 0")
-        gammas[name.strip()] = gamma
+            raise RvppError(f"--gamma {shown!r}: N={gamma} must be >= 0")
+        if name in gammas:
+            raise RvppError(f"--gamma gives {excerpt(name)!r} twice ({name}={gammas[name]} and {name}={gamma}); "
+                            "keep one")
+        gammas[name] = gamma
     return gammas
 
 
@@ -108,18 +225,16 @@ def _run_solve(args: argparse.Namespace) -> int:
     result = solve(case, progress=say)
     written = write_plan(result, args.out)
     if not args.quiet:
-        print(_describe(result), file=sys.stderr)
+        if result.has_plan:
+            print(_describe(result), file=sys.stderr)
         print(f"wrote {', '.join(p.name for p in written)} to {args.out}", file=sys.stderr)
     if not result.has_plan:
-        if args.quiet:
-            print(f"error: {result.status}: {result.message}", file=sys.stderr)
-        return 1
+        print(f"error: {result.status}: {result.message}", file=sys.stderr)
+        return FAILURE
     return 0
 
 
 def _describe(result) -> str:
-    if not result.has_plan:
-        return f"status {result.status}: {result.message}"
     gap = f"{result.mip_gap:.2e}" if result.mip_gap is not None else "n/a"
     return (f"status {result.status}; profit {result.objective_eur:,.0f} EUR (cost {result.cost_keur:.1f} kEUR); "
             f"MIP gap {gap}; build {result.build_s:.2f} s, solve {result.solve_s:.2f} s")

@@ -27,5 +27,24 @@ class CaseError(RvppError):
         return "\n".join(lines)
 
 
+class CaseFileError(CaseError):
+    """A file of a case is not what it should be: not UTF-8 text (a zip, a workbook, a PDF,
+    Latin-1 or UTF-16 text), not valid YAML or CSV, too large, or a key written twice."""
+
+
+class CasePathError(CaseError):
+    """A path leaves the case: an absolute path, a ``..`` step or a link out of the case
+    folder or the upload; or a folder on the server asked for while that is turned off."""
+
+
+class UploadError(CaseError):
+    """Uploaded files do not make one case: none, several, a damaged or encrypted zip."""
+
+
+class UploadLimitError(UploadError):
+    """An upload costs more than allowed: bytes, unzipped bytes, rows or columns of
+    history, or time spent reading it (:class:`rvpp.data.files.UploadLimits`)."""
+
+
 class ModelError(RvppError):
     """The optimisation could not produce a plan (infeasible, solver failure)."""

@@ -141,7 +141,11 @@ def test_home_upload_of_a_broken_case_is_explained_and_a_good_one_loads(paper_ca
     assert case_of(at).name == "uploaded" and case_of(at).replace(name="paper") == paper_case
 
 
-def test_home_loads_a_case_folder(tmp_path, paper_case):
+def test_home_loads_a_case_folder_only_when_the_server_allows_it(tmp_path, paper_case, monkeypatch):
+    monkeypatch.delenv("RVPP_ALLOW_SERVER_FOLDERS", raising=False)
+    at = open_app()
+    assert "home_folder" not in [t.key for t in at.text_input]
+    monkeypatch.setenv("RVPP_ALLOW_SERVER_FOLDERS", "1")
     at = open_app()
     at.text_input(key="home_folder").input(str(tmp_path / "missing")).run()
     click(at, "home_load_folder")
@@ -153,6 +157,9 @@ def test_home_loads_a_case_folder(tmp_path, paper_case):
     click(at, "home_load_folder")
     assert not errors(at)
     assert case_of(at) == mine
+    click(at, "home_load_shipped")
+    assert not errors(at)
+    assert case_of(at) == paper_case
 
 
 # ----------------------------------------------------------------------------- Portfolio
@@ -225,7 +232,7 @@ def test_markets_flat_tariff_preset_and_an_invalid_tariff(paper_case, paper_solv
     at.session_state["markets_tariff_1"] = {"edited_rows": {3: {"tariff_eur_per_mwh": -5.0}}, "added_rows": [],
                                             "deleted_rows": []}
     at.run()
-    assert "hpa_tariff_eur_per_mwh.3=-5 must be >= 0" in errors(at)
+    assert "markets: hpa_tariff_eur_per_mwh hour 03:00 = -5 must be >= 0" in errors(at)
     assert case_of(at).markets.hpa_tariff_eur_per_mwh == (70.0,) * 24
     at.switch_page("pages/results.py").run()
     click(at, "results_solve")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import gzip
 import shutil
 
 import numpy as np
@@ -11,6 +12,7 @@ import pytest
 import yaml
 
 from rvpp import CaseError, load_case, prepare, save_case, with_options
+from rvpp.errors import CaseFileError
 from rvpp.data.case import parse_case
 
 from tests.factories import PAPER
@@ -62,7 +64,7 @@ BAD_INPUTS = {
         "budgets.overrides: unknown source 'WF9'"),
     "negative budget": (
         lambda d: d["budgets"].update(overrides={"WF1": -1}),
-        "budgets: overrides.0.1=-1 must be >= 0"),
+        "budgets: overrides.WF1=-1 must be >= 0 [periods]"),
     "unknown field": (
         lambda d: unit(d, "pv", "PV3").update(p_max_mv=50),
         'pv "PV3": unknown field "p_max_mv"'),
@@ -83,7 +85,7 @@ BAD_INPUTS = {
         "timezone='Europe/Atlantis' is not an IANA time zone"),
     "tariff with the wrong length": (
         lambda d: d["markets"].update(hpa_tariff_eur_per_mwh=[70] * 23),
-        "markets: hpa_tariff_eur_per_mwh=[23 values] must have 24 values (has 23)"),
+        "markets: hpa_tariff_eur_per_mwh has 23 values; give 24, one per clock hour 00:00 to 23:00"),
     "percentiles swapped": (
         lambda d: d["uncertainty"].update(q_lo=0.8, q_hi=0.2),
         "uncertainty: q_lo=0.8 must be < 0.5"),
@@ -103,6 +105,79 @@ BAD_INPUTS = {
         lambda d: d["markets"].update(dam=False),
         "markets: dam=False must be True"),
 }
+
+
+# Inputs whose every problem is known: the messages must be exactly these lines, named as
+# written in case.yaml (no internal index, no second line that is not true).
+EXACT = {
+    "a negative tariff hour": (
+        lambda d: d["markets"]["hpa_tariff_eur_per_mwh"].__setitem__(7, -5),
+        ["markets: hpa_tariff_eur_per_mwh hour 07:00 = -5 must be >= 0"]),
+    "tariffs that are not numbers": (
+        lambda d: d["markets"].update(hpa_tariff_eur_per_mwh=["x", float("nan"), True] + [70] * 21),
+        ["markets: hpa_tariff_eur_per_mwh hour 00:00 = 'x' must be a number",
+         "markets: hpa_tariff_eur_per_mwh hour 01:00 = nan must be a finite number",
+         "markets: hpa_tariff_eur_per_mwh hour 02:00 = True must be a number"]),
+    "a tariff that is not a list": (
+        lambda d: d["markets"].update(hpa_tariff_eur_per_mwh=70),
+        ["markets: hpa_tariff_eur_per_mwh must be a list of 24 tariffs [EUR/MWh_th], one per clock hour 00:00 to "
+         "23:00; got a number"]),
+    "a budget override named by its source": (
+        lambda d: d["budgets"].update(overrides={"WF1": 3, "PV2": -1, "price_da": 2.5}),
+        ["budgets: overrides.PV2=-1 must be >= 0 [periods]",
+         "budgets: overrides.price_da=2.5 must be a whole number [periods]"]),
+    "overrides written as a list": (
+        lambda d: d["budgets"].update(overrides=["WF1", 3]),
+        ["budgets: overrides must be a mapping of source: Γ [periods], e.g. {price_da: 6, WF1: 3}; got a list"]),
+    "no units section": (
+        lambda d: d.pop("units"),
+        ["units: section is required; list the units of the case under wind, pv, csp, ed, td"]),
+    "an empty units section": (
+        lambda d: d.update(units={}),
+        ["units: no unit is listed; a case needs at least one unit under wind, pv, csp, ed, td"]),
+    "every unit list empty": (
+        lambda d: d.update(units={"wind": [], "pv": None, "csp": []}),
+        ["units: no unit is listed; a case needs at least one unit under wind, pv, csp, ed, td"]),
+    "a blank markets section": (
+        lambda d: d.update(markets=None),
+        ["markets: section is empty; it needs at least hpa_tariff_eur_per_mwh"]),
+    "a section that is a list": (
+        lambda d: d.update(uncertainty=[1, 2]),
+        ["uncertainty: must be a mapping of fields; got a list"]),
+    "a breakpoint located by point and coordinate": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(breakpoints=[[0, 0], [19, "high"], [140, 0.4]]),
+        ['csp "CSP1": power_block.breakpoints point 2 efficiency=\'high\' must be a number']),
+    "a unit without a name is located by its place in the list": (
+        lambda d: d["units"]["pv"][1].pop("name"),
+        ["units.pv item 2: name is required"]),
+    "a unit that is not a mapping": (
+        lambda d: d["units"]["ed"].append("ED4"),
+        ["units.ed item 4: must be a mapping of fields (name: ..., ...); got text"]),
+    "a number where text belongs": (
+        lambda d: d.update(name=2025),
+        ["name=2025 must be text (put it in quotes if it looks like a number or a date)"]),
+    "a delivery date written as a number": (
+        lambda d: d.update(delivery_date=0),
+        ["delivery_date=0 must be a date such as 2025-03-18"]),
+    "a huge number is shown cut short": (
+        lambda d: unit(d, "wind", "WF1").update(ramp_up_mw_per_min="9" * 400),
+        ['wind "WF1": ramp_up_mw_per_min=\'' + "9" * 39 + '…\' must be a finite number']),
+    "threads beyond any machine": (
+        lambda d: d["solver"].update(threads=10 ** 30),
+        ["solver: threads=" + "1" + "0" * 30 + " must be <= 1024"]),
+}
+
+
+@pytest.mark.parametrize("label", list(EXACT))
+def test_messages_name_what_the_user_wrote_and_nothing_else(raw, paper_case, label):
+    edit, expected = EXACT[label]
+    assert problems_of(raw, paper_case.history, edit) == expected
+
+
+def test_a_blank_optional_section_means_its_defaults(raw, paper_case):
+    data = copy.deepcopy(raw)
+    data["solver"] = None
+    assert parse_case(data, paper_case.history).solver == paper_case.solver
 
 
 @pytest.mark.parametrize("label", list(BAD_INPUTS))
@@ -208,3 +283,101 @@ def test_a_case_survives_pickling_for_worker_processes(paper_case):
     assert again == paper_case and hash(again) == hash(paper_case)
     assert again.history.frame.equals(paper_case.history.frame)
     assert again.history.source == paper_case.history.source
+
+
+# ----------------------------------------------------------------------------- files that are not what they should be
+
+
+def _folder(tmp_path, case_yaml: bytes | None = None, history: bytes | None = None):
+    folder = tmp_path / "case"
+    shutil.copytree(PAPER, folder)
+    if case_yaml is not None:
+        (folder / "case.yaml").write_bytes(case_yaml)
+    if history is not None:
+        (folder / "history.csv").write_bytes(history)
+    return folder
+
+
+def _message(folder) -> list[str]:
+    with pytest.raises(CaseFileError) as info:
+        load_case(folder)
+    return info.value.problems
+
+
+YAML_BYTES = (PAPER / "case.yaml").read_bytes()
+HISTORY_BYTES = (PAPER / "history.csv").read_bytes()
+
+
+def test_latin1_text_is_named_with_its_byte_and_line(tmp_path):
+    text = YAML_BYTES.replace(b"description: >-", "description: >-\n  Sevilla, año 2025".encode("latin-1"), 1)
+    at = text.index(b"\xf1")
+    lines = text[:at].split(b"\n")
+    assert lines[-1] == b"  Sevilla, a"
+    assert _message(_folder(tmp_path, case_yaml=text)) == [
+        f"case.yaml: not UTF-8 text: byte {at + 1} (line {len(lines)}, column 13) is 0xF1, which looks like Latin-1/Windows-1252; "
+        "save the file as UTF-8"]
+
+
+@pytest.mark.parametrize("where, data, seems", [
+    ("case.yaml", YAML_BYTES.decode().encode("utf-16"), "UTF-16 text"),
+    ("case.yaml", b"%PDF-1.7\n%\xe2\xe3", "a PDF document"),
+    ("history.csv", b"PK\x03\x04" + b"\0" * 40, "a zip archive (an Excel .xlsx workbook is one too)"),
+    ("history.csv", gzip.compress(HISTORY_BYTES[:1000]), "a gzip archive"),
+    ("history.csv", HISTORY_BYTES[:200] + b"\0\0\0" + HISTORY_BYTES[200:400], "binary data (it holds NUL bytes)"),
+])
+def test_a_file_that_is_not_text_is_named_for_what_it_seems(tmp_path, where, data, seems):
+    folder = _folder(tmp_path, **{"case_yaml" if where == "case.yaml" else "history": data})
+    assert _message(folder) == [f"{where}: is {seems}, not UTF-8 text"]
+
+
+def test_a_workbook_given_as_the_case_file_is_named(tmp_path, paper_case):
+    from rvpp.outputs.workbook import write_case_workbook
+
+    book = tmp_path / "case.xlsx"
+    write_case_workbook(paper_case.replace(history=paper_case.history), book)
+    assert _message(book) == ["case.xlsx: is a zip archive (an Excel .xlsx workbook is one too), not UTF-8 text"]
+
+
+def test_a_byte_order_mark_and_windows_line_ends_just_work(tmp_path, paper_case):
+    bom = b"\xef\xbb\xbf"
+    folder = _folder(tmp_path, case_yaml=bom + YAML_BYTES.replace(b"\n", b"\r\n"),
+                     history=bom + HISTORY_BYTES.replace(b"\n", b"\r\n"))
+    assert load_case(folder) == paper_case
+
+
+def test_a_key_written_twice_is_refused_with_both_lines(tmp_path):
+    text = YAML_BYTES.decode()
+    first = text.index("  kappa: 0.3")
+    twice = text.replace("  kappa: 0.3\n", "  kappa: 0.3\n  kappa: 0.5\n", 1)
+    line = text[:first].count("\n") + 1
+    assert _message(_folder(tmp_path, case_yaml=twice.encode())) == [
+        f'case.yaml: key "kappa" is written twice in one mapping (lines {line} and {line + 1}); keep one']
+    deep = text.replace("        e_min_mwh_th: 110\n", "        e_min_mwh_th: 110\n        e_min_mwh_th: 120\n", 1)
+    line = text[:text.index("        e_min_mwh_th: 110")].count("\n") + 1
+    assert _message(_folder(tmp_path / "deep", case_yaml=deep.encode())) == [
+        f'case.yaml: key "e_min_mwh_th" is written twice in one mapping (lines {line} and {line + 1}); keep one']
+
+
+def test_a_yaml_merge_key_may_be_overridden_on_purpose(tmp_path):
+    text = YAML_BYTES.decode().replace("solver:\n", "solver:\n  <<: &base {time_limit_s: 60, threads: 2}\n", 1)
+    assert "  time_limit_s: 120\n" in text
+    solver = load_case(_folder(tmp_path, case_yaml=text.encode())).solver
+    assert (solver.time_limit_s, solver.threads) == (120, 0)
+
+
+@pytest.mark.parametrize("case_yaml, history, expected", [
+    (b"", None, "case.yaml: the top level must be a mapping of settings (name:, markets:, units:, ...); "
+                "the file is empty"),
+    (b"- a\n- b\n", None, "case.yaml: the top level must be a mapping of settings (name:, markets:, units:, ...); "
+                          "it holds a list"),
+    (None, b"", "history.csv: is empty; a history CSV starts with a header row such as "
+                "timestamp,price_da,price_sr_up,price_sr_dn,..."),
+])
+def test_empty_and_shapeless_files_are_named(tmp_path, case_yaml, history, expected):
+    assert _message(_folder(tmp_path, case_yaml=case_yaml, history=history)) == [expected]
+
+
+def test_a_history_that_is_a_folder_is_named(tmp_path):
+    folder = _folder(tmp_path, case_yaml=YAML_BYTES.replace(b"history: history.csv", b"history: data"))
+    (folder / "data").mkdir()
+    assert _message(folder) == ["data: is a folder, not a file"]

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import shutil
+import subprocess
+import sys
 
 import openpyxl
 import pandas as pd
@@ -11,6 +14,7 @@ import pytest
 from rvpp import load_case
 from rvpp.settle.audit import audit_export
 from rvpp.cli import main
+from rvpp.outputs.export import PLAN_FILES
 
 from tests.factories import PAPER
 
@@ -87,11 +91,11 @@ def test_no_csp_and_no_hpa_names_the_missing_heat_source(tmp_path, capsys):
     (["--date", "2031-01-01"], "is not covered"),
     (["--date", "18/03/2025"], "delivery_date='18/03/2025' must be a date"),
     (["--case", "does/not/exist"], "no case.yaml found"),
-    (["--hpa-flat", "-5"], "must be >= 0"),
+    (["--hpa-flat", "-5"], "--hpa-flat: '-5' is not allowed; give a number >= 0 [EUR/MWh_th]"),
 ])
 def test_bad_input_ends_with_a_message_not_a_traceback(tmp_path, capsys, args, message):
     code, err = run(capsys, "solve", *args, "--quiet", "--out", str(tmp_path / "o"))
-    assert code == 2
+    assert code == 1
     assert message in err and "Traceback" not in err
 
 
@@ -99,7 +103,7 @@ def test_unwritable_output_is_reported(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("x")
     code, err = run(capsys, "solve", "--quiet", "--out", str(blocker / "sub"))
-    assert code == 2 and err.startswith("error:") and "Traceback" not in err
+    assert code == 1 and err.startswith("error:") and "Traceback" not in err
 
 
 def test_data_build_regenerates_the_committed_history(tmp_path, capsys):
@@ -108,3 +112,199 @@ def test_data_build_regenerates_the_committed_history(tmp_path, capsys):
     assert code == 0, err
     assert out.read_text() == (PAPER / "history.csv").read_text()
     assert "9504 hours" in err
+
+
+# ----------------------------------------------------------------------------- a corpus of bad input
+
+
+YAML = (PAPER / "case.yaml").read_text(encoding="utf-8")
+
+
+def _case(tmp_path, case_yaml: str | bytes | None = None, history: bytes | None = None) -> str:
+    """A copy of the paper case with its case.yaml or history replaced."""
+    folder = tmp_path / "case"
+    shutil.copytree(PAPER, folder)
+    if case_yaml is not None:
+        (folder / "case.yaml").write_bytes(case_yaml.encode() if isinstance(case_yaml, str) else case_yaml)
+    if history is not None:
+        (folder / "history.csv").write_bytes(history)
+    return str(folder)
+
+
+# (arguments, words the message must hold): every one ends with exit code 1 and "error: ...".
+# A "{case}" argument is replaced by a case folder built from the entry's case.yaml / history.
+SOLVE = [
+    (["--time-limit", "0"], "--time-limit: '0' is not allowed; give a number > 0 [s]"),
+    (["--time-limit", "inf"], "--time-limit: 'inf' is not allowed; give a number > 0 [s]"),
+    (["--time-limit", "nan"], "--time-limit: 'nan' is not allowed"),
+    (["--time-limit", "ten"], "--time-limit: 'ten' is not a number; give a number > 0 [s]"),
+    (["--gap", "-1"], "--gap: '-1' is not allowed; give a number in [0, 1)"),
+    (["--gap", "nan"], "--gap: 'nan' is not allowed; give a number in [0, 1)"),
+    (["--gap", "1"], "--gap: '1' is not allowed; give a number in [0, 1)"),
+    (["--threads", "-3"], "--threads: '-3' is not allowed; give a whole number in [0, 1024]"),
+    (["--threads", "1.5"], "--threads: '1.5' is not allowed; give a whole number in [0, 1024]"),
+    (["--threads", "99999"], "--threads: '99999' is not allowed; give a whole number in [0, 1024]"),
+    (["--dt", "2"], "--dt: '2' is not allowed; give one of 1, 0.5, 0.25 [h]"),
+    (["--dt", "quarter"], "--dt: 'quarter' is not allowed; give one of 1, 0.5, 0.25 [h]"),
+    (["--hpa-flat", "-10"], "--hpa-flat: '-10' is not allowed; give a number >= 0 [EUR/MWh_th]"),
+    (["--hpa-flat", "nan"], "--hpa-flat: 'nan' is not allowed; give a number >= 0 [EUR/MWh_th]"),
+    (["--hpa-flat", "inf"], "--hpa-flat: 'inf' is not allowed"),
+    (["--markets", ""], "--markets: markets='' names no market; give a comma-separated subset of DAM,SRM,HPA"),
+    (["--markets", ","], "--markets: markets=',' names no market"),
+    (["--markets", "DAM,IDM"], "--markets: markets: unknown market 'IDM'; choose from DAM, SRM, HPA"),
+    (["--strategy", "cautious"], "--strategy: invalid choice: 'cautious'"),
+    (["--gamma", "WF1=3", "--gamma", "WF1=4"], "--gamma gives 'WF1' twice (WF1=3 and WF1=4); keep one"),
+    (["--gamma", "=3"], "--gamma '=3' must look like SOURCE=N"),
+    (["--gamma", "WF1=-2"], "--gamma 'WF1=-2': N=-2 must be >= 0"),
+    (["--date", "2025-02-30"], "delivery_date='2025-02-30' must be a date such as 2025-03-18"),
+    (["--date", ""], "delivery_date='' must be a date such as 2025-03-18"),
+    (["--case", ""], "--case: is empty; give a file or folder"),
+    (["--out", ""], "--out: is empty; give a file or folder"),
+    (["--frobnicate"], "unrecognized arguments: --frobnicate"),
+]
+CASE_FILES = [
+    ("units section missing", YAML[:YAML.index("units:")], None,
+     "units: section is required; list the units of the case under wind, pv, csp, ed, td"),
+    ("a key written twice", YAML.replace("  kappa: 0.3\n", "  kappa: 0.3\n  kappa: 0.4\n"), None,
+     'key "kappa" is written twice in one mapping'),
+    ("latin-1", YAML.replace("name: paper", "name: año").encode("latin-1"), None,
+     "case.yaml: not UTF-8 text"),
+    ("utf-16", YAML.encode("utf-16"), None, "case.yaml: is UTF-16 text, not UTF-8 text"),
+    ("a zip as history", None, b"PK\x03\x04" + bytes(100), "history.csv: is a zip archive"),
+    ("history outside the folder", YAML.replace("history: history.csv", "history: /etc/hostname"), None,
+     'case.yaml: history "/etc/hostname" is an absolute path'),
+    ("a negative tariff hour", YAML.replace("[70, 70, 70, 70, 70, 70, 85,", "[70, 70, 70, 70, 70, 70, -85,"), None,
+     "markets: hpa_tariff_eur_per_mwh hour 06:00 = -85 must be >= 0"),
+    ("a budget on a source that does not exist", YAML.replace("overrides: {}", "overrides: {WF9: 3}"), None,
+     "budgets.overrides: unknown source 'WF9'"),
+    ("not YAML", "name: [unclosed\n", None, "case.yaml: not valid YAML at line 2"),
+]
+
+
+def _one_error(err: str) -> list[str]:
+    lines = err.strip().splitlines()
+    assert lines and lines[0].startswith("error: "), err
+    assert all(line.startswith("  - ") for line in lines[1:]), err
+    assert "Traceback" not in err
+    return lines
+
+
+@pytest.mark.parametrize("args, words", SOLVE, ids=[" ".join(a) for a, _ in SOLVE])
+def test_a_bad_option_is_one_named_error_and_writes_nothing(tmp_path, capsys, args, words):
+    out = tmp_path / "o"
+    code, err = run(capsys, "solve", "--out", str(out), "--quiet", *args)
+    assert code == 1
+    assert words in _one_error(err)[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("label, case_yaml, history, words", CASE_FILES, ids=[c[0] for c in CASE_FILES])
+def test_a_bad_case_file_is_one_named_error_and_writes_nothing(tmp_path, capsys, label, case_yaml, history, words):
+    out = tmp_path / "o"
+    code, err = run(capsys, "solve", "--case", _case(tmp_path, case_yaml, history), "--out", str(out), "--quiet")
+    assert code == 1
+    assert words in "\n".join(_one_error(err))
+    assert not out.exists()
+
+
+STUDY = [
+    (["--strategies", ""], "--strategies: is empty; give a comma-separated subset of deterministic,optimistic"),
+    (["--strategies", ","], "--strategies: ',': item 1 is empty"),
+    (["--strategies", "balanced,,optimistic"], "item 2 is empty"),
+    (["--strategies", "cautious"], "--strategies: unknown 'cautious'; choose from deterministic, optimistic"),
+    (["--gammas", ""], "--gammas: is empty; give whole numbers >= 0 such as 0,6,12"),
+    (["--gammas", "0,-6"], "--gammas: '-6' is not allowed; give a whole number >= 0"),
+    (["--gammas", "1.5"], "--gammas: '1.5' is not allowed; give a whole number >= 0"),
+    (["--sources", ","], "--sources: ',': item 1 is empty"),
+    (["--market-sets", ""], "--market-sets: is empty"),
+    (["--market-sets", "SRM"], "--market-sets: markets='SRM' must include DAM"),
+    (["--hpa-prices", "nan"], "--hpa-prices: 'nan' is not allowed; give a number >= 0 [EUR/MWh_th]"),
+    (["--scenarios", "0"], "--scenarios: '0' is not allowed; give a whole number >= 1"),
+    (["--test-days", "0"], "--test-days: '0' is not allowed; give a whole number >= 1"),
+    (["--test-days", "nan"], "--test-days: 'nan' is not allowed"),
+    (["--seed", "-1"], "--seed: '-1' is not allowed; give a whole number >= 0"),
+    (["--seed", "1.5"], "--seed: '1.5' is not allowed"),
+    (["--sp-time-limit", "0"], "--sp-time-limit: '0' is not allowed; give a number > 0 [s]"),
+    (["--time-limit", "-1"], "--time-limit: '-1' is not allowed; give a number > 0 [s]"),
+    (["--m-def", "-1"], "--m-def: '-1' is not allowed; give a number >= 0"),
+    (["--m-sur", "nan"], "--m-sur: 'nan' is not allowed; give a number >= 0"),
+    (["--m-sr", "inf"], "--m-sr: 'inf' is not allowed; give a number >= 0"),
+    (["--c-heat", "-5"], "--c-heat: '-5' is not allowed; give a number >= 0 [EUR/MWh_th]"),
+    (["--workers", "0"], "--workers: '0' is not allowed; give a whole number >= 1"),
+    (["--scheduler", "foo"], "--scheduler: 'foo' is neither processes, serial, local nor a scheduler address"),
+    (["--dt", "0.3"], "--dt: '0.3' is not allowed; give one of 1, 0.5, 0.25 [h]"),
+]
+
+
+@pytest.mark.parametrize("args, words", STUDY, ids=[" ".join(a) for a, _ in STUDY])
+def test_a_bad_study_option_is_one_named_error_and_writes_nothing(tmp_path, capsys, args, words):
+    out = tmp_path / "o"
+    code, err = run(capsys, "study", "sensitivity", "--out", str(out), "--quiet", *args)
+    assert code == 1
+    assert words in _one_error(err)[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    ([], "usage: python -m rvpp"),
+    (["solve", "--help"], "usage: python -m rvpp solve"),
+    (["data", "build", "--seed", "-1"], "--seed: '-1' is not allowed; give a whole number >= 0"),
+    (["study"], "the following arguments are required: name"),
+])
+def test_usage_and_help(capsys, args, words):
+    code = main(args)
+    captured = capsys.readouterr()
+    assert code == (0 if "--help" in args else 1)
+    assert words in captured.out + captured.err and "Traceback" not in captured.err
+
+
+def test_the_command_line_runs_as_a_program_with_exit_code_1(tmp_path):
+    """The same as a user's shell sees it: exit status, one line, no traceback."""
+    done = subprocess.run([sys.executable, "-m", "rvpp", "solve", "--gap", "nan", "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, cwd=PAPER.parents[2], timeout=120)
+    assert done.returncode == 1
+    assert done.stderr == ("error: --gap: 'nan' is not allowed; give a number in [0, 1) "
+                           "(see python -m rvpp solve --help)\n")
+
+
+# ----------------------------------------------------------------------------- outputs: nothing stale, nothing half-written
+
+
+def test_an_infeasible_run_leaves_only_its_summary_and_your_own_files(tmp_path, capsys):
+    out = tmp_path / "plan"
+    assert run(capsys, "solve", "--quiet", "--out", str(out))[0] == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(PLAN_FILES)
+    (out / "notes.txt").write_text("my notes")
+    (out / "model.mps").write_text("not rvpp's plan")
+    code, err = run(capsys, "solve", "--no-csp", "--markets", "DAM,SRM", "--quiet", "--out", str(out))
+    assert code == 1 and _one_error(err)[0].startswith("error: infeasible: ")
+    assert sorted(p.name for p in out.iterdir()) == ["model.mps", "notes.txt", "summary.json"]
+    assert json.loads((out / "summary.json").read_text())["status"] == "infeasible"
+    assert (out / "notes.txt").read_text() == "my notes"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]  # no temporary folder left beside it
+
+
+def test_a_failure_while_writing_leaves_the_earlier_plan_as_it_was(tmp_path, paper_solve, monkeypatch):
+    from rvpp.outputs import export
+
+    out = tmp_path / "plan"
+    export.write_plan(paper_solve(), out)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(result, target):
+        raise OSError(28, "No space left on device", str(target))
+
+    monkeypatch.setattr(export, "write_workbook", broken)
+    with pytest.raises(OSError):
+        export.write_plan(paper_solve(strategy="pessimistic"), out)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
+
+
+def test_a_new_output_folder_appears_complete(tmp_path, paper_solve):
+    from rvpp.outputs.export import write_plan
+
+    written = write_plan(paper_solve(), tmp_path / "deep" / "plan")
+    assert [p.name for p in written] == [*(f"{t}.csv" for t in ("market", "units", "csp", "flexibility")),
+                                         "plan.xlsx", "summary.json"]
+    assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["plan"]

@@ -156,7 +156,7 @@ def test_out_of_sample_command_on_a_second_date(tmp_path):
 
 def test_bad_study_options_end_with_a_message(tmp_path, capsys):
     assert main(["study", "sensitivity", "--gammas", "0,30", "--out", str(tmp_path), "--quiet",
-                 "--scheduler", "serial"]) == 2
+                 "--scheduler", "serial"]) == 1
     assert "outside 0..24" in capsys.readouterr().err
 
 

@@ -97,7 +97,7 @@ def test_case_workbook_round_trips(case):
 
 
 def test_a_broken_workbook_is_explained(case):
-    with pytest.raises(rvpp.CaseError, match="cannot be read as an Excel workbook"):
+    with pytest.raises(rvpp.CaseError, match=r"cannot be read as an Excel workbook \(.xlsx\) \(it seems to be text"):
         workbook.read_case_workbook(b"not a workbook", label="plan.xlsx")
     buffer = io.BytesIO()
     with pd.ExcelWriter(buffer, engine="openpyxl") as writer:
@@ -119,12 +119,12 @@ def test_yaml_and_csv_upload(case):
     assert bundle.read_case_files(files) == case
     with pytest.raises(rvpp.CaseError) as err:
         bundle.read_case_files({"case.yaml": files["case.yaml"]})
-    assert 'history file "history.csv" does not exist' in err.value.problems[0]
+    assert err.value.problems[0] == 'history file "history.csv" is not among the uploaded files'
     assert err.value.problems[-1] == "the files uploaded are: case.yaml"
 
 
 def test_broken_uploads_are_explained(case):
-    with pytest.raises(rvpp.CaseError, match="not a valid zip archive"):
+    with pytest.raises(rvpp.CaseError, match="cannot be read as a zip archive"):
         bundle.read_case_files({"case.zip": b"PK-not-really"})
     with pytest.raises(rvpp.CaseError, match="no case found in notes.txt"):
         bundle.read_case_files({"notes.txt": b"hello"})
@@ -136,3 +136,31 @@ def test_broken_uploads_are_explained(case):
     assert err.value.problems == ['wind "WF1": p_max_mw=-50 must be > 0']
     with pytest.raises(rvpp.CaseError, match="not valid YAML"):
         bundle.read_case_files({"case.yaml": b"name: [unclosed", "history.csv": history})
+
+
+@pytest.mark.parametrize("files, expected", [
+    ({"case.yaml": "name: Añón\n".encode("latin-1")},
+     "case.yaml: not UTF-8 text: byte 8 (line 1, column 8) is 0xF1, which looks like Latin-1/Windows-1252; save the file as UTF-8"),
+    ({"case.yaml": "name: x\n".encode("utf-16")}, "case.yaml: is UTF-16 text, not UTF-8 text"),
+    ({"case.yaml": b"history: history.csv\n", "history.csv": b"PK\x05\x06" + b"\0" * 18},
+     "history.csv: is an empty zip archive, not UTF-8 text"),
+    ({"case.yaml": b"name: a\nname: b\n"}, 'case.yaml: key "name" is written twice in one mapping (lines 1 and 2); '
+                                         "keep one"),
+])
+def test_uploaded_files_that_are_not_utf8_text_are_named(files, expected):
+    with pytest.raises(rvpp.CaseError) as err:
+        bundle.read_case_files(files)
+    assert err.value.problems == [expected]
+
+
+def test_an_uploaded_workbook_names_a_field_given_twice(case):
+    import openpyxl
+
+    book = openpyxl.load_workbook(io.BytesIO(workbook.case_workbook_bytes(case)))
+    book["case"].append(["name", "again"])
+    rows = book["case"].max_row
+    buffer = io.BytesIO()
+    book.save(buffer)
+    with pytest.raises(rvpp.CaseError) as err:
+        bundle.read_case_files({"case.xlsx": buffer.getvalue()})
+    assert err.value.problems == [f"case.xlsx: sheet 'case' gives the field 'name' twice (rows 2 and {rows}); keep one"]

@@ -13,14 +13,15 @@ from __future__ import annotations
 import datetime as dt
 import math
 from collections.abc import Iterator, Mapping
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Annotated, Any, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..errors import CaseError
+from ..errors import CaseError, CaseFileError
+from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
 from .history import PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
@@ -42,6 +43,11 @@ Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
 MARKET_NAMES = ("DAM", "SRM", "HPA")
 RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}
 CASE_FILE = "case.yaml"
+MAX_CASE_YAML_BYTES = MIB  # a case.yaml of 100 units is about 80 KiB
+MAX_YAML_DEPTH = 32        # nesting levels (a case uses five)
+MAX_YAML_VALUES = 100_000  # values once aliases are expanded (a case of 100 units holds about 10,000)
+HOURS_PER_DAY = 24
+MAX_THREADS = 1024  # HiGHS threads; more is a typo, not a machine
 
 
 class _Frozen(BaseModel):
@@ -242,6 +248,25 @@ class Markets(_Frozen):
     reserve_duration_min: Positive = 15.0
     hpa_tariff_eur_per_mwh: Annotated[tuple[NonNegative, ...], Field(min_length=24, max_length=24)]
 
+    @field_validator("hpa_tariff_eur_per_mwh", mode="before")
+    @classmethod
+    def _tariff_by_hour(cls, value: Any) -> Any:
+        """Check the 24 tariffs one by one, naming each by its clock hour (``hour 07:00 = -5``)."""
+        field = "hpa_tariff_eur_per_mwh"
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f"{field} must be a list of 24 tariffs [EUR/MWh_th], one per clock hour 00:00 to "
+                             f"23:00; got {_kind_of(value)}")
+        if len(value) != HOURS_PER_DAY:
+            raise ValueError(f"{field} has {len(value)} values; give 24, one per clock hour 00:00 to 23:00")
+        numbers = [_as_number(tariff) for tariff in value]
+        problems = [f"{field} hour {hour:02d}:00 = {_show(tariff)} "
+                    + (number if isinstance(number, str) else "must be >= 0")
+                    for hour, (tariff, number) in enumerate(zip(value, numbers))
+                    if isinstance(number, str) or number < 0]
+        if problems:
+            raise ValueError("\n".join(problems))
+        return tuple(numbers)
+
     @property
     def label(self) -> str:
         """e.g. ``DAM+SRM+HPA``."""
@@ -270,17 +295,33 @@ class Budgets(_Frozen):
     @field_validator("overrides", mode="before")
     @classmethod
     def _from_mapping(cls, value: Any) -> Any:
+        """A mapping ``{source: Γ}`` (or pairs), each Γ checked under the source's name."""
+        if value is None:
+            return ()
         if isinstance(value, Mapping):
-            return tuple(sorted(value.items()))
-        return value
-
-    @model_validator(mode="after")
-    def _unique(self) -> "Budgets":
-        names = [name for name, _ in self.overrides]
-        duplicated = sorted({n for n in names if names.count(n) > 1})
-        if duplicated:
-            raise ValueError(f"overrides name {duplicated[0]!r} more than once")
-        return self
+            pairs = list(value.items())
+        elif isinstance(value, (list, tuple)) and all(isinstance(p, (list, tuple)) and len(p) == 2 for p in value):
+            pairs = [tuple(p) for p in value]
+        else:
+            raise ValueError(f"overrides must be a mapping of source: Γ [periods], e.g. {{price_da: 6, WF1: 3}}; "
+                             f"got {_kind_of(value)}")
+        problems = []
+        names = [source for source, _ in pairs]
+        for source, gamma in pairs:
+            if not isinstance(source, str):
+                problems.append(f"overrides: source {_show(source)} must be a name such as price_da or WF1")
+                continue
+            if names.count(source) > 1:
+                problems.append(f"overrides name {source!r} more than once")
+                continue
+            number = _as_number(gamma, whole=True)
+            if isinstance(number, str):
+                problems.append(f"overrides.{excerpt(source)}={_show(gamma)} {number} [periods]")
+            elif number < 0:
+                problems.append(f"overrides.{excerpt(source)}={_show(gamma)} must be >= 0 [periods]")
+        if problems:
+            raise ValueError("\n".join(dict.fromkeys(problems)))
+        return tuple(sorted((source, _as_number(gamma, whole=True)) for source, gamma in pairs))
 
     @property
     def override_map(self) -> dict[str, int]:
@@ -292,7 +333,7 @@ class SolverSettings(_Frozen):
 
     time_limit_s: Positive = 120.0
     rel_gap: Annotated[float, Field(ge=0.0, lt=1.0)] = 1e-4
-    threads: Annotated[int, Field(ge=0)] = 0
+    threads: Annotated[int, Field(ge=0, le=MAX_THREADS)] = 0
     budget_encoding: Literal["top_gamma", "binary"] = "top_gamma"
     pwl_encoding: Literal["incremental", "convex_combination"] = "incremental"
 
@@ -363,6 +404,14 @@ class Case(_Frozen):
         dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
         return {**dump, "units": units}
 
+    @field_validator("delivery_date", mode="before")
+    @classmethod
+    def _date_as_written(cls, value: Any) -> Any:
+        """A date is written as one (``2025-03-18``), never as a number of seconds since 1970."""
+        if isinstance(value, (int, float)):
+            raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18")
+        return value
+
     @field_validator("dt_h")
     @classmethod
     def _dt(cls, value: float) -> float:
@@ -397,13 +446,13 @@ class Case(_Frozen):
         known = set(PRICE_COLUMNS) | set(names)
         for source, _ in self.budgets.overrides:
             if source not in known:
-                problems.append(f"budgets.overrides: unknown source {source!r}; sources are "
+                problems.append(f"budgets.overrides: unknown source {excerpt(source)!r}; sources are "
                                 f"{', '.join(PRICE_COLUMNS)} and the unit names ({', '.join(names)})")
         columns = set(self.history.columns)
         for kind, unit in self.units():
             if unit.column not in columns:
-                problems.append(f'{kind} "{unit.name}": history column {unit.column!r} is missing from '
-                                f"{self.history.source} (columns: {', '.join(sorted(columns))})")
+                problems.append(f'{kind} "{unit.name}": history column {excerpt(unit.column)!r} is missing from '
+                                f"{self.history.source} (columns: {excerpt_names(sorted(columns), 20)})")
         for price in PRICE_COLUMNS:
             if price not in columns:
                 problems.append(f"{self.history.source}: price column {price!r} is missing")
@@ -461,40 +510,58 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
     """Build a :class:`Case` from plain data (the ``case.yaml`` layout).
 
     Raises :class:`CaseError` listing every problem found, each naming unit, field,
-    value and rule.
+    value and rule in the words of ``case.yaml``.
     """
     if not isinstance(data, Mapping):
-        raise CaseError(f"{CASE_FILE}: the top level must be a mapping of settings, got {type(data).__name__}")
+        raise CaseError(f"{CASE_FILE}: the top level must be a mapping of settings, got {_kind_of(data)}")
     problems: list[str] = []
     for key in data:
         if key not in _TOP_FIELDS:
-            problems.append(f'{CASE_FILE}: unknown setting "{key}" (known: {", ".join(sorted(_TOP_FIELDS))})')
+            problems.append(f'{CASE_FILE}: unknown setting "{excerpt(key)}" (known: {", ".join(sorted(_TOP_FIELDS))})')
     sections: dict[str, Any] = {}
     for key, model in _SECTIONS.items():
-        raw = data.get(key, {} if key != "markets" else None)
-        if raw is None:
-            problems.append(f"{key}: section is required")
+        raw = data.get(key)
+        if raw is None and key == "markets":
+            problems.append(f"{key}: section is {'empty' if key in data else 'required'}; it needs at least "
+                            "hpa_tariff_eur_per_mwh")
             continue
-        sections[key] = _validate(model, raw, key, problems)
-    units: dict[str, tuple] = {}
-    raw_units = data.get("units", {}) or {}
+        sections[key] = _validate(model, {} if raw is None else raw, key, problems)  # blank: the defaults
+    units = _parse_units(data.get("units"), problems)
+    if problems:
+        raise CaseError(problems)
+    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h") if k in data}
+    case = _validate(Case, {**top, **sections, **units, "history": history}, "", problems)
+    if problems:
+        raise CaseError(problems)
+    return case
+
+
+def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:
+    """The unit lists of ``units:``, each unit validated and named in messages as ``csp "CSP1"``."""
+    kinds = ", ".join(UNIT_KINDS)
+    if raw_units is None:
+        problems.append(f"units: section is required; list the units of the case under {kinds}")
+        return {}
     if not isinstance(raw_units, Mapping):
-        problems.append("units: must be a mapping of unit lists (wind, pv, csp, ed, td)")
-        raw_units = {}
+        problems.append(f"units: must be a mapping of unit lists ({kinds}); got {_kind_of(raw_units)}")
+        return {}
     for kind in raw_units:
         if kind not in UNIT_KINDS:
-            problems.append(f'units: unknown unit kind "{kind}" (known: {", ".join(UNIT_KINDS)})')
+            problems.append(f'units: unknown unit kind "{excerpt(kind)}" (known: {kinds})')
+    units: dict[str, tuple] = {}
     for kind in UNIT_KINDS:
         entries = raw_units.get(kind) or []
         if not isinstance(entries, (list, tuple)):
-            problems.append(f"units.{kind}: must be a list of units")
+            problems.append(f"units.{kind}: must be a list of units; got {_kind_of(entries)}")
             continue
         built = []
-        for i, entry in enumerate(entries):
+        for i, entry in enumerate(entries, start=1):
             if not isinstance(entry, Mapping):
-                problems.append(f"units.{kind}[{i}]: must be a mapping of fields")
+                problems.append(f"units.{kind} item {i}: must be a mapping of fields (name: ..., ...); got "
+                                f"{_kind_of(entry)}")
                 continue
-            label = f'{kind} "{entry.get("name", f"#{i + 1}")}"'
+            name = entry.get("name")
+            label = f'{kind} "{excerpt(name)}"' if isinstance(name, str) and name else f"units.{kind} item {i}"
             payload = dict(entry)
             if kind in ("wind", "pv"):
                 payload.setdefault("kind", kind)
@@ -502,52 +569,80 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
             if unit is not None:
                 built.append(unit)
         units[kind] = tuple(built)
-    if problems:
-        raise CaseError(problems)
-    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h") if k in data}
-    case = _validate(Case, {**top, **sections, **units, "history": history}, "case", problems)
-    if problems:
-        raise CaseError(problems)
-    return case
+    if not any(isinstance(raw_units.get(kind), (list, tuple)) and raw_units.get(kind) for kind in UNIT_KINDS) \
+            and not any(kind not in UNIT_KINDS for kind in raw_units):
+        problems.append(f"units: no unit is listed; a case needs at least one unit under {kinds}")
+    return units
 
 
 def _validate(model: type[BaseModel], raw: Any, label: str, problems: list[str]) -> Any:
     try:
         return model.model_validate(raw)
     except ValidationError as err:
-        problems.extend(_describe(err, label, raw))
+        problems.extend(_describe(err, label))
         return None
 
 
-def _describe(err: ValidationError, label: str, raw: Any) -> list[str]:
+def _describe(err: ValidationError, label: str) -> list[str]:
+    """One line per error of ``err``, located as in ``case.yaml``: ``label: field.sub=value rule``.
+
+    ``label`` names the section or unit (``markets``, ``csp "CSP1"``); empty for the top
+    level. Lists are located by what their items mean (``breakpoints point 2 input``),
+    never by an internal index.
+    """
+    prefix = f"{label}: " if label else ""
     lines = []
     for e in err.errors():
-        loc = ".".join(str(p) for p in e["loc"])
-        kind, ctx = e["type"], e.get("ctx", {})
-        value = e.get("input")
+        where = _where(e["loc"])
+        kind, ctx = e["type"], e.get("ctx") or {}
         if kind == "value_error":
             for line in str(ctx.get("error", e["msg"])).splitlines():
-                lines.append(line if label == "case" else f"{label}: {loc + ': ' if loc else ''}{line}")
-            continue
-        if kind == "missing":
-            lines.append(f"{label}: {loc} is required")
-            continue
-        if kind == "extra_forbidden":
-            lines.append(f'{label}: unknown field "{loc}"')
-            continue
-        lines.append(f"{label}: {loc}={_show(value)} {_rule(kind, ctx, e['msg'])}")
-    return lines
+                shown = line if not where or line.startswith(where.split(" ")[0]) else f"{where}: {line}"
+                lines.append(line if not label and not where else prefix + shown)
+        elif kind == "missing":
+            lines.append(f"{prefix}{where} is required")
+        elif kind == "extra_forbidden":
+            lines.append(f'{prefix}unknown field "{excerpt(where)}"')
+        elif not where:
+            lines.append(f"{prefix}{_rule(kind, ctx, e['msg'])}; got {_kind_of(e.get('input'))}")
+        else:
+            lines.append(f"{prefix}{where}={_show(e.get('input'))} {_rule(kind, ctx, e['msg'])}")
+    return list(dict.fromkeys(lines))
+
+
+def _where(loc: tuple) -> str:
+    """A pydantic location as written in ``case.yaml``: ``storage.e_min_mwh_th``,
+    ``power_block.breakpoints point 2 efficiency``, ``hpa_tariff_eur_per_mwh hour 07:00``."""
+    text = ""
+    for i, part in enumerate(loc):
+        if isinstance(part, int):
+            parent = loc[i - 1] if i else None
+            if parent == "breakpoints":
+                text += f" point {part + 1}"
+            elif parent == "hpa_tariff_eur_per_mwh":
+                text += f" hour {part:02d}:00"
+            elif isinstance(parent, int) and loc[i - 2:i - 1] == ("breakpoints",):
+                text += " input" if part == 0 else " efficiency"
+            else:
+                text += f" item {part + 1}"
+        else:
+            text += ("." if text else "") + excerpt(part)
+    return text
 
 
 def _show(value: Any) -> str:
+    """A value as the user wrote it, cut short."""
     if isinstance(value, float):
         return f"{value:g}"
     if isinstance(value, (list, tuple)) and len(value) > 6:
         return f"[{len(value)} values]"
-    return repr(value) if isinstance(value, str) else str(value)
+    if isinstance(value, Mapping):
+        return "{...}" if value else "{}"
+    return repr(excerpt(value)) if isinstance(value, str) else excerpt(value)
 
 
 def _rule(kind: str, ctx: dict, msg: str) -> str:
+    """The rule a pydantic error type stands for, in the words of the case format."""
     rules = {
         "greater_than_equal": lambda: f"must be >= {ctx.get('ge'):g}",
         "greater_than": lambda: f"must be > {ctx.get('gt'):g}",
@@ -559,47 +654,210 @@ def _rule(kind: str, ctx: dict, msg: str) -> str:
         "int_parsing": lambda: "must be a whole number",
         "int_from_float": lambda: "must be a whole number",
         "int_type": lambda: "must be a whole number",
+        "int_parsing_size": lambda: "must be a whole number of a sensible size",
         "bool_parsing": lambda: "must be true or false",
         "bool_type": lambda: "must be true or false",
         "literal_error": lambda: f"must be {ctx.get('expected')}",
+        "string_type": lambda: "must be text (put it in quotes if it looks like a number or a date)",
         "string_pattern_mismatch": lambda: "must start with a letter or digit and use at most 40 letters, "
                                             "digits, '_', '.' or '-'",
         "string_too_short": lambda: "must not be empty",
-        "too_short": lambda: f"must have {ctx.get('min_length')} values (has {ctx.get('actual_length')})",
+        "string_too_long": lambda: f"must have at most {ctx.get('max_length')} characters",
+        "too_short": lambda: f"must have at least {ctx.get('min_length')} values (has {ctx.get('actual_length')})",
         "too_long": lambda: f"must have at most {ctx.get('max_length')} values (has {ctx.get('actual_length')})",
         "date_from_datetime_parsing": lambda: "must be a date such as 2025-03-18",
+        "date_from_datetime_inexact": lambda: "must be a date such as 2025-03-18, without a time of day",
         "date_parsing": lambda: "must be a date such as 2025-03-18",
         "date_type": lambda: "must be a date such as 2025-03-18",
         "tuple_type": lambda: "must be a list",
+        "list_type": lambda: "must be a list",
+        "iterable_type": lambda: "must be a list",
         "model_type": lambda: "must be a mapping of fields",
         "model_attributes_type": lambda: "must be a mapping of fields",
         "dict_type": lambda: "must be a mapping",
+        "mapping_type": lambda: "must be a mapping",
+        "is_instance_of": lambda: f"must be {ctx.get('class', 'of another type')}",
+        "recursion_loop": lambda: "is nested too deep",
     }
-    return rules.get(kind, lambda: msg.lower())()
+    return rules.get(kind, lambda: msg[:1].lower() + msg[1:])()
 
 
 # ----------------------------------------------------------------------------- files
 
 
 def load_case(path: str | Path) -> Case:
-    """Read a case folder (or its ``case.yaml``) and validate it."""
+    """Read a case folder (or its ``case.yaml``) and validate it.
+
+    The history CSV named by ``history:`` must lie inside the case folder: an absolute
+    path, a ``..`` step or a link out of the folder raises
+    :class:`~rvpp.errors.CasePathError` before any file is opened, so a case is a
+    portable folder and never reads files beside it.
+    """
     path = Path(path)
-    file = path / CASE_FILE if path.is_dir() else path
-    if not file.is_file():
-        raise CaseError(f"no {CASE_FILE} found at {path}")
     try:
-        data = yaml.safe_load(file.read_text(encoding="utf-8"))
+        file = path / CASE_FILE if path.is_dir() else path
+        found = file.is_file()
+    except (OSError, ValueError):  # no permission, a NUL in the name
+        found = False
+    if not found:
+        raise CaseError(f"no {CASE_FILE} found at {excerpt(path, 200)}")
+    data = read_case_yaml(read_file(file, file.name, max_bytes=MAX_CASE_YAML_BYTES), file.name)
+    relative = history_path(data, file.name)
+    history = History.read_csv(inside_folder(file.parent, relative, "history", file.name), source=str(relative))
+    return parse_case(data, history)
+
+
+def history_path(data: Mapping[str, Any], file: str) -> PurePosixPath:
+    """The ``history:`` of a case, checked to stay inside the case folder (nothing is opened)."""
+    return relative_path(data.get("history"), "history", file)
+
+
+def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:
+    """The settings in the bytes of a ``case.yaml`` named ``file`` (not yet validated).
+
+    The file must be UTF-8 text of at most ``MAX_CASE_YAML_BYTES``, nested at most
+    ``MAX_YAML_DEPTH`` levels and at most ``MAX_YAML_VALUES`` values once its aliases
+    are expanded; its top level must be a mapping. Raises :class:`CaseFileError`.
+    """
+    if len(data) > MAX_CASE_YAML_BYTES:
+        raise CaseFileError(f"{file}: is larger than {MAX_CASE_YAML_BYTES // 1024} KiB; a case.yaml is usually "
+                            "a few KiB")
+    text = decode_text(data, file)
+    try:
+        _check_yaml_shape(text, file)
+        loader = _CaseLoader(text)
+        loader.file = file
+        try:
+            loaded = loader.get_single_data()
+        finally:
+            loader.dispose()
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise CaseError(f"{file.name}: not valid YAML{where} ({getattr(exc, 'problem', exc)})") from None
-    if not isinstance(data, Mapping):
-        raise CaseError(f"{file.name}: the top level must be a mapping of settings")
-    history_name = data.get("history")
-    if not isinstance(history_name, str):
-        raise CaseError(f'{file.name}: "history" must name the history CSV file of the case')
-    history = History.read_csv(file.parent / history_name)
-    return parse_case(data, history)
+        problem = getattr(exc, "problem", None) or exc
+        raise CaseFileError(f"{file}: not valid YAML{where} ({excerpt(problem, 120)})") from None
+    if not isinstance(loaded, Mapping):
+        got = "the file is empty" if loaded is None else f"it holds {_kind_of(loaded)}"
+        raise CaseFileError(f"{file}: the top level must be a mapping of settings (name:, markets:, units:, ...); "
+                            f"{got}")
+    return dict(loaded)
+
+
+_YamlBase = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when available: fast and iterative
+
+
+class _CaseLoader(_YamlBase):
+    """PyYAML's safe loader (plain data only: no Python objects) that refuses a key written
+    twice in one mapping, at every depth, instead of keeping the last value."""
+
+    file = CASE_FILE
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        lines: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":  # "<<: *defaults" may be overridden on purpose
+                continue
+            key = self.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            if not _hashable(key):
+                continue  # the base class names it
+            if key in lines:
+                raise CaseFileError(f'{self.file}: key "{excerpt(key)}" is written twice in one mapping (lines '
+                                    f"{lines[key]} and {line}); keep one")
+            lines[key] = line
+        return super().construct_mapping(node, deep=deep)
+
+
+def _hashable(value: Any) -> bool:
+    try:
+        hash(value)
+    except TypeError:
+        return False
+    return True
+
+
+def _check_yaml_shape(text: str, file: str) -> None:
+    """Refuse YAML nested too deep or too large once aliases are expanded (a "billion laughs"),
+    from the parser's events, before any value is built."""
+    total = 0
+    sizes: dict[str, int] = {}
+    stack: list[list] = [[None, 0]]  # [anchor, expanded values so far] of each open collection
+    for event in yaml.parse(text, Loader=_YamlBase):
+        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            if len(stack) > MAX_YAML_DEPTH:
+                raise CaseFileError(f"{file}: nested more than {MAX_YAML_DEPTH} levels deep (line "
+                                    f"{event.start_mark.line + 1}); a case needs a few levels")
+            stack.append([event.anchor, 1])
+            added = 1
+        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            anchor, size = stack.pop()
+            if anchor is not None:
+                sizes[anchor] = size
+            stack[-1][1] += size
+            continue
+        elif isinstance(event, yaml.ScalarEvent):
+            if event.anchor is not None:
+                sizes[event.anchor] = 1
+            stack[-1][1] += 1
+            added = 1
+        elif isinstance(event, yaml.AliasEvent):
+            if event.anchor not in sizes:
+                raise CaseFileError(f"{file}: alias *{excerpt(event.anchor)} at line {event.start_mark.line + 1} "
+                                    "refers to a value not defined before it (or to itself)")
+            added = sizes[event.anchor]
+            stack[-1][1] += added
+        else:
+            continue
+        total += added
+        if total > MAX_YAML_VALUES:
+            raise CaseFileError(f"{file}: holds more than {MAX_YAML_VALUES:,} values once its aliases (*name) are "
+                                "expanded; a case holds a few thousand")
+
+
+def _as_number(value: Any, whole: bool = False) -> float | int | str:
+    """``value`` as a finite number (an ``int`` with ``whole``), or the rule it breaks.
+
+    Numbers written as text (``"70"``) count, as they do for every other field.
+    """
+    wanted = "must be a whole number" if whole else "must be a number"
+    if isinstance(value, bool):
+        return wanted
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            return wanted
+    if isinstance(value, int):
+        if whole:
+            return value
+        try:
+            return float(value)
+        except OverflowError:
+            return "must be a finite number"
+    if not isinstance(value, float):
+        return wanted
+    if not math.isfinite(value):
+        return "must be a finite number"
+    if whole:
+        return int(value) if value.is_integer() else wanted
+    return value
+
+
+def _kind_of(value: Any) -> str:
+    """What a YAML value is, in the words of the format: a list, a mapping, text, a number."""
+    if value is None:
+        return "nothing (an empty value)"
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, str):
+        return "text"
+    if isinstance(value, (list, tuple)):
+        return "a list"
+    if isinstance(value, Mapping):
+        return "a mapping"
+    return "a " + type(value).__name__
 
 
 def save_case(case: Case, folder: str | Path, history_file: str = "history.csv") -> Path:
@@ -623,12 +881,17 @@ def save_case(case: Case, folder: str | Path, history_file: str = "history.csv")
 
 def parse_markets(text: str) -> dict[str, bool]:
     """``"DAM,SRM"`` -> ``{"srm": True, "hpa": False}``; the DAM is always required."""
+    if not isinstance(text, str):
+        raise CaseError(f"markets={excerpt(text)!r} must be text such as DAM,SRM,HPA")
     names = [part.strip().upper() for part in text.replace("+", ",").split(",") if part.strip()]
+    if not names:
+        raise CaseError(f"markets={excerpt(text)!r} names no market; give a comma-separated subset of "
+                        f"{','.join(MARKET_NAMES)}, e.g. DAM,SRM")
     unknown = [n for n in names if n not in MARKET_NAMES]
     if unknown:
-        raise CaseError(f"markets: unknown market {unknown[0]!r}; choose from {', '.join(MARKET_NAMES)}")
+        raise CaseError(f"markets: unknown market {excerpt(unknown[0])!r}; choose from {', '.join(MARKET_NAMES)}")
     if "DAM" not in names:
-        raise CaseError(f"markets={text!r} must include DAM (the day-ahead market is always on)")
+        raise CaseError(f"markets={excerpt(text)!r} must include DAM (the day-ahead market is always on)")
     return {"srm": "SRM" in names, "hpa": "HPA" in names}
 
 

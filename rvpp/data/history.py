@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import datetime as dt
 import hashlib
+import io
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from ..errors import CaseError
+from ..errors import CaseError, CaseFileError, UploadLimitError
+from .files import decode_text, excerpt, excerpt_names, read_file
 
 PRICE_COLUMNS = ("price_da", "price_sr_up", "price_sr_dn")
 HOUR = pd.Timedelta(hours=1)
@@ -36,15 +38,39 @@ class History:
         self.fingerprint = _fingerprint(self._frame)
 
     @classmethod
-    def read_csv(cls, path: str | Path) -> "History":
+    def read_csv(cls, path: str | Path, source: str | None = None) -> "History":
+        """Read a history CSV from disk (``source``: the name shown in messages)."""
         path = Path(path)
-        if not path.is_file():
-            raise CaseError(f'history file "{path.name}" does not exist')
+        source = source or path.name
+        if not path.exists():
+            raise CaseError(f'history file "{source}" does not exist')
+        return cls.from_csv(read_file(path, source), source)
+
+    @classmethod
+    def from_csv(cls, data: bytes, source: str, max_rows: int | None = None,
+                 max_columns: int | None = None) -> "History":
+        """Parse the bytes of a history CSV (UTF-8 text).
+
+        ``max_rows`` and ``max_columns`` bound what an upload may hold; more raises
+        :class:`~rvpp.errors.UploadLimitError` before the table is built.
+        """
+        text = decode_text(data, source)
+        if not text.strip():
+            raise CaseFileError(f"{source}: is empty; a history CSV starts with a header row such as "
+                                "timestamp,price_da,price_sr_up,price_sr_dn,...")
+        if max_columns is not None:
+            columns = text.partition("\n")[0].count(",") + 1
+            if columns > max_columns:
+                raise UploadLimitError(f"{source}: has {columns:,} columns; an upload may have at most "
+                                       f"{max_columns:,}")
         try:
-            frame = pd.read_csv(path)
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-            raise CaseError(f"{path.name}: cannot be read as CSV ({exc})") from None
-        return cls(frame, source=path.name)
+            frame = pd.read_csv(io.StringIO(text), nrows=None if max_rows is None else max_rows + 1)
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
+            raise CaseFileError(f"{source}: cannot be read as CSV ({excerpt(str(exc).strip(), 120)})") from None
+        if max_rows is not None and len(frame) > max_rows:
+            raise UploadLimitError(f"{source}: has more than {max_rows:,} rows; an upload may have at most "
+                                   f"{max_rows:,} (about {max_rows // 8784} years of hours)")
+        return cls(frame, source=source)
 
     def to_csv(self, path: str | Path, timezone: str) -> None:
         """Write with local ISO-8601 timestamps (UTC offset included)."""
@@ -129,8 +155,9 @@ def _restore(frame: pd.DataFrame, source: str, fingerprint: str) -> History:
 def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
     if isinstance(frame.index, pd.DatetimeIndex) and "timestamp" not in frame.columns:
         frame = frame.reset_index(names="timestamp")
+    frame = frame.set_axis([str(c) for c in frame.columns], axis="columns")
     if "timestamp" not in frame.columns:
-        raise CaseError(f'{source}: no "timestamp" column (found {list(frame.columns)})')
+        raise CaseError(f'{source}: no "timestamp" column (found {excerpt_names(frame.columns)})')
     if len(frame) == 0:
         raise CaseError(f"{source}: no rows")
     stamps = _parse_timestamps(frame["timestamp"], source)
@@ -143,17 +170,17 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
         bad_text = (values.isna() & data[column].notna()).to_numpy()
         if bad_text.any():
             i = int(np.flatnonzero(bad_text)[0])
-            problems.append(f'{source}: column "{column}" has a non-numeric value '
-                            f"{data[column].iloc[i]!r} at {shown[i].isoformat()}")
+            problems.append(f'{source}: column "{excerpt(column)}" has a non-numeric value '
+                            f"'{excerpt(data[column].iloc[i])}' at {shown[i].isoformat()}")
         missing = values.isna().to_numpy() & ~bad_text
         if missing.any():
             rows = np.flatnonzero(missing)
-            problems.append(f'{source}: column "{column}" is empty (NaN) at {shown[rows[0]].isoformat()}'
+            problems.append(f'{source}: column "{excerpt(column)}" is empty (NaN) at {shown[rows[0]].isoformat()}'
                             + (f" and {len(rows) - 1} more hours" if len(rows) > 1 else ""))
         infinite = np.isinf(values.to_numpy(dtype=float, na_value=0.0))
         if infinite.any():
             where = shown[int(np.flatnonzero(infinite)[0])].isoformat()
-            problems.append(f'{source}: column "{column}" is infinite at {where}')
+            problems.append(f'{source}: column "{excerpt(column)}" is infinite at {where}')
         numeric[column] = values.to_numpy(dtype=float)
     problems += _timeline_problems(stamps, shown, source)
     if problems:
@@ -177,12 +204,12 @@ def _parse_timestamps(column: pd.Series, source: str) -> pd.DatetimeIndex:
         raise CaseError(f'{source}: "timestamp" is empty in data row {row + 1}')
     naive = ~text.str.contains(r"(?:Z|[+-]\d\d:?\d\d)$", regex=True)
     if naive.any():
-        raise CaseError(f'{source}: timestamp {text[naive].iloc[0]!r} has no UTC offset '
+        raise CaseError(f"{source}: timestamp '{excerpt(text[naive].iloc[0])}' has no UTC offset "
                         "(write e.g. 2025-03-30T03:00:00+02:00 so hours are unambiguous)")
     try:
         return pd.DatetimeIndex(pd.to_datetime(text, utc=True, format="ISO8601"))
     except (ValueError, TypeError) as exc:
-        raise CaseError(f'{source}: a timestamp cannot be read ({exc})') from None
+        raise CaseError(f"{source}: a timestamp cannot be read ({excerpt(exc, 120)})") from None
 
 
 def _timeline_problems(stamps: pd.DatetimeIndex, shown: list[pd.Timestamp], source: str) -> list[str]:

@@ -56,7 +56,7 @@ class Variant:
             budgets = {"strategy": self.strategy, "overrides": dict(self.gammas)}
         elif self.gammas:
             budgets = {"overrides": {**case.budgets.override_map, **dict(self.gammas)}}
-        markets: dict[str, Any] = parse_markets(self.markets) if self.markets else {}
+        markets: dict[str, Any] = parse_markets(self.markets) if self.markets is not None else {}
         if self.hpa_flat is not None:
             markets["hpa_tariff_eur_per_mwh"] = [self.hpa_flat] * 24
         if markets:

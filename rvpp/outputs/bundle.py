@@ -4,6 +4,13 @@ history CSV, or an Excel case workbook (:mod:`rvpp.outputs.workbook`).
 :func:`read_case_files` takes the files as ``{file name: bytes}`` and returns a validated
 :class:`~rvpp.data.case.Case`; anything wrong raises :class:`~rvpp.errors.CaseError` with a
 message meant for the person who uploaded the files.
+
+An upload is read in memory and never touches the server's disk: a case may only read
+the files that came with it. An uploaded file or zip member whose name is absolute or
+takes a ``..`` step, a link inside a zip, and a ``history:`` that leaves the upload are
+refused (:class:`~rvpp.errors.CasePathError`) before anything is read. What an upload
+may cost is bounded by :class:`~rvpp.data.files.UploadLimits`
+(:class:`~rvpp.errors.UploadLimitError`).
 """
 
 from __future__ import annotations
@@ -11,14 +18,15 @@ from __future__ import annotations
 import io
 import tempfile
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path, PurePosixPath
 
-from ..data.case import CASE_FILE, Case, load_case, save_case
-from ..errors import CaseError
+from ..data.case import CASE_FILE, Case, history_path, parse_case, read_case_yaml, save_case
+from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, unzip, upload_path
+from ..data.history import History
+from ..errors import CaseError, UploadError, UploadLimitError
 from .workbook import read_case_workbook
 
-MAX_UNZIPPED_BYTES = 200 * 1024 ** 2  # refuse archives that inflate beyond 200 MiB
 YAML_SUFFIXES = (".yaml", ".yml")
 EXPECTED = ("a zip of a case folder, a case.yaml together with its history CSV, or an Excel case "
             "workbook (.xlsx)")
@@ -36,63 +44,64 @@ def case_zip_bytes(case: Case, folder_name: str | None = None) -> bytes:
     return buffer.getvalue()
 
 
-def read_case_files(files: Mapping[str, bytes]) -> Case:
+def read_case_files(files: Mapping[str, bytes], limits: UploadLimits = UploadLimits()) -> Case:
     """A case from uploaded files (see the module docstring for the accepted forms)."""
     if not files:
-        raise CaseError(f"no file given; upload {EXPECTED}")
-    names = {PurePosixPath(name).name: data for name, data in files.items()}
-    suffixes = {name: PurePosixPath(name).suffix.lower() for name in names}
-    zips = [n for n, s in suffixes.items() if s == ".zip"]
-    workbooks = [n for n, s in suffixes.items() if s in (".xlsx", ".xlsm")]
-    yamls = [n for n, s in suffixes.items() if s in YAML_SUFFIXES]
+        raise UploadError(f"no file given; upload {EXPECTED}")
+    sent = sum(len(data) for data in files.values())
+    if sent > limits.upload_bytes:
+        raise UploadLimitError(f"the upload is {sent / 1024 ** 2:.1f} MiB; an upload may be at most "
+                               f"{limits.upload_bytes / 1024 ** 2:g} MiB")
+    budget = UploadBudget(limits)
+    uploaded = {upload_path(name): data for name, data in files.items()}
+    suffixes = {path: path.suffix.lower() for path in uploaded}
+    zips = [p for p, s in suffixes.items() if s == ".zip"]
+    workbooks = [p for p, s in suffixes.items() if s in (".xlsx", ".xlsm")]
+    yamls = [p for p, s in suffixes.items() if s in YAML_SUFFIXES]
+    names = ", ".join(sorted(excerpt(p, 80) for p in uploaded))
     if len(zips) + len(workbooks) + min(len(yamls), 1) > 1:
-        raise CaseError(f"the upload mixes several cases ({', '.join(sorted(names))}); upload {EXPECTED}")
+        raise UploadError(f"the upload mixes several cases ({names}); upload {EXPECTED}")
     if zips:
-        return _from_zip(zips[0], names[zips[0]])
+        return _from_zip(str(zips[0]), uploaded[zips[0]], budget)
     if workbooks:
-        return read_case_workbook(names[workbooks[0]], label=workbooks[0])
+        return read_case_workbook(uploaded[workbooks[0]], label=str(workbooks[0]), budget=budget)
     if len(yamls) == 1:
-        with tempfile.TemporaryDirectory() as tmp:
-            for name, data in names.items():
-                (Path(tmp) / name).write_bytes(data)
-            return _load(Path(tmp) / yamls[0], uploaded=sorted(names))
+        return _from_files(yamls[0], uploaded.__getitem__, set(uploaded), budget,
+                           lambda relative: [f'history file "{excerpt(relative, 80)}" is not among the uploaded '
+                                             "files", f"the files uploaded are: {names}"])
     if len(yamls) > 1:
-        raise CaseError(f"several YAML files ({', '.join(sorted(yamls))}); upload one case.yaml with its history CSV")
-    raise CaseError(f"no case found in {', '.join(sorted(names))}; upload {EXPECTED}")
+        raise UploadError(f"several YAML files ({names}); upload one case.yaml with its history CSV")
+    raise UploadError(f"no case found in {names}; upload {EXPECTED}")
 
 
-def _from_zip(name: str, data: bytes) -> Case:
-    try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-    except zipfile.BadZipFile:
-        raise CaseError(f"{name}: not a valid zip archive") from None
-    with archive:
-        members = [m for m in archive.infolist() if not m.is_dir()]
-        if sum(m.file_size for m in members) > MAX_UNZIPPED_BYTES:
-            raise CaseError(f"{name}: unpacks to more than {MAX_UNZIPPED_BYTES // 1024 ** 2} MiB; "
-                            "a case is usually a few MiB")
-        cases = [m for m in members if PurePosixPath(m.filename).name == CASE_FILE
-                 and "__MACOSX" not in m.filename]
+def _from_zip(name: str, data: bytes, budget: UploadBudget) -> Case:
+    with open_zip(data, name, budget.limits) as archive:
+        members = {upload_path(m.filename): m for m in archive.infolist()
+                   if not m.is_dir() and "__MACOSX" not in m.filename}
+        cases = [path for path in members if path.name == CASE_FILE]
         if not cases:
-            raise CaseError(f"{name}: no {CASE_FILE} inside (found: "
-                            f"{', '.join(m.filename for m in members[:8]) or 'nothing'})")
+            found = ", ".join(excerpt(p, 80) for p in list(members)[:8]) or "nothing"
+            raise UploadError(f"{name}: no {CASE_FILE} inside (found: {found})")
         if len(cases) > 1:
-            raise CaseError(f"{name}: holds {len(cases)} {CASE_FILE} files; zip one case folder at a time")
-        folder = PurePosixPath(cases[0].filename).parent
-        with tempfile.TemporaryDirectory() as tmp:
-            for member in members:
-                path = PurePosixPath(member.filename)
-                if path.parent != folder:
-                    continue
-                (Path(tmp) / path.name).write_bytes(archive.read(member))
-            return _load(Path(tmp) / CASE_FILE, uploaded=[PurePosixPath(m.filename).name for m in members])
+            raise UploadError(f"{name}: holds {len(cases)} {CASE_FILE} files; zip one case folder at a time")
+        return _from_files(cases[0], lambda path: unzip(archive, members[path], name, budget), set(members), budget,
+                           lambda relative: [f'{name}: history file "{excerpt(relative, 80)}" is not in the zip '
+                                             f"beside {excerpt(cases[0], 80)}"])
 
 
-def _load(path: Path, uploaded: list[str]) -> Case:
-    try:
-        return load_case(path)
-    except CaseError as err:
-        missing = [p for p in err.problems if "does not exist" in p]
-        if missing:
-            raise CaseError([*err.problems, f"the files uploaded are: {', '.join(uploaded)}"]) from None
-        raise
+def _from_files(case_file: PurePosixPath, read: Callable[[PurePosixPath], bytes], present: set[PurePosixPath],
+                budget: UploadBudget, missing: Callable[[PurePosixPath], list[str]]) -> Case:
+    """The case of ``case_file`` among uploaded files: ``read(path)`` gives a file's bytes."""
+    data = read_case_yaml(read(case_file), case_file.name)
+    budget.check_time(f"reading {case_file.name}")
+    relative = history_path(data, case_file.name)
+    target = case_file.parent / relative
+    if target not in present:
+        raise CaseError(missing(relative))
+    limits = budget.limits
+    history = History.from_csv(read(target), str(relative), max_rows=limits.history_rows,
+                               max_columns=limits.history_columns)
+    budget.check_time(f"reading {excerpt(relative, 80)}")
+    case = parse_case(data, history)
+    budget.check_time(f"checking {case_file.name}")
+    return case

@@ -1,10 +1,19 @@
-"""Write a plan to disk: ``summary.json``, CSV tables and ``plan.xlsx`` (docs/exports.md)."""
+"""Write a plan to disk: ``summary.json``, CSV tables and ``plan.xlsx`` (docs/exports.md).
+
+Writes are atomic: a file appears complete or not at all, and a plan folder holds the
+files of one run only (:func:`write_plan`).
+"""
 
 from __future__ import annotations
 
 import io
 import json
 import math
+import os
+import shutil
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pandas as pd
@@ -12,22 +21,67 @@ import pandas as pd
 from ..solving.results import Result
 
 TABLES = ("market", "units", "csp", "flexibility")
+SUMMARY = "summary.json"
+PLAN_FILES = (*(f"{name}.csv" for name in TABLES), "plan.xlsx", SUMMARY)  # what rvpp owns in a plan folder
 
 
 def write_plan(result: Result, folder: str | Path) -> list[Path]:
-    """Write every export of ``result`` into ``folder``; return the paths written."""
+    """Write every export of ``result`` into ``folder``; return the paths written.
+
+    The files are written into a temporary folder beside ``folder`` and moved into place
+    only when all are complete, ``summary.json`` last. A run without a plan writes only
+    ``summary.json`` and removes the plan files of an earlier run, so the folder never
+    shows a stale plan beside a new summary. Other files in ``folder`` (notes of your
+    own) are never touched; a failure part-way leaves the earlier run's files as they were.
+    """
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = [folder / "summary.json"]
-    written[0].write_text(json.dumps(_clean(result.summary()), indent=2) + "\n", encoding="utf-8")
-    if not result.has_plan:
-        return written
-    for name in TABLES:
-        path = folder / f"{name}.csv"
-        getattr(result, name).to_csv(path, index=False, float_format="%.6f")
-        written.append(path)
-    written.append(write_workbook(result, folder / "plan.xlsx"))
-    return written
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    staging = _sibling(folder, "tmp")
+    staging.mkdir()
+    try:
+        names = _write_exports(result, staging)
+        if not folder.exists():
+            staging.rename(folder)
+            return [folder / name for name in names]
+        for name in names[:-1]:
+            os.replace(staging / name, folder / name)
+        for stale in set(PLAN_FILES) - set(names):
+            (folder / stale).unlink(missing_ok=True)
+        os.replace(staging / SUMMARY, folder / SUMMARY)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return [folder / name for name in names]
+
+
+def _write_exports(result: Result, folder: Path) -> list[str]:
+    """Write the exports into an empty ``folder``; their names, ``summary.json`` last."""
+    names = []
+    if result.has_plan:
+        for name in TABLES:
+            getattr(result, name).to_csv(folder / f"{name}.csv", index=False, float_format="%.6f")
+            names.append(f"{name}.csv")
+        write_workbook(result, folder / "plan.xlsx")
+        names.append("plan.xlsx")
+    (folder / SUMMARY).write_text(json.dumps(_clean(result.summary()), indent=2) + "\n", encoding="utf-8")
+    return [*names, SUMMARY]
+
+
+@contextmanager
+def replacing(path: str | Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` (same suffix) to write to; it replaces ``path`` only
+    when the block ends without error, so ``path`` is never seen half-written."""
+    path = Path(path)
+    temporary = _sibling(path, "tmp")
+    try:
+        yield temporary
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def _sibling(path: Path, tag: str) -> Path:
+    """A hidden, unique name beside ``path`` with the same suffix, e.g. ``.plan.tmp-1a2b3c4d.xlsx``."""
+    return path.with_name(f".{path.stem}.{tag}-{uuid.uuid4().hex[:8]}{path.suffix}")
 
 
 def write_workbook(result: Result, target: str | Path | io.BytesIO) -> str | Path | io.BytesIO:

@@ -27,6 +27,8 @@ from __future__ import annotations
 import datetime as dt
 import io
 import math
+import zipfile
+from xml.etree import ElementTree
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -34,9 +36,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+import openpyxl
+
 from ..data.case import UNIT_KINDS, Case, parse_case
-from ..errors import CaseError
+from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, read_file, unzip
 from ..data.history import History
+from ..errors import CaseError, CaseFileError, UploadLimitError
 
 BREAKPOINTS = "power_block.breakpoints"
 BREAKPOINT_COLUMNS = ("input_mw_th", "efficiency")
@@ -213,19 +218,29 @@ def case_workbook_bytes(case: Case) -> bytes:
     return buffer.getvalue()
 
 
-def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "workbook") -> Case:
-    """Read a case workbook written by :func:`write_case_workbook` (or filled in by hand)."""
-    if isinstance(source, bytes):
-        source = io.BytesIO(source)
-    try:
-        sheets = pd.read_excel(source, sheet_name=None, dtype=object)
-    except Exception as exc:  # openpyxl raises many types for a file that is not a workbook
-        raise CaseError(f"{label}: cannot be read as an Excel workbook ({exc})") from None
+def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "workbook",
+                       budget: UploadBudget | None = None) -> Case:
+    """Read a case workbook written by :func:`write_case_workbook` (or filled in by hand).
+
+    The workbook is read as an upload: within ``budget`` (by default the limits of
+    :class:`~rvpp.data.files.UploadLimits`), its zip inflated and counted before the
+    sheets are parsed, the sheets streamed row by row.
+    """
+    budget = budget or UploadBudget(UploadLimits())
+    if isinstance(source, (str, Path)):
+        source = read_file(Path(source), label, max_bytes=budget.limits.upload_bytes)
+    elif isinstance(source, io.BytesIO):
+        source = source.getvalue()
+    sheets = _read_sheets(source, label, budget)
     required = ("case", "hpa_tariff", "history")
     missing = [name for name in required if name not in sheets]
     if missing:
         raise CaseError(f"{label}: sheet {missing[0]!r} is missing (a case workbook has the sheets case, "
                         f"hpa_tariff, budgets, {', '.join(UNIT_KINDS)}, breakpoints and history)")
+    for name, columns in (("case", ("field", "value")), ("budgets", ("source", "gamma")),
+                          ("breakpoints", ("unit", *BREAKPOINT_COLUMNS)), ("history", ("timestamp",))):
+        if name in sheets:
+            _require_columns(sheets[name], name, columns, label)
     data = _settings(sheets["case"], label)
     data.setdefault("markets", {})["hpa_tariff_eur_per_mwh"] = _tariff(sheets["hpa_tariff"], label)
     budgets = sheets.get("budgets", pd.DataFrame(columns=["source", "gamma"]))
@@ -242,9 +257,84 @@ def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "wo
             if kind == "csp":
                 unit.setdefault("power_block", {})["breakpoints"] = points.get(unit.get("name"), [])
             data["units"].setdefault(kind, []).append(unit)
-    history = History(sheets["history"].astype({"timestamp": str}) if "timestamp" in sheets["history"]
-                      else sheets["history"], source=f"{label}, sheet history")
-    return parse_case(data, history)
+    history = sheets["history"]
+    history["timestamp"] = [None if _is_empty(t) else str(t) for t in history["timestamp"]]
+    case = parse_case(data, History(history, source=f"{label}, sheet history"))
+    budget.check_time(f"checking {label}")
+    return case
+
+
+def _read_sheets(data: bytes, label: str, budget: UploadBudget) -> dict[str, pd.DataFrame]:
+    """Every sheet of the workbook as a table of cell values (first row: the column names).
+
+    The zip is inflated once and counted before openpyxl parses it (its headers are not
+    trusted); rows are streamed, so a sheet larger than the limits is refused early.
+    """
+    limits = budget.limits
+    with open_zip(data, label, limits, expected="an Excel workbook (.xlsx)") as archive:
+        for member in archive.infolist():
+            unzip(archive, member, label, budget, keep=False)
+    try:
+        book = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True, keep_links=False)
+    except Exception as exc:  # openpyxl raises many types for a zip that is not a workbook
+        raise CaseFileError(f"{label}: cannot be read as an Excel workbook ({excerpt(exc, 120)})") from None
+    sheets = {}
+    try:
+        for sheet in book.worksheets:
+            sheet.reset_dimensions()  # the recorded size may lie: read the rows that are there
+            rows = []
+            for row in sheet.iter_rows(values_only=True):
+                if len(rows) > limits.history_rows:
+                    raise UploadLimitError(f"{label}: sheet {excerpt(sheet.title)!r} has more than "
+                                           f"{limits.history_rows:,} rows; an upload may have at most "
+                                           f"{limits.history_rows:,}")
+                if len(row) > limits.history_columns:
+                    raise UploadLimitError(f"{label}: sheet {excerpt(sheet.title)!r} row {len(rows) + 1} reaches "
+                                           f"column {len(row):,}; an upload may have at most "
+                                           f"{limits.history_columns:,} columns")
+                if len(rows) % 1000 == 0:
+                    budget.check_time(f"reading sheet {excerpt(sheet.title)!r} of {label}")
+                rows.append(row)
+            sheets[sheet.title] = _table(rows, sheet.title, label)
+    except (KeyError, ValueError, TypeError, OSError, zipfile.BadZipFile, ElementTree.ParseError) as exc:
+        raise CaseFileError(f"{label}: cannot be read as an Excel workbook ({excerpt(exc, 120)})") from None
+    finally:
+        book.close()
+    return sheets
+
+
+def _table(rows: list[tuple], sheet: str, label: str) -> pd.DataFrame:
+    """Cell values under their header row; empty trailing rows and columns left out."""
+    while rows and all(_is_empty(v) for v in rows[-1]):
+        rows.pop()
+    if not rows:
+        return pd.DataFrame()
+    width = max(_width(row) for row in rows)
+    header = [f"Unnamed: {i}" if _is_empty(v) else str(v).strip() for i, v in enumerate(rows[0][:width])]
+    header += [f"Unnamed: {i}" for i in range(len(header), width)]
+    seen: dict[str, int] = {}
+    for i, name in enumerate(header):
+        if name in seen:
+            raise CaseError(f"{label}: sheet {excerpt(sheet)!r} has the column {excerpt(name)!r} twice "
+                            f"(columns {seen[name] + 1} and {i + 1})")
+        seen[name] = i
+    body = [tuple(row[:width]) + (None,) * (width - len(row[:width])) for row in rows[1:]]
+    return pd.DataFrame(body, columns=header, dtype=object)
+
+
+def _width(row: tuple) -> int:
+    """Cells up to the last one that holds a value."""
+    width = len(row)
+    while width and _is_empty(row[width - 1]):
+        width -= 1
+    return width
+
+
+def _require_columns(sheet: pd.DataFrame, name: str, columns: tuple[str, ...], label: str) -> None:
+    missing = [c for c in columns if c not in sheet.columns]
+    if missing:
+        raise CaseError(f"{label}: sheet {name!r} needs the columns {', '.join(columns)} in its first row "
+                        f"(missing: {', '.join(missing)})")
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -273,12 +363,22 @@ def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
 
 
 def _unflatten(flat: Mapping[str, Any]) -> dict[str, Any]:
+    """``{"storage.e_min_mwh_th": 110}`` -> ``{"storage": {"e_min_mwh_th": 110}}``.
+
+    A name that is both a value and a section (``storage`` and ``storage.eta_ch``)
+    raises :class:`CaseError`.
+    """
     nested: dict[str, Any] = {}
     for key, value in flat.items():
         *parents, leaf = key.split(".")
         node = nested
-        for part in parents:
+        for depth, part in enumerate(parents, start=1):
             node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise CaseError(f"{excerpt(key)!r}: {'.'.join(parents[:depth])!r} is given both as a value and as a "
+                                "section of fields")
+        if isinstance(node.get(leaf), dict):
+            raise CaseError(f"{excerpt(key)!r} is given both as a value and as a section of fields")
         node[leaf] = value
     return nested
 
@@ -332,16 +432,26 @@ def _units_from_table(kind: str, table: pd.DataFrame) -> list[dict[str, Any]]:
 
 
 def _settings(sheet: pd.DataFrame, label: str) -> dict[str, Any]:
-    if not {"field", "value"} <= set(sheet.columns):
-        raise CaseError(f"{label}: sheet 'case' needs the columns field and value")
-    flat = {str(row["field"]).strip(): _plain(row["value"]) for row in sheet.to_dict(orient="records")
-            if not _is_empty(row["field"])}
+    flat: dict[str, Any] = {}
+    rows: dict[str, int] = {}
+    for row_number, row in enumerate(sheet.to_dict(orient="records"), start=2):
+        if _is_empty(row["field"]):
+            continue
+        field = str(row["field"]).strip()
+        if field in rows:
+            raise CaseError(f"{label}: sheet 'case' gives the field {excerpt(field)!r} twice (rows {rows[field]} "
+                            f"and {row_number}); keep one")
+        rows[field] = row_number
+        flat[field] = _plain(row["value"])
     flat = {key: value for key, value in flat.items() if value is not None or key == "description"}
     if isinstance(flat.get("delivery_date"), dt.date):
         flat["delivery_date"] = flat["delivery_date"].isoformat()
     if flat.get("description") is None:
         flat["description"] = ""
-    return _unflatten(flat)
+    try:
+        return _unflatten(flat)
+    except CaseError as err:
+        raise CaseError(f"{label}: sheet 'case': {err}") from None
 
 
 def _tariff(sheet: pd.DataFrame, label: str) -> list[Any]:

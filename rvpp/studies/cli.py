@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
+from ..cli import Number, choice_of, listed, path_option
 from ..data.case import STRATEGIES, load_case, parse_markets, with_options
-from ..errors import RvppError
+from ..data.files import excerpt
+from ..data.periods import ALLOWED_DT_H
 from ..settle.recourse import Penalties
-from .settings import (HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS,
-                       StudySettings, parse_numbers)
+from ..solving.parallel import SCHEDULERS
+from .settings import HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 
@@ -25,36 +28,46 @@ def add_study_commands(commands) -> None:
                     "tables.xlsx), figures (HTML, PNG) and report.md to --out.")
     study.add_argument("name", choices=[*STUDIES, REPRODUCE],
                        help="the study; reproduce runs those of the paper (all but stress)")
-    study.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case folder (default: the paper case)")
+    study.add_argument("--case", type=path_option, default=DEFAULT_CASE,
+                       help="case folder (default: the paper case)")
     study.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
-    study.add_argument("--dt", type=float, choices=(1.0, 0.5, 0.25), help="period length in hours")
-    study.add_argument("--out", type=Path, help="output folder (default: out/study-NAME)")
-    study.add_argument("--scheduler", default="processes",
+    study.add_argument("--dt", type=choice_of(ALLOWED_DT_H, "h"), help="period length in hours: 1, 0.5 or 0.25")
+    study.add_argument("--out", type=path_option, help="output folder (default: out/study-NAME)")
+    study.add_argument("--scheduler", type=_scheduler, default="processes",
                        help="processes (default: local process pool), serial, local (a local Dask cluster) "
                             "or the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    study.add_argument("--workers", type=int, help="worker processes of a local pool or cluster (default: cores)")
-    study.add_argument("--strategies", type=_names(STRATEGIES), help="comma-separated subset of "
-                       + ",".join(STRATEGIES))
-    study.add_argument("--gammas", type=_numbers(whole=True), help="Γ grid of the sensitivity, e.g. 0,6,12 "
-                       "(default: every hour of the day)")
-    study.add_argument("--sources", type=_words, default=(), help="sensitivity: sweep these sources or kinds "
-                       "one at a time, e.g. PV1,wind,price (default: all sources at once)")
-    study.add_argument("--market-sets", type=_market_sets, help="market sets of Table 10, e.g. "
-                       f"DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
-    study.add_argument("--hpa-prices", type=_numbers(whole=False), help="flat HPA tariffs [EUR/MWh_th] "
-                       f"(default {','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
-    study.add_argument("--test-days", type=int, default=TEST_DAYS, help=f"out-of-sample days (default {TEST_DAYS})")
-    study.add_argument("--scenarios", type=_numbers(whole=True), help="scenario counts N of the stochastic "
-                       f"benchmark (default {','.join(map(str, SCENARIO_COUNTS))})")
-    study.add_argument("--seed", type=int, default=SEED, help=f"seed of the scenario sampling (default {SEED})")
-    study.add_argument("--sp-time-limit", type=float, default=SP_TIME_LIMIT_S, metavar="S",
-                       help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
-    study.add_argument("--time-limit", type=float, metavar="S", help="time limit of every other solve [s]")
+    study.add_argument("--workers", type=Number(1, whole=True),
+                       help="worker processes of a local pool or cluster (default: cores)")
+    study.add_argument("--strategies", type=listed(_choice(STRATEGIES), "a comma-separated subset of "
+                                                   + ",".join(STRATEGIES)),
+                       help="comma-separated subset of " + ",".join(STRATEGIES))
+    study.add_argument("--gammas", type=listed(Number(0, whole=True), "whole numbers >= 0 such as 0,6,12"),
+                       help="Γ grid of the sensitivity, e.g. 0,6,12 (default: every hour of the day)")
+    study.add_argument("--sources", type=listed(str, "source names or kinds such as PV1,wind,price"), default=(),
+                       help="sensitivity: sweep these sources or kinds one at a time, e.g. PV1,wind,price "
+                            "(default: all sources at once)")
+    study.add_argument("--market-sets", type=listed(_market_set, "market sets such as DAM,DAM+SRM+HPA"),
+                       help=f"market sets of Table 10, e.g. DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
+    study.add_argument("--hpa-prices", type=listed(Number(0, unit="EUR/MWh_th"), "tariffs >= 0 such as 70,60,50"),
+                       help=f"flat HPA tariffs [EUR/MWh_th] (default {','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
+    study.add_argument("--test-days", type=Number(1, whole=True), default=TEST_DAYS,
+                       help=f"out-of-sample days (default {TEST_DAYS})")
+    study.add_argument("--scenarios", type=listed(Number(1, whole=True), "whole numbers >= 1 such as 5,10"),
+                       help=f"scenario counts N of the stochastic benchmark (default "
+                            f"{','.join(map(str, SCENARIO_COUNTS))})")
+    study.add_argument("--seed", type=Number(0, whole=True), default=SEED,
+                       help=f"seed of the scenario sampling, >= 0 (default {SEED})")
+    study.add_argument("--sp-time-limit", type=Number(0, low_open=True, unit="s"), default=SP_TIME_LIMIT_S,
+                       metavar="S", help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
+    study.add_argument("--time-limit", type=Number(0, low_open=True, unit="s"), metavar="S",
+                       help="time limit of every other solve [s]")
     penalties = Penalties()
-    study.add_argument("--m-def", type=float, default=penalties.m_def, help="deficit price multiplier")
-    study.add_argument("--m-sur", type=float, default=penalties.m_sur, help="surplus price multiplier")
-    study.add_argument("--m-sr", type=float, default=penalties.m_sr, help="reserve shortfall price multiplier")
-    study.add_argument("--c-heat", type=float, metavar="EUR_PER_MWH",
+    multiplier = Number(0)
+    study.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
+    study.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
+    study.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
+                       help="reserve shortfall price multiplier, >= 0")
+    study.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
                        help="price of unserved heat (default: twice the highest HPA tariff)")
     study.add_argument("--fix-commitment", action="store_true",
                        help="settle with the plan's CSP turbine schedule: no start where the plan is off")
@@ -63,37 +76,25 @@ def add_study_commands(commands) -> None:
     study.set_defaults(run=run_study_command)
 
 
-def _names(allowed):
-    def parse(text: str) -> tuple[str, ...]:
-        names = _words(text)
-        unknown = [n for n in names if n not in allowed]
-        if unknown:
-            raise argparse.ArgumentTypeError(f"unknown {unknown[0]!r}; choose from {', '.join(allowed)}")
-        return names
-    return parse
+def _choice(allowed: tuple[str, ...]):
+    def convert(name: str) -> str:
+        if name not in allowed:
+            raise argparse.ArgumentTypeError(f"unknown {excerpt(name)!r}; choose from {', '.join(allowed)}")
+        return name
+    return convert
 
 
-def _market_sets(text: str) -> tuple[str, ...]:
-    sets = _words(text)
-    for item in sets:
-        try:
-            parse_markets(item)
-        except RvppError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
-    return sets
+def _market_set(text: str) -> str:
+    parse_markets(text)  # raises a CaseError naming the market
+    return text
 
 
-def _words(text: str) -> tuple[str, ...]:
-    return tuple(part.strip() for part in text.split(",") if part.strip())
-
-
-def _numbers(whole: bool):
-    def parse(text: str) -> tuple:
-        try:
-            return parse_numbers(text, whole)
-        except ValueError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
-    return parse
+def _scheduler(text: str) -> str:
+    """``--scheduler``: a name of :data:`SCHEDULERS` or a Dask scheduler address ``[proto://]host:port``."""
+    if text in SCHEDULERS or re.fullmatch(r"(?:[a-z]+://)?[^\s:/]+:\d{1,5}", text):
+        return text
+    raise argparse.ArgumentTypeError(f"{excerpt(text)!r} is neither {', '.join(SCHEDULERS)} nor a scheduler "
+                                     "address such as tcp://10.0.0.5:8786")
 
 
 def settings_from(args: argparse.Namespace) -> StudySettings:

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..data.case import Case
+from ..outputs.export import replacing
 from ..solving.extract import SOLVER_ZERO
 from .findings import findings
 from .runner import StudyOutput
@@ -93,11 +94,11 @@ def write_tables(outputs: Sequence[StudyOutput], folder: Path) -> list[Path]:
     written = []
     tables = {name: table for out in outputs for name, table in out.tables.items()}
     for name, table in tables.items():
-        (target / f"{name}.csv").write_text(table_csv(table), encoding="utf-8")
-        (target / f"{name}.md").write_text(markdown_table(table) + "\n", encoding="utf-8")
+        _write(target / f"{name}.csv", table_csv(table))
+        _write(target / f"{name}.md", markdown_table(table) + "\n")
         written += [target / f"{name}.csv", target / f"{name}.md"]
     workbook = folder / "tables.xlsx"
-    workbook.write_bytes(tables_workbook_bytes(tables))
+    _write(workbook, tables_workbook_bytes(tables))
     return written + [workbook]
 
 
@@ -108,7 +109,8 @@ def write_figures(outputs: Sequence[StudyOutput], folder: Path, png: bool) -> li
     figures = {name: fig for out in outputs for name, fig in out.figures.items()}
     written = []
     for name, fig in figures.items():
-        fig.write_html(target / f"{name}.html", include_plotlyjs="directory")
+        with replacing(target / f"{name}.html") as path:
+            fig.write_html(path, include_plotlyjs="directory")
         written.append(target / f"{name}.html")
     if png and figures:
         written += _write_png(figures, target)
@@ -123,7 +125,8 @@ def _write_png(figures: dict, target: Path) -> list[Path]:
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="The kopts argument is ignored")
             for name, fig in figures.items():
-                fig.write_image(target / f"{name}.png", width=1100, height=520)
+                with replacing(target / f"{name}.png") as path:
+                    fig.write_image(path, width=1100, height=520)
     finally:
         kaleido.stop_sync_server()
     return [target / f"{name}.png" for name in figures]
@@ -182,7 +185,7 @@ def write_report(outputs: Sequence[StudyOutput], folder: Path, case: Case, setti
                   f"({'one set for every method' if len(checks['realization_sets']) == 1 else 'DIFFERENT sets'}); "
                   f"days whose realization differs between methods: {checks['days_with_differing_realizations']}."]
     path = folder / "report.md"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    _write(path, "\n".join(lines) + "\n")
     return path
 
 
@@ -197,8 +200,14 @@ def write_run_info(folder: Path, case: Case, settings: StudySettings, outputs: S
             "consistency": consistency(outputs),
             "findings": [asdict(f) for f in findings({out.name: out for out in outputs})], **run_info}
     path = folder / "run.json"
-    path.write_text(json.dumps(info, indent=2, default=str) + "\n", encoding="utf-8")
+    _write(path, json.dumps(info, indent=2, default=str) + "\n")
     return path
+
+
+def _write(path: Path, content: str | bytes) -> None:
+    """Write ``content`` to ``path`` atomically (UTF-8 for text)."""
+    with replacing(path) as temporary:
+        temporary.write_bytes(content.encode("utf-8") if isinstance(content, str) else content)
 
 
 def write_all(outputs: Sequence[StudyOutput], folder: str | Path, case: Case, settings: StudySettings,

@@ -1,0 +1,179 @@
+"""Property: loading any mutation of the default case either succeeds or raises rvpp's own error.
+
+The mutations are those a careless edit or a hostile upload makes: keys dropped or
+renamed, numbers replaced by extremes (0, -1, 1e308, nan, inf, huge integers), types
+swapped (text for a list, a list for a mapping), units duplicated, sections reordered,
+and bytes of the YAML text cut, doubled or replaced. Whatever comes in, the only
+acceptable failure is an :class:`rvpp.errors.RvppError` whose message names the problem;
+any other exception is a bug.
+"""
+
+from __future__ import annotations
+
+import copy
+import datetime as dt
+import math
+from typing import Any
+
+import pandas as pd
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rvpp.data.case import parse_case, with_options
+from rvpp.data.history import History
+from rvpp.errors import CaseError, RvppError
+from rvpp.outputs.bundle import read_case_files
+
+from tests.factories import PAPER
+
+RAW = yaml.safe_load((PAPER / "case.yaml").read_text(encoding="utf-8"))
+FAST = dict(deadline=dt.timedelta(seconds=5), suppress_health_check=[HealthCheck.too_slow])
+
+EXTREMES = [0, -1, 1, 0.5, 1e308, -1e308, 5e-324, math.nan, math.inf, -math.inf, 10 ** 30, -10 ** 30, 2 ** 63,
+            True, False, None, "", "x", "nan", "1e999", "2025-13-45", "../../etc/hostname", "\x00\x1b", "é" * 50,
+            [], [1, 2, 3], [[0, 0], [1, 1]], {}, {"a": 1}, {"name": "X"}, list(range(30)), dt.date(2025, 5, 5)]
+
+
+@pytest.fixture(scope="module")
+def short_history(paper_case):
+    """The paper history around its delivery date: enough for the bands, quick to parse."""
+    frame = paper_case.history.frame
+    start = pd.Timestamp(paper_case.delivery_date, tz="UTC") - pd.Timedelta(days=35)
+    return History(frame[(frame.index >= start) & (frame.index < start + pd.Timedelta(days=40))])
+
+
+@pytest.fixture(scope="module")
+def short_csv(short_history, tmp_path_factory):
+    path = tmp_path_factory.mktemp("history") / "history.csv"
+    short_history.to_csv(path, "Europe/Madrid")
+    return path.read_bytes()
+
+
+def paths(data: Any, prefix: tuple = ()) -> list[tuple]:
+    """Every location in nested data: mapping keys and list positions."""
+    found = [prefix] if prefix else []
+    if isinstance(data, dict):
+        for key, value in data.items():
+            found += paths(value, prefix + (key,))
+    elif isinstance(data, list):
+        for i, value in enumerate(data):
+            found += paths(value, prefix + (i,))
+    return found
+
+
+def _parent(data: Any, path: tuple) -> Any:
+    for part in path[:-1]:
+        data = data[part]
+    return data
+
+
+@st.composite
+def mutated_cases(draw) -> dict:
+    data = copy.deepcopy(RAW)
+    for _ in range(draw(st.integers(1, 4))):
+        where = paths(data)
+        if not where:
+            break
+        path = draw(st.sampled_from(where))
+        parent, key = _parent(data, path), path[-1]
+        action = draw(st.sampled_from(["drop", "extreme", "text-to-list", "rename", "duplicate", "shuffle",
+                                       "wrap"]))
+        if action == "drop":
+            del parent[key]
+        elif action == "extreme":
+            parent[key] = copy.deepcopy(draw(st.sampled_from(EXTREMES)))
+        elif action == "text-to-list":
+            parent[key] = [parent[key]] if not isinstance(parent[key], list) else {"items": parent[key]}
+        elif action == "rename" and isinstance(parent, dict):
+            parent[draw(st.sampled_from(["", "Name", "units ", "p_max_MW", "1", "history"]))] = parent.pop(key)
+        elif action == "duplicate" and isinstance(parent, list):
+            parent.append(copy.deepcopy(parent[key]))
+        elif action == "shuffle" and isinstance(parent, dict):
+            items = list(parent.items())
+            order = draw(st.permutations(range(len(items))))
+            parent.clear()
+            parent.update(items[i] for i in order)
+        elif action == "wrap":
+            parent[key] = {"value": parent[key]}
+    return data
+
+
+def load_or_refuse(load) -> None:
+    """Call ``load``; success and RvppError are fine, the error must name something."""
+    try:
+        load()
+    except RvppError as err:
+        message = str(err)
+        assert message.strip() and "Traceback" not in message
+        if isinstance(err, CaseError):
+            assert err.problems and all(isinstance(p, str) and p for p in err.problems)
+
+
+def _check_mutation(data: dict, history: History) -> None:
+    load_or_refuse(lambda: parse_case(data, history))
+
+
+def _check_text(text: bytes, csv: bytes) -> None:
+    load_or_refuse(lambda: read_case_files({"case.yaml": text, "history.csv": csv}))
+
+
+@settings(max_examples=100, **FAST)
+@given(data=mutated_cases())
+def test_a_mutated_case_loads_or_is_refused_by_rule(short_history, data):
+    _check_mutation(data, short_history)
+
+
+@settings(max_examples=60, **FAST)
+@given(data=mutated_cases())
+def test_a_mutated_case_yaml_uploads_or_is_refused_by_rule(short_csv, data):
+    text = yaml.safe_dump(data, sort_keys=False, allow_unicode=True).encode()
+    _check_text(text, short_csv)
+
+
+@st.composite
+def damaged_texts(draw) -> bytes:
+    """The default case.yaml with bytes cut, doubled or replaced."""
+    text = bytearray((PAPER / "case.yaml").read_bytes())
+    for _ in range(draw(st.integers(1, 6))):
+        at = draw(st.integers(0, len(text) - 1))
+        span = draw(st.integers(1, 40))
+        action = draw(st.sampled_from(["cut", "double", "replace", "insert"]))
+        if action == "cut":
+            del text[at:at + span]
+        elif action == "double":
+            text[at:at] = text[at:at + span]
+        else:
+            new = draw(st.binary(min_size=1, max_size=8) | st.sampled_from(
+                [b":", b"- ", b"&a ", b"*a", b"{", b"[", b"\t", b"'", b"!!python/object ", b"\xff", b"<<: "]))
+            text[at:at + (span if action == "replace" else 0)] = new
+        if not text:
+            break
+    return bytes(text)
+
+
+@settings(max_examples=60, **FAST)
+@given(text=damaged_texts())
+def test_a_damaged_case_yaml_uploads_or_is_refused_by_rule(short_csv, text):
+    _check_text(text, short_csv)
+
+
+@settings(max_examples=60, **FAST)
+@given(hpa_flat=st.sampled_from([None, *EXTREMES[:14]]), time_limit=st.sampled_from([None, *EXTREMES[:14]]),
+       gap=st.sampled_from([None, *EXTREMES[:14]]), threads=st.sampled_from([None, *EXTREMES[:14]]),
+       markets=st.sampled_from([None, "", ",", "DAM", "SRM", "dam+hpa", "DAM,IDM", "DAM,,SRM"]),
+       dt_h=st.sampled_from([None, 1, 0.25, 0.3, 0, -1, math.nan]),
+       date=st.sampled_from([None, "2025-05-05", "", "2025-02-30", "1900-01-01", 20250505]))
+def test_run_options_apply_or_are_refused_by_rule(paper_case, hpa_flat, time_limit, gap, threads, markets, dt_h,
+                                                  date):
+    load_or_refuse(lambda: with_options(paper_case, hpa_flat=hpa_flat, time_limit_s=time_limit, rel_gap=gap,
+                                        threads=threads, markets=markets, dt_h=dt_h, date=date))
+
+
+@pytest.mark.slow
+@settings(max_examples=800, **FAST)
+@given(data=mutated_cases(), text=damaged_texts())
+def test_many_more_mutations_load_or_are_refused_by_rule(short_history, short_csv, data, text):
+    _check_mutation(data, short_history)
+    _check_text(text, short_csv)
