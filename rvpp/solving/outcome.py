@@ -48,7 +48,8 @@ MESSAGES = {
 
 @dataclass(frozen=True)
 class SolveOutcome:
-    """One solver run: outcome, incumbent objective and bound, relative gap, wall time [s].
+    """One solver run: outcome, incumbent objective and bound, relative gap, wall time [s],
+    and the search's size (branch-and-bound nodes, simplex iterations) where HiGHS reports it.
 
     ``objective`` is ``None`` unless the outcome is usable; ``bound`` is ``None`` unless it
     is finite; ``termination`` keeps the solver interface's own name for the ending.
@@ -61,6 +62,8 @@ class SolveOutcome:
     gap: float | None = None
     seconds: float = 0.0
     message: str = ""
+    nodes: int | None = None
+    lp_iterations: int | None = None
 
     @property
     def usable(self) -> bool:
@@ -68,7 +71,8 @@ class SolveOutcome:
 
     @classmethod
     def of(cls, status: Outcome, termination: str, objective: float | None, bound: float | None,
-           seconds: float, note: str = "") -> "SolveOutcome":
+           seconds: float, note: str = "", nodes: int | None = None,
+           lp_iterations: int | None = None) -> "SolveOutcome":
         """Build a consistent record: numbers only where usable, the gap from objective and bound."""
         bound = bound if bound is not None and math.isfinite(bound) else None
         if status is Outcome.TIME_LIMIT and (objective is None or bound is None):
@@ -79,4 +83,4 @@ class SolveOutcome:
         if objective is not None and bound is not None:
             gap = abs(bound - objective) / max(abs(objective), 1e-9)
         message = "; ".join(part for part in (MESSAGES[status], note) if part)
-        return cls(status, termination, objective, bound, gap, seconds, message)
+        return cls(status, termination, objective, bound, gap, seconds, message, nodes, lp_iterations)

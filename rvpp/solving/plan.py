@@ -59,7 +59,8 @@ def solve_problem(problem: Problem, progress: Progress | None = None, started: f
     say("done")
     return Result(problem=problem, status=outcome.status, termination=outcome.termination, message=message,
                   objective_eur=outcome.objective, bound_eur=outcome.bound, mip_gap=outcome.gap, build_s=build_s,
-                  solve_s=outcome.seconds, extract_s=extract_s, **tables)
+                  solve_s=outcome.seconds, extract_s=extract_s, nodes=outcome.nodes,
+                  lp_iterations=outcome.lp_iterations, **tables)
 
 
 def write_mps(case: Case, path) -> None:

@@ -37,6 +37,8 @@ class Result:
     build_s: float = 0.0
     solve_s: float = 0.0
     extract_s: float = 0.0
+    nodes: int | None = None
+    lp_iterations: int | None = None
     parts: dict[str, float] = field(default_factory=dict)
     protection_eur: dict[str, float] = field(default_factory=dict)
     market: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
