@@ -8,10 +8,12 @@ every activation scenario ``s``; ``p_θ = e[none]``, ``r↑_θ = e[up] − e[non
 
 from __future__ import annotations
 
+import numpy as np
 import pyomo.environ as pyo
 
 from ..data.case import CSP
 from ..solving.problem import Problem
+from ..solving.robust import surely_deviating
 from .market import activation
 from .curve import on_curve
 from .piecewise import add_convex_combination, add_incremental
@@ -41,9 +43,11 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
 
     Valid tightening: the storage charges only from the solar field (while charging
     it does not discharge and the power block takes no negative input), so
-    ``p_ch ≤ min(P̄ch, P̂sf)·u``. In periods without sun charging mode can only idle,
-    so the mode is fixed to discharging there whenever discharging mode can idle too
-    (``P̲dis = 0``) or charging mode cannot (``P̲ch > 0``).
+    ``p_ch ≤ min(P̄ch, P̂sf)·u``, where ``P̂sf`` is the field's highest robust
+    availability (the nominal value, less the deviation in the periods that surely
+    deviate). In periods without sun charging mode can only idle, so the mode is fixed
+    to discharging there whenever discharging mode can idle too (``P̲dis = 0``) or
+    charging mode cannot (``P̲ch > 0``).
     """
     b = m.csp[csp.name]
     ts, dt = csp.storage, problem.dt_h
@@ -60,7 +64,8 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.sigma_up = pyo.Var(bounds=(0.0, 1.0))
     b.sigma_dn = pyo.Var(bounds=(0.0, 1.0))
 
-    field = problem.sources[csp.name].nominal
+    source = problem.sources[csp.name]
+    field = np.maximum(source.nominal - np.where(surely_deviating(problem, csp.name), source.deviation, 0.0), 0.0)
     idle_when_discharging = ts.p_dis_min_mw_th == 0.0 or ts.p_ch_min_mw_th > 0.0
     for t in m.T:
         if field[t - 1] <= 0.0 and idle_when_discharging:
@@ -164,6 +169,8 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
             _order_fill(m, b, len(curve.lengths) - 1)
     else:
         add_convex_combination(b, "pb", index, b.x, b.e, b.online, curve)
+    if len(m.S) > 1:
+        _reserve_slopes(m, b, curve)
 
 
 def _order_fill(m: pyo.ConcreteModel, b, n_fill: int) -> None:
@@ -173,6 +180,18 @@ def _order_fill(m: pyo.ConcreteModel, b, n_fill: int) -> None:
         b.pb_fill["none", t, k] <= b.pb_fill["up", t, k]))
     b.pb_fill_order_dn = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
         b.pb_fill["dn", t, k] <= b.pb_fill["none", t, k]))
+
+
+def _reserve_slopes(m: pyo.ConcreteModel, b, curve) -> None:
+    """Valid inequalities: between two inputs on the curve the output changes at a rate
+    between the curve's smallest and largest slope [MW per MW_th], so
+    ``s̲·r_ts↑ ≤ e_up − e_none ≤ s̄·r_ts↑`` and ``s̲·r_ts↓ ≤ e_none − e_dn ≤ s̄·r_ts↓``
+    (off, every term is zero). They tie the reserve scenarios to the nominal output."""
+    low, high = float(curve.slopes.min()), float(curve.slopes.max())
+    b.pb_slope_up_low = pyo.Constraint(m.T, rule=lambda b, t: b.e["up", t] - b.e["none", t] >= low * b.r_ts_up[t])
+    b.pb_slope_up_high = pyo.Constraint(m.T, rule=lambda b, t: b.e["up", t] - b.e["none", t] <= high * b.r_ts_up[t])
+    b.pb_slope_dn_low = pyo.Constraint(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t] >= low * b.r_ts_dn[t])
+    b.pb_slope_dn_high = pyo.Constraint(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t] <= high * b.r_ts_dn[t])
 
 
 def add_csp_reserves(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import highspy
 import numpy as np
 import pyomo.environ as pyo
+from pyomo.common.collections import ComponentMap
 from pyomo.core.base.var import VarData
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
@@ -207,11 +208,15 @@ class HighsModel:
         return SolveOutcome.of(status, termination, objective, bound, seconds, note, nodes,
                                int(info.simplex_iteration_count))
 
-    def values(self) -> dict[VarData, float]:
-        """The last usable solution by Pyomo variable (empty without one)."""
-        if self.solution is None:
-            return {}
-        return dict(zip(self.compiled.columns, self.solution.tolist()))
+    def values(self, integer_only: bool = False) -> ComponentMap:
+        """The last usable solution by Pyomo variable (empty without one); ``integer_only``:
+        only the integer variables, the usual MIP start for a neighbouring problem."""
+        values = ComponentMap()
+        if self.solution is not None:
+            for v, x, is_int in zip(self.compiled.columns, self.solution.tolist(), self.compiled.integer.tolist()):
+                if is_int or not integer_only:
+                    values[v] = x
+        return values
 
     def load(self) -> None:
         """Write the last usable solution into the Pyomo variables."""

@@ -12,8 +12,8 @@ from collections.abc import Callable
 
 from ..data.case import Case
 from .diagnose import explain_infeasibility
-from .highs import run_highs
-from .outcome import Outcome
+from .highs import HighsModel
+from .outcome import Outcome, SolveOutcome
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
 from .extract import extract
@@ -37,13 +37,24 @@ def solve_problem(problem: Problem, progress: Progress | None = None, started: f
     started = time.perf_counter() if started is None else started
     reasons = infeasibility_reasons(problem)
     if reasons:
-        return Result(problem=problem, status=Outcome.INFEASIBLE, termination="not solved",
-                      message="; ".join(reasons), build_s=time.perf_counter() - started)
+        return not_solved(problem, reasons, time.perf_counter() - started)
     say(f"building the model ({problem.nt} periods)")
     m = build_model(problem)
     build_s = time.perf_counter() - started
     say("solving with HiGHS")
-    outcome = run_highs(m, problem.case.solver)
+    outcome = HighsModel(m).solve(problem.case.solver)
+    return plan_result(problem, m, outcome, build_s, say)
+
+
+def not_solved(problem: Problem, reasons: list[str], build_s: float) -> Result:
+    """The result of a day whose infeasibility is named before solving."""
+    return Result(problem=problem, status=Outcome.INFEASIBLE, termination="not solved",
+                  message="; ".join(reasons), build_s=build_s)
+
+
+def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, progress: Progress | None = None) -> Result:
+    """Plain tables of a solved model, or the explanation of an infeasible day."""
+    say = progress or (lambda _msg: None)
     tables, extract_s, message = {}, 0.0, outcome.message
     if outcome.usable:
         t0 = time.perf_counter()

@@ -19,8 +19,9 @@ Three variants of the constraint budgets exist (``Budgets.mode`` and
   ``y ≤ dev·χ`` and ``ζ ≤ M·χ`` of the authors' implementation, which make χ land on
   the Γ largest deviations;
 * paper mode, top-Γ encoding (default): since χ is then determined by the data, it is
-  fixed to the Γ largest deviations in advance; only when tied deviations straddle
-  the Γ boundary do binaries choose among the tied periods, so the optimum is the same;
+  fixed to the Γ largest deviations in advance (:func:`top_gamma_choice`); only when
+  tied deviations straddle the Γ boundary do binaries choose among the tied periods,
+  so the optimum is the same;
 * planner-chosen hours: the formulation as printed (``y ≤ M·χ``), under which the
   maximizing operator picks the Γ periods where a deviation hurts least. For teaching.
 """
@@ -78,40 +79,72 @@ def add_price_protection(block, exposure: dict, gamma: int):
     """Worst-case loss of Γ periods: ``Γ·φ + Σt ζ_t`` with ``φ + ζ_t ≥ exposure_t`` [EUR].
 
     Dual of the inner maximisation (paper Protection_obj), equation (MILP-DAMprice).
+    Γ is the mutable parameter ``block.gamma``; the same rows hold for every Γ from 0
+    (``φ`` covers every exposure, no loss) to the number of periods (``φ = 0``, every
+    exposure counts), so a model can be re-solved for another Γ without rebuilding.
     """
     periods = list(exposure)
-    if gamma <= 0:
-        return 0.0
-    if gamma >= len(periods):
-        return sum(exposure[t] for t in periods)
+    block.gamma = pyo.Param(mutable=True, initialize=int(gamma), within=pyo.NonNegativeIntegers)
     block.phi = pyo.Var(domain=pyo.NonNegativeReals)
     block.zeta = pyo.Var(periods, domain=pyo.NonNegativeReals)
     block.dual = pyo.Constraint(periods, rule=lambda b, t: b.phi + b.zeta[t] >= exposure[t])
-    return gamma * block.phi + sum(block.zeta[t] for t in periods)
+    return block.gamma * block.phi + sum(block.zeta[t] for t in periods)
 
 
 def add_budgeted_deviation(block, source: Source, problem: Problem) -> dict:
     """The deviation ``y_t`` [MW] applied to the source's bound, by budget variant.
 
-    Always creates ``block.chi[t]`` (1 in the periods that deviate) and returns
-    ``y_t`` as an expression per period.
+    Always creates ``block.chi[t]`` (1 in the periods that deviate) and the mutable
+    budget ``block.gamma``, and returns ``y_t`` as an expression per period.
     """
     periods = range(1, problem.nt + 1)
     dev = np.asarray(source.deviation, dtype=float)
-    gamma = int(source.gamma)
     block.chi = pyo.Var(periods, domain=pyo.Binary)
+    block.gamma = pyo.Param(mutable=True, initialize=int(source.gamma), within=pyo.NonNegativeIntegers)
+    block.built_gamma = int(source.gamma)
     mode = problem.case.budgets.mode
     encoding = problem.case.solver.budget_encoding
-    if gamma == 0 or dev.max() <= 0.0:
-        for i, t in enumerate(periods):
-            block.chi[t].fix(1 if i < gamma else 0)
+    if dev.max() <= 0.0:  # nothing deviates, whatever the budget
+        _fix_chi(block, top_gamma_choice(dev, int(source.gamma)))
         return {t: 0.0 for t in periods}
-    block.budget = pyo.Constraint(expr=sum(block.chi[t] for t in periods) == gamma)
+    block.budget = pyo.Constraint(expr=sum(block.chi[t] for t in periods) == block.gamma)
     if mode == "planner_chosen":
         return {t: float(dev[t - 1]) * block.chi[t] for t in periods}
     if encoding == "binary":
         return _paper_binary(block, dev, periods)
-    return _paper_top_gamma(block, dev, gamma, periods)
+    _fix_chi(block, top_gamma_choice(dev, int(source.gamma)))
+    return {t: float(dev[t - 1]) * block.chi[t] for t in periods}
+
+
+def set_budgets(m: pyo.ConcreteModel, problem: Problem) -> None:
+    """Give a model built by :func:`add_robustness` the budgets of ``problem``.
+
+    ``problem`` must describe the same case and day as the model, with other Γ values:
+    the mutable budgets change and, under the top-Γ encoding, χ is fixed anew, so the
+    model is re-solved without being rebuilt. A solar field's budget may not fall below
+    the one the model was built with: the storage's charging limit was tightened with
+    the periods that surely deviate then (:func:`surely_deviating`), and those periods
+    only grow with Γ.
+    """
+    for csp in problem.case.csp:
+        if problem.sources[csp.name].gamma < m.robust[csp.name].built_gamma:
+            raise ValueError(f"Γ of {csp.name!r} below the {m.robust[csp.name].built_gamma} the model was built "
+                             "with; build the model with the smallest budget first")
+    top_gamma = problem.case.budgets.mode == "paper" and problem.case.solver.budget_encoding == "top_gamma"
+    for name, source in problem.sources.items():
+        block = m.robust[name]
+        block.gamma.set_value(int(source.gamma))
+        if not source.is_price and (top_gamma or not hasattr(block, "budget")):
+            _fix_chi(block, top_gamma_choice(source.deviation, int(source.gamma)))
+
+
+def _fix_chi(block, chi: np.ndarray) -> None:
+    """Fix χ where the data decide it; leave it free (NaN) among ties at the Γ boundary."""
+    for t in block.chi:
+        if np.isnan(chi[t - 1]):
+            block.chi[t].unfix()
+        else:
+            block.chi[t].fix(int(chi[t - 1]))
 
 
 def _paper_binary(block, dev: np.ndarray, periods) -> dict:
@@ -128,25 +161,34 @@ def _paper_binary(block, dev: np.ndarray, periods) -> dict:
     return {t: block.y[t] for t in periods}
 
 
-def _paper_top_gamma(block, dev: np.ndarray, gamma: int, periods) -> dict:
-    """χ fixed on the Γ largest deviations; binaries only among ties at the boundary."""
+def top_gamma_choice(dev: np.ndarray, gamma: int) -> np.ndarray:
+    """Paper-mode χ decided by the data: 1 on the Γ largest deviations, 0 elsewhere, NaN where
+    tied deviations straddle the Γ boundary (the solver chooses among them)."""
+    dev = np.asarray(dev, dtype=float)
+    chi = np.zeros(len(dev))
+    if gamma <= 0 or len(dev) == 0 or dev.max() <= 0.0:
+        chi[:max(0, gamma)] = 1.0
+        return chi
     order = np.argsort(-dev, kind="stable")
-    threshold = dev[order[gamma - 1]]
+    threshold = dev[order[min(gamma, len(dev)) - 1]]
     above = dev > threshold
     tied = dev == threshold
     needed = gamma - int(above.sum())
-    ambiguous = threshold > 0.0 and int(tied.sum()) > needed
-    for t in periods:
-        i = t - 1
-        if above[i]:
-            block.chi[t].fix(1)
-        elif tied[i] and ambiguous:
-            continue
-        elif tied[i] and needed > 0:
-            block.chi[t].fix(1)
-            needed -= 1
-        else:
-            block.chi[t].fix(0)
-    if not ambiguous:
-        block.del_component(block.budget)
-    return {t: float(dev[t - 1]) * block.chi[t] for t in periods}
+    chi[above] = 1.0
+    if threshold > 0.0 and int(tied.sum()) > needed:
+        chi[tied] = np.nan
+    else:
+        chi[np.flatnonzero(tied)[:needed]] = 1.0
+    return chi
+
+
+def surely_deviating(problem: Problem, name: str) -> np.ndarray:
+    """Periods where source ``name`` sits at its bad bound whatever the solver chooses.
+
+    In paper mode with the top-Γ encoding these are the Γ largest deviations outside a
+    tie; under the other variants the solver places χ, so no period is sure.
+    """
+    source = problem.sources[name]
+    if problem.case.budgets.mode != "paper" or problem.case.solver.budget_encoding != "top_gamma":
+        return np.zeros(problem.nt, dtype=bool)
+    return top_gamma_choice(source.deviation, int(source.gamma)) == 1.0
