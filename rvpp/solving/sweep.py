@@ -1,9 +1,10 @@
 """A delivery day re-solved for a grid of budgets Γ without rebuilding the model.
 
-The model of the day is built once, at the smallest Γ of the grid; every further Γ only
-changes the mutable budgets and the fixed χ of the robust layer
-(:func:`rvpp.solving.robust.set_budgets`), recompiles the matrix and re-solves, starting
-HiGHS from the commitment, storage modes and curve segments of the neighbouring Γ. Each
+The model of the day is built once, at the smallest Γ of the grid, and kept in a
+:class:`~rvpp.solving.persistent.DayModel`: every further Γ only changes the mutable
+budgets and the fixed χ of the robust layer, recompiles the matrix and re-solves,
+starting HiGHS from the commitment, storage modes and curve segments of the
+neighbouring Γ. Each
 point is the same plain :class:`~rvpp.solving.results.Result` that
 ``rvpp.solve(with_options(case, gammas=...))`` returns for it.
 """
@@ -11,17 +12,13 @@ point is the same plain :class:`~rvpp.solving.results.Result` that
 from __future__ import annotations
 
 import dataclasses
-import time
 from collections.abc import Callable, Iterable, Sequence
 
 from ..data.case import Case, with_options
 from ..errors import RvppError
-from ..model import build_model
-from .highs import HighsModel
-from .plan import not_solved, plan_result
-from .problem import Problem, infeasibility_reasons, prepare, strategy_budgets
+from .persistent import DayModel
+from .problem import Problem, prepare, strategy_budgets
 from .results import Result
-from .robust import set_budgets
 
 Progress = Callable[[int, int], None]
 
@@ -40,33 +37,17 @@ def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None
     unknown = [n for n in names if n not in case.sources()]
     if unknown:
         raise RvppError(f"sources: unknown source {unknown[0]!r}; choose from {', '.join(case.sources())}")
-    started = time.perf_counter()
     base = prepare(with_options(case, gammas={name: min(grid) for name in names}))
     outside = [g for g in grid if not 0 <= g <= base.nt]
     if outside:
         raise RvppError(f"Γ grid: {outside[0]} is outside 0..{base.nt}, the periods of {case.delivery_date}")
-    m = build_model(base)
-    model = HighsModel(m)
-    build_s = time.perf_counter() - started
     report = progress or (lambda _done, _total: None)
     order = sorted(set(grid))
     report(0, len(order))
+    day = DayModel()
     solved: dict[int, Result] = {}
-    start = None
     for done, gamma in enumerate(order, start=1):
-        t0 = time.perf_counter()
-        problem = with_budgets(base, with_options(case, gammas={name: gamma for name in names}))
-        reasons = infeasibility_reasons(problem)
-        if reasons:
-            solved[gamma] = not_solved(problem, reasons, build_s)
-        else:
-            set_budgets(m, problem)
-            model.refresh()
-            outcome = model.solve(problem.case.solver, start=start)
-            if outcome.usable:
-                start = model.values(integer_only=True)
-            solved[gamma] = plan_result(problem, m, outcome, build_s + time.perf_counter() - t0 - outcome.seconds)
-        build_s = 0.0  # the model was built once, for the first point
+        solved[gamma] = day.solve(with_budgets(base, with_options(case, gammas={name: gamma for name in names})))
         report(done, len(order))
     return [solved[g] for g in grid]
 

@@ -1,0 +1,40 @@
+"""A kept day model: budgets change in place, other data rebuild it, the plans stay the same."""
+
+from __future__ import annotations
+
+import pytest
+
+from rvpp import audit_result, prepare, solve_problem, with_options
+from rvpp.solving.persistent import DayModel
+from rvpp.solving.sweep import with_budgets
+
+
+def _with_initial_state(case, energy_mwh_th: float, on: bool):
+    csp = case.csp[0]
+    csp = csp.model_copy(update={
+        "storage": csp.storage.model_copy(update={"e_init_mwh_th": energy_mwh_th}),
+        "power_block": csp.power_block.model_copy(update={"initially_on": on})})
+    return case.replace(csp=[csp])
+
+
+@pytest.mark.slow
+def test_budgets_re_solve_in_place_and_new_data_rebuild(paper_case):
+    day = with_options(paper_case, strategy="deterministic", date="2025-04-15")
+    first = prepare(day)
+    problems = [
+        first,
+        with_budgets(first, with_options(day, strategy="balanced")),        # budgets only: kept
+        prepare(_with_initial_state(day, 400.0, True)),                    # initial state: rebuilt
+        prepare(with_options(day, date="2025-04-16", strategy="balanced")),  # next day: rebuilt
+    ]
+    kept = DayModel()
+    rebuilds = []
+    for problem in problems:
+        result = kept.solve(problem)
+        rebuilds.append(kept.rebuilds)
+        alone = solve_problem(problem)
+        assert result.status == alone.status == "optimal"
+        assert result.objective_eur == pytest.approx(alone.objective_eur, abs=1e-4 * abs(alone.objective_eur) + 0.01)
+        assert result.problem is problem and audit_result(result) == []
+    assert rebuilds == [1, 1, 2, 3]
+    assert problems[2].case.csp[0].storage.e_init_mwh_th == 400.0
