@@ -9,7 +9,9 @@ PORT ?= 8501
 ADDRESS ?= 127.0.0.1
 FOLDERS ?= 1
 
-.PHONY: install run test bench data reproduce clean
+BENCH ?= full
+
+.PHONY: install run test bench bench-studies data reproduce clean
 
 $(STAMP): requirements.txt
 	$(PYTHON) -m venv $(VENV)
@@ -27,10 +29,13 @@ run: install
 test: install
 	$(BIN)/python -m pytest -n 2
 
+# Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes a few minutes.
 bench: install
-	$(BIN)/python benchmarks/solve_times.py
-	$(BIN)/python benchmarks/studies.py
+	$(BIN)/python benchmarks/run.py --mode $(BENCH)
 	$(BIN)/python benchmarks/history.py
+
+bench-studies: install
+	$(BIN)/python benchmarks/studies.py
 
 reproduce: install
 	$(BIN)/python -m rvpp study reproduce --out out/reproduce
