@@ -272,3 +272,27 @@ def test_a_shortfall_of_energy_and_reserve_and_heat_adds_up():
                       penalty_reserve_eur=shortfall, penalty_heat_eur=unserved,
                       penalty_eur=deficit + shortfall + unserved, net_cost_eur=market + deficit + shortfall + unserved,
                       deficit_mwh=96.0, reserve_up_short_mwh=60.0, unserved_heat_mwh=24.0)
+
+
+def test_the_stochastic_start_is_a_complete_feasible_point_worth_its_settlements(paper):
+    import pyomo.environ as pyo
+
+    from rvpp.settle.recourse import build_recourse_model, recourse_start
+
+    days = [paper.delivery_date - dt.timedelta(days=k) for k in (2, 9)]
+    reals = [realization(paper, d) for d in days]
+    problems = [realized_problem(paper, r) for r in reals]
+    m = build_recourse_model(problems, Penalties())
+    flat = np.full(24, 20.0)
+    bids = FirstStage(flat, np.zeros(24), np.zeros(24), np.full(24, 30.0))
+    start = recourse_start(m, paper, problems, Penalties(), bids)
+    free = [v for v in m.component_data_objects(pyo.Var, active=True) if not v.fixed]
+    assert all(v in start for v in free), "every free variable has a start value"
+    for v in free:
+        v.set_value(start[v], skip_validation=True)
+    for con in m.component_data_objects(pyo.Constraint, active=True):
+        body = pyo.value(con.body)
+        assert con.lower is None or body >= pyo.value(con.lower) - 1e-5, con.name
+        assert con.upper is None or body <= pyo.value(con.upper) + 1e-5, con.name
+    settled = [evaluate(paper, bids, r)["net_cost_eur"] for r in reals]
+    assert pyo.value(m.expected_net_cost) == pytest.approx(np.mean(settled), rel=1e-3)
