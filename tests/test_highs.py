@@ -68,3 +68,42 @@ def test_outcomes_read_as_their_plain_value():
     assert f"{Outcome.INFEASIBLE_OR_UNBOUNDED}" == "infeasible_or_unbounded"
     assert Outcome("time_limit") is Outcome.TIME_LIMIT
     assert [o for o in Outcome if o.usable] == [Outcome.OPTIMAL, Outcome.TIME_LIMIT]
+
+
+def test_a_kept_model_re_solves_after_its_data_change():
+    from rvpp.solving.highs import HighsModel
+
+    m = pyo.ConcreteModel()
+    m.cap = pyo.Param(mutable=True, initialize=4.0)
+    m.x = pyo.Var(domain=pyo.NonNegativeIntegers)
+    m.c = pyo.Constraint(expr=2 * m.x <= m.cap)
+    m.obj = pyo.Objective(expr=m.x, sense=pyo.maximize)
+    model = HighsModel(m)
+    settings = SolverSettings(rel_gap=0.0)
+    assert model.solve(settings).objective == pytest.approx(2.0)
+    m.cap.set_value(9.0)
+    model.refresh()
+    start = model.values()  # the previous optimum x = 2 is still feasible: a valid start
+    outcome = model.solve(settings, start=start)
+    assert outcome.status is Outcome.OPTIMAL and outcome.objective == pytest.approx(4.0)
+    assert pyo.value(m.x) == pytest.approx(4.0) and outcome.nodes is not None
+
+
+def test_a_constraint_without_variables_that_fails_is_infeasible_not_an_error():
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(bounds=(0, 1))
+    m.x.fix(1.0)
+    m.c = pyo.Constraint(expr=m.x >= 2)
+    m.obj = pyo.Objective(expr=m.x)
+    outcome = _solve(m)
+    assert outcome.status is Outcome.INFEASIBLE and not outcome.usable
+    assert "c" in outcome.message
+
+
+def test_a_linear_program_reports_its_objective_as_bound():
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(bounds=(0, 2.5))
+    m.obj = pyo.Objective(expr=2 * m.x + 1, sense=pyo.maximize)
+    outcome = _solve(m)
+    assert outcome.status is Outcome.OPTIMAL and outcome.nodes is None
+    assert outcome.objective == pytest.approx(6.0) and outcome.bound == pytest.approx(6.0)

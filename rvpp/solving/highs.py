@@ -24,6 +24,7 @@ import highspy
 import numpy as np
 import pyomo.environ as pyo
 from pyomo.common.collections import ComponentMap
+from pyomo.common.errors import InfeasibleConstraintException
 from pyomo.core.base.var import VarData
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
@@ -88,8 +89,6 @@ class TrivialInfeasibility(Exception):
 
 def compile_model(m: pyo.Block) -> CompiledModel:
     """The active objective and constraints of ``m`` as a ``HighsLp`` (fixed variables become constants)."""
-    from pyomo.common.errors import InfeasibleConstraintException
-
     try:
         info = LinearStandardFormCompiler().write(m, mixed_form=True, set_sense=None)
     except InfeasibleConstraintException as exc:
