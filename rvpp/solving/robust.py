@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 import pyomo.environ as pyo
 
+from ..errors import RvppError
 from .problem import Problem, Source
 
 PRICE_EXPOSURES = ("price_da", "price_sr_up", "price_sr_dn")
@@ -128,7 +129,7 @@ def set_budgets(m: pyo.ConcreteModel, problem: Problem) -> None:
     """
     for csp in problem.case.csp:
         if problem.sources[csp.name].gamma < m.robust[csp.name].built_gamma:
-            raise ValueError(f"Γ of {csp.name!r} below the {m.robust[csp.name].built_gamma} the model was built "
+            raise RvppError(f"Γ of {csp.name!r} below the {m.robust[csp.name].built_gamma} the model was built "
                              "with; build the model with the smallest budget first")
     top_gamma = problem.case.budgets.mode == "paper" and problem.case.solver.budget_encoding == "top_gamma"
     for name, source in problem.sources.items():
