@@ -34,8 +34,14 @@ from .outcome import Outcome, SolveOutcome
 # The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models.
 HIGHS_OPTIONS = {"mip_heuristic_run_rins": False, "mip_heuristic_run_rens": False}
 
-# HiGHS shares one task scheduler per process; solves in threads of one process take turns.
-_solver_lock = threading.Lock()
+# HiGHS creates one task scheduler per process at its first run; that first run is
+# serialized, later runs in threads of one process go side by side (HiGHS releases the
+# interpreter lock while it solves).
+_first_run = threading.Lock()
+_scheduler_ready = threading.Event()
+# Pyomo's compiler sets up shared state at its first use; compiles take turns (they hold
+# the interpreter lock anyway).
+_compile_lock = threading.Lock()
 
 # HiGHS sizes one thread pool per process at its first solve and refuses a
 # different "threads" value afterwards; the first explicit value is kept here.
@@ -62,8 +68,9 @@ _FEASIBLE = 2  # HiGHS solution status "feasible"
 def _thread_option(requested: int) -> tuple[dict, str]:
     if not requested:
         return {}, ""
-    if not _pool_threads:
-        _pool_threads.append(requested)
+    with _first_run:
+        if not _pool_threads:
+            _pool_threads.append(requested)
     if requested == _pool_threads[0]:
         return {"threads": requested}, ""
     return {}, (f"threads={requested} ignored: HiGHS already runs this process with "
@@ -90,7 +97,8 @@ class TrivialInfeasibility(Exception):
 def compile_model(m: pyo.Block) -> CompiledModel:
     """The active objective and constraints of ``m`` as a ``HighsLp`` (fixed variables become constants)."""
     try:
-        info = LinearStandardFormCompiler().write(m, mixed_form=True, set_sense=None)
+        with _compile_lock:
+            info = LinearStandardFormCompiler().write(m, mixed_form=True, set_sense=None)
     except InfeasibleConstraintException as exc:
         raise TrivialInfeasibility(str(exc)) from exc
     columns = info.columns
@@ -162,13 +170,17 @@ class HighsModel:
                            "mip_rel_gap": float(settings.rel_gap), **threads}.items():
             h.setOptionValue(key, value)
         try:
-            with _solver_lock:
-                t0 = time.perf_counter()
-                h.passModel(self.compiled.lp)
-                if start:
-                    self._set_start(h, start)
+            t0 = time.perf_counter()
+            h.passModel(self.compiled.lp)
+            if start:
+                self._set_start(h, start)
+            if _scheduler_ready.is_set():
                 h.run()
-                seconds = time.perf_counter() - t0
+            else:
+                with _first_run:
+                    h.run()
+                    _scheduler_ready.set()
+            seconds = time.perf_counter() - t0
         except Exception as exc:  # the solver library failed; report, do not crash the caller
             return SolveOutcome.of(Outcome.ERROR, type(exc).__name__, None, None, 0.0, f"HiGHS failed: {exc}")
         outcome = self._outcome(h, seconds, note)
@@ -229,7 +241,7 @@ def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True,
               start: Mapping[VarData, float] | None = None) -> SolveOutcome:
     """Compile ``m``, run HiGHS once and load the incumbent if it is usable.
 
-    Safe to call from several threads: solves in one process take turns (use processes,
-    e.g. :func:`rvpp.solving.batch.solve_many` with a process pool, to run in parallel).
+    Safe to call from several threads, which solve side by side (HiGHS releases the
+    interpreter lock while it runs).
     """
     return HighsModel(m).solve(settings, start=start, load=load)

@@ -18,6 +18,7 @@ a start never changes the optimum, only the time to reach it.
 
 from __future__ import annotations
 
+import threading
 import time
 
 from pyomo.common.collections import ComponentMap
@@ -28,6 +29,10 @@ from .plan import not_solved, plan_result
 from .problem import Problem, infeasibility_reasons
 from .results import Result
 from .robust import set_budgets
+
+# Model building and extraction are Python work and Pyomo keeps some shared state; only
+# HiGHS runs of day models in different threads go side by side.
+_PYOMO = threading.Lock()
 
 
 class DayModel:
@@ -46,20 +51,22 @@ class DayModel:
         reasons = infeasibility_reasons(problem)
         if reasons:
             return not_solved(problem, reasons, time.perf_counter() - started)
-        if self._budgets_only(problem):
-            set_budgets(self.model, problem)
-            self.highs.refresh()
-        else:
-            self.model = build_model(problem)
-            self.highs = HighsModel(self.model)
-            self.rebuilds += 1
-            self._start = self._by_name(self._start)
+        with _PYOMO:
+            if self._budgets_only(problem):
+                set_budgets(self.model, problem)
+                self.highs.refresh()
+            else:
+                self.model = build_model(problem)
+                self.highs = HighsModel(self.model)
+                self.rebuilds += 1
+                self._start = self._by_name(self._start)
         self.problem = problem
         build_s = time.perf_counter() - started
         outcome = self.highs.solve(problem.case.solver, start=self._start)
         if outcome.usable:
             self._start = self.highs.values(integer_only=True)
-        return plan_result(problem, self.model, outcome, build_s)
+        with _PYOMO:
+            return plan_result(problem, self.model, outcome, build_s)
 
     def _budgets_only(self, problem: Problem) -> bool:
         """True when ``problem`` differs from the built one in its budgets alone, and no solar

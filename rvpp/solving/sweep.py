@@ -1,18 +1,23 @@
 """A delivery day re-solved for a grid of budgets Γ without rebuilding the model.
 
-The model of the day is built once, at the smallest Γ of the grid, and kept in a
-:class:`~rvpp.solving.persistent.DayModel`: every further Γ only changes the mutable
-budgets and the fixed χ of the robust layer, recompiles the matrix and re-solves,
-starting HiGHS from the commitment, storage modes and curve segments of the
-neighbouring Γ. Each
-point is the same plain :class:`~rvpp.solving.results.Result` that
+The grid is sorted and each part of it walked by a
+:class:`~rvpp.solving.persistent.DayModel`: the model is built once, at the part's
+smallest Γ, and every further Γ only changes the mutable budgets and the fixed χ of
+the robust layer, recompiles the matrix and re-solves, starting HiGHS from the
+commitment, storage modes and curve segments of the neighbouring Γ. On two cores two
+threads walk the two halves of the grid (HiGHS runs side by side). Each point is the same plain :class:`~rvpp.solving.results.Result` that
 ``rvpp.solve(with_options(case, gammas=...))`` returns for it.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
+import threading
 from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
 
 from ..data.case import Case, with_options
 from ..errors import RvppError
@@ -24,11 +29,14 @@ Progress = Callable[[int, int], None]
 
 
 def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None = None,
-                progress: Progress | None = None) -> list[Result]:
+                progress: Progress | None = None, workers: int | None = None) -> list[Result]:
     """Plans of ``case`` with Γ = g for every source in ``sources`` (default: all), for each g.
 
     Results come in the order of ``gammas``; sources not named keep the case's budgets.
     ``progress(done, total)`` is called before the first solve and after each.
+    ``workers`` threads each walk a contiguous part of the sorted grid with their own
+    model (default: two on a machine with two cores or more, one when the case's solver
+    is limited to one thread, as in a process pool).
     """
     grid = [int(g) for g in gammas]
     if not grid:
@@ -41,14 +49,29 @@ def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None
     outside = [g for g in grid if not 0 <= g <= base.nt]
     if outside:
         raise RvppError(f"Γ grid: {outside[0]} is outside 0..{base.nt}, the periods of {case.delivery_date}")
-    report = progress or (lambda _done, _total: None)
     order = sorted(set(grid))
+    if workers is None:
+        workers = 1 if case.solver.threads == 1 else min(2, os.cpu_count() or 1)
+    parts = [part for part in np.array_split(np.array(order), max(1, min(workers, len(order)))) if len(part)]
+    report = progress or (lambda _done, _total: None)
     report(0, len(order))
-    day = DayModel()
     solved: dict[int, Result] = {}
-    for done, gamma in enumerate(order, start=1):
-        solved[gamma] = day.solve(with_budgets(base, with_options(case, gammas={name: gamma for name in names})))
-        report(done, len(order))
+    lock = threading.Lock()
+
+    def walk(part) -> None:
+        day = DayModel()
+        for gamma in part.tolist():
+            result = day.solve(with_budgets(base, with_options(case, gammas={name: gamma for name in names})))
+            with lock:
+                solved[gamma] = result
+                report(len(solved), len(order))
+
+    if len(parts) == 1:
+        walk(parts[0])
+    else:
+        with ThreadPoolExecutor(max_workers=len(parts)) as pool:
+            for future in [pool.submit(walk, part) for part in parts]:
+                future.result()
     return [solved[g] for g in grid]
 
 
