@@ -32,7 +32,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ..errors import RvppError
-from .problem import Problem, Source
+from .problem import Problem, Source, budget_split
 
 PRICE_EXPOSURES = ("price_da", "price_sr_up", "price_sr_dn")
 
@@ -164,22 +164,21 @@ def _paper_binary(block, dev: np.ndarray, periods) -> dict:
 
 def top_gamma_choice(dev: np.ndarray, gamma: int) -> np.ndarray:
     """Paper-mode χ decided by the data: 1 on the Γ largest deviations, 0 elsewhere, NaN where
-    tied deviations straddle the Γ boundary (the solver chooses among them)."""
+    tied deviations straddle the Γ boundary (the solver chooses among them).
+
+    The periods come from :func:`~rvpp.solving.problem.budget_split`; where fewer than Γ
+    periods have a positive deviation, χ is completed with the earliest remaining
+    periods (their deviation is 0, so they change no bound) to keep ``Σχ = Γ``.
+    """
     dev = np.asarray(dev, dtype=float)
-    chi = np.zeros(len(dev))
-    if gamma <= 0 or len(dev) == 0 or dev.max() <= 0.0:
-        chi[:max(0, gamma)] = 1.0
-        return chi
-    order = np.argsort(-dev, kind="stable")
-    threshold = dev[order[min(gamma, len(dev)) - 1]]
-    above = dev > threshold
-    tied = dev == threshold
-    needed = gamma - int(above.sum())
-    chi[above] = 1.0
-    if threshold > 0.0 and int(tied.sum()) > needed:
+    sure, tied, count = budget_split(dev, gamma)
+    chi = sure.astype(float)
+    if count and int(tied.sum()) > count:
         chi[tied] = np.nan
     else:
-        chi[np.flatnonzero(tied)[:needed]] = 1.0
+        chi[tied] = 1.0
+    missing = max(0, gamma - int(np.nansum(chi)) - int(np.isnan(chi).any()) * count)
+    chi[np.flatnonzero(chi == 0.0)[:missing]] = 1.0
     return chi
 
 
