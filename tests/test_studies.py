@@ -7,6 +7,7 @@ import hashlib
 import json
 import shutil
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -15,12 +16,12 @@ import pytest
 import rvpp
 from rvpp.cli import main
 from rvpp.data.history import PRICE_COLUMNS
-from rvpp.studies import markets, out_of_sample, sensitivity, stochastic, stress
+from rvpp.studies import findings, markets, out_of_sample, sensitivity, stochastic, stress
 from rvpp.settle.recourse import FirstStage
 from rvpp.solving.outcome import Outcome
 from rvpp.studies.evaluation import evaluation_days, sample_days, settlement_warning, summarize, training_days
 from rvpp.studies.report import write_all
-from rvpp.studies.runner import plan_table, solve_configs
+from rvpp.studies.runner import StudyOutput, plan_table, solve_configs
 from rvpp.studies.settings import StudySettings
 from rvpp.uncertainty.bands import window_days
 
@@ -345,3 +346,89 @@ def test_paper_mode_stress_ranks_prices_by_exposure_not_by_deviation():
     assert pattern["price_sr_up"] == [7]  # 1 x 20 MW beats 9 x 1 MW in period 2
     assert "price_sr_dn" not in pattern  # no down band offered: nothing at stake
     assert pattern["W"] == [5, 9]  # availabilities: the largest deviations [MW]
+
+
+TOU_TARIFF = [70.0] * 6 + [85.0] * 2 + [100.0] * 16  # EUR/MWh_th per hour; the night is the cheapest
+
+
+def case1_output(heat_mw: list[float], dt_h: float = 1.0, hpa: bool = True) -> dict[str, StudyOutput]:
+    """A Case 1 output around a stand-in plan: only what the heat finding reads."""
+    n = len(heat_mw)
+    market = pd.DataFrame({"h_hpa_mw": heat_mw, "tariff_hpa": np.repeat(TOU_TARIFF, round(1 / dt_h))[:n],
+                           "clock": [f"{int(k * dt_h):02d}:{int(60 * (k * dt_h % 1)):02d}" for k in range(n)]})
+    plan = SimpleNamespace(has_plan=True, market=market, problem=SimpleNamespace(dt_h=dt_h),
+                           case=SimpleNamespace(markets=SimpleNamespace(hpa=hpa)))
+    out = StudyOutput("case1", "")
+    out.facts["result"] = plan
+    return {"case1": out}
+
+
+def markets_output(**facts: pd.DataFrame) -> dict[str, StudyOutput]:
+    out = StudyOutput("markets", "")
+    out.facts.update(facts)
+    return {"markets": out}
+
+
+def test_night_heat_finding_holds_when_most_heat_is_bought_at_the_cheapest_tariff():
+    # 6 h x 30 MW at 70 EUR/MWh_th and 2 h x 20 MW at 85: 180 of 220 MWh_th (82 %) at night.
+    found = findings.hpa_heat_bought_at_night(case1_output([30.0] * 6 + [20.0] * 2 + [0.0] * 16))
+    assert found.holds
+    assert "heat bought 220.0 MWh_th, of which 180.0 MWh_th (82%)" in found.evidence
+    assert "in the periods at 70 EUR/MWh_th (00:00-05:00); periods with purchases: 00:00-07:00" in found.evidence
+
+
+def test_night_heat_finding_fails_for_daytime_or_no_purchases():
+    # 10 MW in hours 00-01 (20 MWh_th) against 25 MW in 18-20 (75 MWh_th): 21 % at night.
+    daytime = findings.hpa_heat_bought_at_night(case1_output([10.0] * 2 + [0.0] * 16 + [25.0] * 3 + [0.0] * 3))
+    assert not daytime.holds and "(21%)" in daytime.evidence
+    assert daytime.evidence.endswith("periods with purchases: 00:00-01:00, 18:00-20:00")
+    nothing = findings.hpa_heat_bought_at_night(case1_output([0.0] * 24))
+    assert not nothing.holds and nothing.evidence.endswith("periods with purchases: none")
+    assert findings.hpa_heat_bought_at_night(case1_output([0.0] * 24, hpa=False)) is None
+
+
+def test_night_heat_finding_counts_energy_of_quarter_hours():
+    # 96 quarter hours, the night tariff in the first 24: 6 x 40 MW x 0.25 h = 60 MWh_th in 00:00-01:15,
+    # 10 x 8 MW x 0.25 h = 20 MWh_th in 06:30-08:45 (85 and 100 EUR/MWh_th): 75 % at night.
+    found = findings.hpa_heat_bought_at_night(case1_output([40.0] * 6 + [0.0] * 20 + [8.0] * 10 + [0.0] * 60,
+                                                           dt_h=0.25))
+    assert found.holds and "heat bought 80.0 MWh_th, of which 60.0 MWh_th (75%)" in found.evidence
+    assert found.evidence.endswith("(00:00-05:45); periods with purchases: 00:00-01:15, 06:30-08:45")
+
+
+TABLE12 = pd.DataFrame({"time-of-use": [20.0, 50.0], "70": [19.0, 49.0], "60": [16.0, 48.0], "50": [12.0, 44.0]},
+                       index=pd.Index(["deterministic", "balanced"], name="strategy"))
+
+
+def test_flat_tariff_finding_needs_tens_of_percent_for_every_strategy():
+    # 50 EUR/MWh_th: deterministic (20 - 12) / 20 = 40 %, balanced (50 - 44) / 50 = 12 %.
+    found = findings.flat_hpa_tariff_cuts_cost(markets_output(hpa_price=TABLE12))
+    assert found.holds and found.claim.startswith("A flat HPA tariff of 50 EUR/MWh_th")
+    assert "deterministic: 70 5.0%, 60 20.0%, 50 40.0%; balanced: 70 2.0%, 60 4.0%, 50 12.0%" in found.evidence
+    # Balanced at 50 EUR/MWh_th only 8 % cheaper: (50 - 46) / 50.
+    weaker = findings.flat_hpa_tariff_cuts_cost(markets_output(hpa_price=TABLE12.assign(**{"50": [12.0, 46.0]})))
+    assert not weaker.holds and "50 8.0%" in weaker.evidence
+    # A strategy without a time-of-use plan cannot show the effect.
+    missing = findings.flat_hpa_tariff_cuts_cost(markets_output(
+        hpa_price=TABLE12.assign(**{"time-of-use": [20.0, np.nan]})))
+    assert not missing.holds and "balanced: 70 n/a" in missing.evidence
+    assert findings.flat_hpa_tariff_cuts_cost(markets_output(hpa_price=TABLE12[["time-of-use"]])) is None
+
+
+TABLE10 = pd.DataFrame({"DAM": [10.0, 40.0], "DAM+HPA": [9.8, 40.0], "DAM+SRM": [8.0, 39.0],
+                        "DAM+SRM+HPA": [7.9, 39.0]}, index=pd.Index(["deterministic", "pessimistic"], name="strategy"))
+
+
+def test_hpa_finding_compares_dam_with_and_without_the_hpa():
+    # Deterministic 0.2 kEUR (2.0 %) cheaper with the HPA, pessimistic equal (the paper's Table 10 pattern).
+    found = findings.hpa_lowers_dam_cost(markets_output(markets=TABLE10))
+    assert found.holds
+    assert found.evidence.endswith("deterministic 0.20 kEUR (2.0%), pessimistic 0.00 kEUR (0.0%)")
+    equal = findings.hpa_lowers_dam_cost(markets_output(markets=TABLE10.assign(**{"DAM+HPA": [10.0, 40.0]})))
+    assert not equal.holds
+    dearer = findings.hpa_lowers_dam_cost(markets_output(markets=TABLE10.assign(**{"DAM+HPA": [9.8, 40.5]})))
+    assert not dearer.holds and "pessimistic -0.50 kEUR (-1.2%)" in dearer.evidence
+    # Without a DAM-only plan the comparison the paper makes is not possible.
+    no_dam = findings.hpa_lowers_dam_cost(markets_output(markets=TABLE10.assign(DAM=[np.nan, 40.0])))
+    assert not no_dam.holds and "deterministic n/a (no DAM plan)" in no_dam.evidence
+    assert findings.hpa_lowers_dam_cost(markets_output(markets=TABLE10.drop(columns="DAM+HPA"))) is None
