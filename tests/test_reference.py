@@ -21,7 +21,9 @@ GAP = 1e-7
 REL_TOL = 1e-6
 
 # Dates are explicit so the comparison does not move with the case's default day.
-# 2025-05-05: the CSP runs under every strategy and covers the heat alone;
+# 2025-05-05: the CSP runs under every strategy; its tank starts the day empty, so the HPA buys
+# the night's heat, except in DAM and DAM+SRM, which have no HPA and use a cyclic tank instead:
+# there the CSP covers the heat alone;
 # 2025-03-18: cloudy, the CSP stays off under the stricter budgets and the HPA supplies heat.
 CONFIGS = {
     "deterministic": {"strategy": "deterministic", "date": "2025-05-05"},
@@ -39,8 +41,18 @@ CONFIGS = {
 }
 
 
+def with_storage(case, **changes):
+    csp = case.csp[0]
+    return case.replace(csp=[csp.model_copy(update={"storage": csp.storage.model_copy(update=changes)})])
+
+
+def cyclic_storage(case):
+    """The storage day is cyclic (``e[0] = e[NT]``) instead of starting at the case's fixed level."""
+    return with_storage(case, e_init_mwh_th=None)
+
+
 def non_default_parameters(case):
-    """Settings the paper case leaves at their defaults: fixed initial storage energy,
+    """Settings the paper case leaves at their defaults: another fixed initial storage energy,
     start-up heat drawn over 2 h, turbine initially on with other minimum up/down times,
     asymmetric ED ramps and flexibility, a wind minimum output and a slow wind ramp."""
     csp = case.csp[0]
@@ -55,7 +67,7 @@ def non_default_parameters(case):
     return case.replace(csp=[csp], ed=ed, wind=wind)
 
 
-CASE_CHANGES = {"non-default parameters": non_default_parameters}
+CASE_CHANGES = {"non-default parameters": non_default_parameters, "DAM": cyclic_storage, "DAM+SRM": cyclic_storage}
 
 
 def relative_difference(value: float, reference: float) -> float:
@@ -142,9 +154,11 @@ def test_a_tie_at_the_budget_boundary_is_broken_in_the_plans_favour_in_both_mode
         assert relative_difference(results[name].objective_eur, reference) <= REL_TOL, (name, reference)
 
 
-def test_heat_without_hpa_is_infeasible_for_both(solved, paper_case):
-    """On a cloudy day the thermal demands need the HPA: DAM alone has no plan in either model."""
-    dam_only = with_options(paper_case, markets="DAM", date="2025-03-18", rel_gap=GAP)
+@pytest.mark.parametrize(("date", "strategy"), [("2025-03-18", None), ("2025-05-05", "deterministic")])
+def test_heat_without_hpa_is_infeasible_for_both(paper_case, date, strategy):
+    """On a cloudy day (2025-03-18), and at night with the tank empty at midnight (2025-05-05), the
+    thermal demands need the HPA: DAM alone has no plan in either model."""
+    dam_only = with_options(paper_case, markets="DAM", date=date, strategy=strategy, rel_gap=GAP)
     assert solve(dam_only).status == "infeasible"
     with pytest.raises(ReferenceNotOptimal, match="Infeasible"):
         reference_optimum(dam_only)
@@ -153,9 +167,7 @@ def test_heat_without_hpa_is_infeasible_for_both(solved, paper_case):
 def test_minimum_discharge_power_keeps_the_optimum(paper_case):
     # With a minimum discharge power the storage idles in charging mode at night; fixing
     # the mode to discharging there would force a discharge (1,350.82 EUR, 1.09 % worse).
-    csp = paper_case.csp[0]
-    storage = csp.storage.model_copy(update={"p_dis_min_mw_th": 10.0})
-    case = with_options(paper_case.replace(csp=[csp.model_copy(update={"storage": storage})]),
+    case = with_options(with_storage(cyclic_storage(paper_case), p_dis_min_mw_th=10.0),
                         date="2025-03-18", strategy="balanced", rel_gap=GAP)
     result = solve(case)
     assert result.status == "optimal", result.message

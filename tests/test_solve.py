@@ -52,9 +52,29 @@ def test_raising_one_budget_never_raises_profit(paper_solve):
         assert safer.objective_eur <= base.objective_eur + 1e-4 * abs(base.objective_eur), source
 
 
+@pytest.fixture(scope="module")
+def cyclic_solve(paper_case):
+    """Deterministic plans of the paper case with a cyclic storage day, by market set.
+
+    The case starts the day with an empty tank, so without the HPA its night heat has no
+    source; with a cyclic day the tank carries the afternoon's heat into the night and every
+    market set has a plan."""
+    csp = paper_case.csp[0]
+    cyclic = paper_case.replace(csp=[csp.model_copy(update={
+        "storage": csp.storage.model_copy(update={"e_init_mwh_th": None})})])
+    cache = {}
+
+    def run(markets: str):
+        if markets not in cache:
+            cache[markets] = solve(with_options(cyclic, strategy="deterministic", markets=markets))
+        return cache[markets]
+
+    return run
+
+
 @pytest.mark.parametrize("markets", ["DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA"])
-def test_every_market_set_gives_an_audited_plan(paper_solve, markets):
-    result = paper_solve(strategy="deterministic", markets=markets)
+def test_every_market_set_gives_an_audited_plan(cyclic_solve, markets):
+    result = cyclic_solve(markets)
     assert_good(result)
     if "SRM" not in markets:
         assert np.allclose(result.market[["r_sr_up_mw", "r_sr_dn_mw"]], 0.0)
@@ -62,12 +82,32 @@ def test_every_market_set_gives_an_audited_plan(paper_solve, markets):
         assert np.allclose(result.market["h_hpa_mw"], 0.0)
 
 
-def test_more_markets_never_cost_more(paper_solve):
-    cost = {m: paper_solve(strategy="deterministic", markets=m).cost_keur
-            for m in ("DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA")}
+def test_more_markets_never_cost_more(cyclic_solve):
+    cost = {m: cyclic_solve(m).cost_keur for m in ("DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA")}
     tolerance = 1e-3
     assert cost["DAM,SRM,HPA"] <= min(cost["DAM,HPA"], cost["DAM,SRM"]) + tolerance
     assert max(cost["DAM,HPA"], cost["DAM,SRM"]) <= cost["DAM"] + tolerance
+
+
+@pytest.mark.parametrize("markets", ["DAM", "DAM,SRM"])
+def test_an_empty_tank_without_the_hpa_has_no_plan(paper_solve, markets):
+    result = paper_solve(strategy="deterministic", markets=markets)
+    assert result.status == "infeasible" and not result.has_plan
+    assert result.message.startswith("no feasible plan: heat balance short") and "first at 00:00" in result.message
+
+
+@pytest.mark.parametrize("markets", ["DAM,HPA", "DAM,SRM,HPA"])
+def test_the_hpa_supplies_the_heat_until_the_solar_field_starts(paper_solve, markets):
+    result = paper_solve(strategy="deterministic", markets=markets)
+    assert_good(result)
+    csp, market = result.csp.set_index("t"), result.market.set_index("t")
+    td = result.units[result.units["kind"] == "td"].groupby("t")["p_mw"].sum()
+    dark = csp.index[: int(np.argmax(csp["p_sf_mw"].to_numpy() > 0))]  # periods before the field's first heat
+    assert len(dark) >= 6  # at least the night hours 00:00-06:00
+    assert csp.loc[dark.min(), "ts_energy_mwh"] == pytest.approx(result.case.csp[0].storage.e_min_mwh_th)
+    assert np.allclose(csp.loc[dark, "heat_to_td_mw"], 0.0, atol=1e-6)
+    np.testing.assert_allclose(market.loc[dark, "h_hpa_mw"], td.loc[dark], rtol=1e-9, atol=1e-6)
+    assert (td.loc[dark] > 0).all()
 
 
 def test_the_rvpp_without_csp_is_solved_and_costs_more(paper_solve):

@@ -46,8 +46,13 @@ def test_an_edit_changes_the_case_and_an_invalid_one_names_the_rule(case):
     with pytest.raises(rvpp.CaseError) as err:
         workbook.with_unit_table(case, "csp", table)
     assert err.value.problems == ['csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100']
+    table.loc[0, "storage.e_min_mwh_th"] = 100.0  # below the case's initial energy of 110 MWh_th
+    assert workbook.with_unit_table(case, "csp", table).csp[0].storage.e_min_mwh_th == 100.0
     table.loc[0, "storage.e_min_mwh_th"] = 200.0
-    assert workbook.with_unit_table(case, "csp", table).csp[0].storage.e_min_mwh_th == 200.0
+    with pytest.raises(rvpp.CaseError) as err:
+        workbook.with_unit_table(case, "csp", table)
+    assert err.value.problems == ['csp "CSP1": storage.e_init_mwh_th=110 must lie in '
+                                  '[storage.e_min_mwh_th=200, storage.e_max_mwh_th=1100]']
 
 
 def test_added_and_removed_rows(case):
