@@ -141,6 +141,15 @@ def test_reproduce_runs_end_to_end(tmp_path):
     markets = pd.read_csv(tables / "table10_markets.csv").set_index("strategy")
     assert verdicts["DAM+SRM+HPA is the cheapest market set for every strategy"] == bool(
         (markets["DAM+SRM+HPA"] <= markets["DAM"] + 1e-3).all())
+    night_market = pd.read_csv(tables / "case1_market.csv")  # hourly periods: MW = MWh per period
+    heat, tariff = night_market["h_hpa_mw"], night_market["tariff_hpa"]
+    assert verdicts["HPA heat is bought in the night hours of the cheapest tariff"] == bool(
+        heat.sum() > 0 and heat[tariff == tariff.min()].sum() >= 0.5 * heat.sum())
+    hpa = pd.read_csv(tables / "table12_hpa_price.csv").set_index("strategy")
+    cut = (hpa["time-of-use"] - hpa["60"]) / hpa["time-of-use"].abs()
+    assert verdicts["A flat HPA tariff of 60 EUR/MWh_th lowers the cost by tens of percent (at least 10%) for "
+                    "every strategy"] == bool((cut >= 0.10).all())
+    assert "DAM+HPA costs less than DAM alone" not in verdicts  # no DAM+HPA column in this run
     report = (out / "report.md").read_text()
     assert "## Findings of the paper, checked on this run" in report
     assert report.count("| yes |") + report.count("| no |") == len(info["findings"])
