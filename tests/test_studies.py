@@ -422,6 +422,9 @@ def test_flat_tariff_finding_needs_tens_of_percent_for_every_strategy():
         hpa_price=TABLE12.assign(**{"time-of-use": [20.0, np.nan]})))
     assert not missing.holds and "balanced: 70 n/a" in missing.evidence
     assert findings.flat_hpa_tariff_cuts_cost(markets_output(hpa_price=TABLE12[["time-of-use"]])) is None
+    # 1 EUR dearer at 70 EUR/MWh_th on 20 kEUR (within the solver's gap) reads as 0.0 %, not -0.0 %.
+    tie = findings.flat_hpa_tariff_cuts_cost(markets_output(hpa_price=TABLE12.assign(**{"70": [20.001, 49.0]})))
+    assert "deterministic: 70 0.0%, 60 20.0%" in tie.evidence
 
 
 TABLE10 = pd.DataFrame({"DAM": [10.0, 40.0], "DAM+HPA": [9.8, 40.0], "DAM+SRM": [8.0, 39.0],

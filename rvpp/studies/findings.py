@@ -184,7 +184,8 @@ def flat_hpa_tariff_cuts_cost(outputs: Outputs) -> Finding | None:
     base = table["time-of-use"].abs().where(lambda c: c > COST_TOLERANCE_KEUR)
     cut = flat.rsub(table["time-of-use"], axis=0).div(base, axis=0)
     holds = bool((cut[lowest] >= TENS_OF_PERCENT).all())
-    rows = "; ".join(f"{s}: " + ", ".join(f"{c} {cut.loc[s, c]:.1%}" if np.isfinite(cut.loc[s, c]) else f"{c} n/a"
+    shown = cut.round(3) + 0.0  # the shown precision (0.1 %): no "-0.0%" for a tie
+    rows = "; ".join(f"{s}: " + ", ".join(f"{c} {shown.loc[s, c]:.1%}" if np.isfinite(shown.loc[s, c]) else f"{c} n/a"
                                           for c in cut.columns) for s in cut.index)
     return Finding(f"A flat HPA tariff of {lowest} EUR/MWh_th lowers the cost by tens of percent (at least "
                    f"{TENS_OF_PERCENT:.0%}) for every strategy", "Case 3, Table 12 (50 EUR/MWh_th: 20.7-48.9 %)",
