@@ -184,8 +184,11 @@ def write_case_workbook(case: Case, target: str | Path | io.BytesIO) -> str | Pa
     settings["delivery_date"] = case.delivery_date.isoformat()
     for section in SETTING_SECTIONS:
         for key, value in data[section].items():
-            if key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam"):
+            if isinstance(value, Mapping):  # band methods, imbalance price columns
+                settings.update(_flatten(value, f"{section}.{key}."))
+            elif key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam") and value is not None:
                 settings[f"{section}.{key}"] = value
+    settings.update(_flatten({"provenance": data["provenance"]}))
     tariff = pd.DataFrame({"hour": range(HOURS_PER_DAY),
                            "tariff_eur_per_mwh": list(case.markets.hpa_tariff_eur_per_mwh)})
     budgets = pd.DataFrame(list(case.budgets.overrides), columns=["source", "gamma"])

@@ -19,13 +19,15 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ...errors import DataImportError
 from . import entsoe, omie, tables
 from .report import Imported, ImportReport, decode, hourly, read_bytes
 
-__all__ = ["Imported", "ImportReport", "HourlyTable", "detect", "import_files", "hourly_table", "write_table"]
+__all__ = ["Imported", "ImportReport", "HourlyTable", "detect", "fill_gaps", "import_files", "hourly_table",
+           "write_table"]
 
 FORMATS = ("omie", "entsoe", "dataset", "time_utc")
 FORMAT_NAMES = {"omie": omie.SOURCE, "entsoe": entsoe.SOURCE, "dataset": tables.DATASET, "time_utc": tables.TIME_UTC}
@@ -119,6 +121,33 @@ def hourly_table(imports: list[Imported]) -> HourlyTable:
             origins[column] = origins[column] + (item.report,)
     frame.index = pd.DatetimeIndex(frame.index, name="timestamp")
     return HourlyTable(frame=frame, origins=origins, notes=tuple(notes))
+
+
+def fill_gaps(table: pd.DataFrame, max_hours: int) -> tuple[pd.DataFrame, list[str]]:
+    """Interpolate linearly across empty runs of at most ``max_hours`` hours inside each column.
+
+    Only on request (``--fill-gaps``): returns the table and one line per run filled, so the
+    filling is reported; a longer run, or one at either end of the table, is refused.
+    """
+    out = table.copy()
+    filled = []
+    for column in table.columns:
+        empty = table[column].isna().to_numpy()
+        if not empty.any():
+            continue
+        runs = np.split(np.flatnonzero(empty), np.flatnonzero(np.diff(np.flatnonzero(empty)) != 1) + 1)
+        for run in runs:
+            first, last = table.index[run[0]], table.index[run[-1]]
+            if run[0] == 0 or run[-1] == len(table) - 1:
+                raise DataImportError(f"{column} has no value at {first:%Y-%m-%dT%H:%MZ}, at the edge of the data; "
+                                      "choose a span that starts and ends with values")
+            if len(run) > max_hours:
+                raise DataImportError(f"{column} has no value for {len(run)} hours from {first:%Y-%m-%dT%H:%MZ}; "
+                                      f"at most {max_hours} hours are interpolated (--fill-gaps)")
+            filled.append(f"{column}: {len(run)} hour(s) from {first:%Y-%m-%dT%H:%MZ} to {last:%Y-%m-%dT%H:%MZ} "
+                          "interpolated linearly")
+        out[column] = table[column].interpolate(method="linear", limit_area="inside")
+    return out, filled
 
 
 def write_table(table: pd.DataFrame, path: str | Path, timezone: str = "Europe/Madrid") -> Path:
