@@ -43,6 +43,11 @@ def add_data_commands(commands) -> None:
                        help="fleet wind capacity (default: the highest output in the data)")
     build.add_argument("--solar-capacity", type=float, metavar="MW",
                        help="fleet solar capacity (default: the highest output in the data)")
+    build.add_argument("--fill-gaps", type=int, default=0, metavar="HOURS",
+                       help="interpolate gaps of at most HOURS hours linearly, each reported (default 0: refuse gaps)")
+    build.add_argument("--bands", choices=("forecast", "climatology"), default="forecast",
+                       help="forecast (default): wind, PV and DAM price on forecast-error bands; climatology: "
+                            "every source on the paper's bands")
     build.add_argument("--seed", type=int, help="seed of the synthetic series (default: the published one)")
     build.add_argument("--force", action="store_true", help="overwrite a folder that already holds a case")
     build.set_defaults(run=_run_build_case)
@@ -86,7 +91,8 @@ def _run_build_case(args: argparse.Namespace) -> int:
 
     options = BuildOptions(errors_scale=args.errors_scale, start=args.start, end=args.end, date=args.date,
                            zone=args.zone, wind_capacity_mw=args.wind_capacity,
-                           solar_capacity_mw=args.solar_capacity, seed=args.seed)
+                           solar_capacity_mw=args.solar_capacity, seed=args.seed, fill_gaps_h=args.fill_gaps,
+                           bands=args.bands)
     built = build_case(args.sources, args.out, template=args.template, options=options, overwrite=args.force,
                        progress=lambda m: print(f"  {m}", file=sys.stderr))
     print("\n".join(built.lines()))
