@@ -110,8 +110,10 @@ def test_build_refuses_what_it_cannot_build(tmp_path):
     source = write_table(tmp_path / "series.csv")
     prices_only = tmp_path / "prices.csv"
     pd.read_csv(source)[["time_utc", "time_local", "price_da"]].to_csv(prices_only, index=False)
-    with pytest.raises(DataImportError, match="no actual_wind_onshore \\(needed for wind units WF1, WF2\\)"):
-        build_case([prices_only], tmp_path / "a", template=PAPER)
+    no_prices = tmp_path / "wind.csv"
+    pd.read_csv(source).drop(columns="price_da").to_csv(no_prices, index=False)
+    with pytest.raises(DataImportError, match="the files give no day-ahead price"):
+        build_case([no_prices], tmp_path / "a", template=PAPER)
     with pytest.raises(RvppError, match="--date 2021-05-20 must lie in 2021-06-07 to 2021-06-14"):
         build_case([source], tmp_path / "b", template=PAPER, options=BuildOptions(date="2021-05-20"))
     with pytest.raises(RvppError, match="--errors-scale K=-1 must be"):
@@ -119,7 +121,20 @@ def test_build_refuses_what_it_cannot_build(tmp_path):
     build_case([source], tmp_path / "c", template=PAPER)
     with pytest.raises(RvppError, match="already holds a case"):
         build_case([source], tmp_path / "c", template=PAPER)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["c", "prices.csv", "series.csv"]  # no temporary left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c", "prices.csv", "series.csv", "wind.csv"]  # no temporary
+
+
+def test_prices_alone_make_a_case_with_every_unit_synthetic(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    prices_only = tmp_path / "prices.csv"
+    pd.read_csv(source)[["time_utc", "time_local", "price_da"]].to_csv(prices_only, index=False)
+    built = build_case([prices_only], tmp_path / "case", template=PAPER)
+    case = load_case(tmp_path / "case")
+    assert {c: p.origin for c, p in case.provenance_map.items() if p.origin == "real"} == {"price_da": "real"}
+    assert case.wind[0].forecast_series is None and case.uncertainty.band_method("WF1", "wind") == "climatology"
+    assert case.uncertainty.band_method("price_da") == "forecast"
+    assert any("wind units are synthetic" in n for n in built.notes)
+    assert "WF1_fc" not in case.history.columns and case.history.frame["WF1"].max() > 0
 
 
 def test_command_line_builds_a_case(tmp_path, capsys):

@@ -119,12 +119,12 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     say(f"reading {len(sources)} file(s)")
     imports = import_files(list(sources), options.zone)
     table = hourly_table(imports)
-    needed = _needed_columns(base)
-    missing = [c for c in needed if c not in table.frame.columns]
-    if missing:
-        raise DataImportError(f"the files give no {missing[0]} (needed for {needed[missing[0]]}); they give "
-                              f"{', '.join(table.frame.columns)}")
-    frame, first, last = _span(table.frame[list(needed)], base.timezone, options)
+    if "price_da" not in table.frame.columns:
+        raise DataImportError(f"the files give no day-ahead price (price_da); they give "
+                              f"{', '.join(table.frame.columns) or 'nothing'}")
+    fleets = _fleets(base, table.frame.columns)
+    needed = ["price_da"] + [c for pair in fleets.values() for c in pair if c]
+    frame, first, last = _span(table.frame[needed], base.timezone, options)
     notes = list(table.notes)
     filled: list[str] = []
     if frame.isna().any().any():
@@ -143,58 +143,61 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     columns, capacities, provenance = {}, {}, {}
     columns["price_da"] = frame["price_da"].to_numpy(float)
     provenance["price_da"] = _real("price_da", table.origins["price_da"], made("as published", "price_da"))
-    for kind in ("wind", "pv"):
-        units = getattr(base, kind)
-        if not units:
-            continue
-        actual_col, forecast_col = FLEETS[kind]
+    for kind, (actual_col, forecast_col) in fleets.items():
         given = options.wind_capacity_mw if kind == "wind" else options.solar_capacity_mw
         capacity = float(given) if given is not None else float(frame[actual_col].max())
         capacities[kind] = capacity
         actual_cf = frame[actual_col].to_numpy(float) / capacity
-        forecast_cf = frame[forecast_col].to_numpy(float) / capacity
-        above = int((actual_cf > 1.0).sum() + (forecast_cf > 1.0).sum())
+        forecast_cf = frame[forecast_col].to_numpy(float) / capacity if forecast_col else None
+        above = int((actual_cf > 1.0).sum() + (0 if forecast_cf is None else (forecast_cf > 1.0).sum()))
         if above:
             notes.append(f"{kind}: {above} values above the given fleet capacity {capacity:,.0f} MW were capped at it")
-        actual_cf, forecast_cf = np.clip(actual_cf, 0.0, 1.0), np.clip(forecast_cf, 0.0, 1.0)
-        night = ""
-        if kind == "pv":
-            dark = _sun_down(frame.index)
-            actual_cf, forecast_cf = np.where(dark, 0.0, actual_cf), np.where(dark, 0.0, forecast_cf)
-            night = "; 0 while the sun is below the horizon at the site (the fleet includes solar-thermal plants)"
-        for unit in units:
+        dark = _sun_down(frame.index) if kind == "pv" else np.zeros(len(frame), dtype=bool)
+        night = "; 0 while the sun is below the horizon at the site (the fleet includes solar-thermal plants)" \
+            if kind == "pv" else ""
+        actual_cf = np.where(dark, 0.0, np.clip(actual_cf, 0.0, 1.0))
+        if forecast_col is None:
+            notes.append(f"{kind}: the files give no {FLEETS[kind][1]}; {kind} units keep climatology bands")
+        else:
+            forecast_cf = np.where(dark, 0.0, np.clip(forecast_cf, 0.0, 1.0))
+        for unit in getattr(base, kind):
             actual = actual_cf * unit.p_max_mw
-            forecast = np.clip(actual - options.errors_scale * (actual - forecast_cf * unit.p_max_mw),
-                               0.0, unit.p_max_mw)
             columns[unit.name] = actual
-            columns[unit.name + FORECAST_SUFFIX] = forecast
             provenance[unit.name] = _real(actual_col, table.origins[actual_col], made(
                 f"{actual_col} / {capacity:,.0f} MW × {unit.p_max_mw:g} MW{night}", actual_col))
+            if forecast_col is None:
+                continue
+            columns[unit.name + FORECAST_SUFFIX] = np.clip(
+                actual - options.errors_scale * (actual - forecast_cf * unit.p_max_mw), 0.0, unit.p_max_mw)
             provenance[unit.name + FORECAST_SUFFIX] = _real(
                 forecast_col, table.origins[actual_col] + table.origins[forecast_col], made(
                     f"{unit.name} − {options.errors_scale:g}·({unit.name} − {forecast_col} / {capacity:,.0f} MW × "
                     f"{unit.p_max_mw:g} MW), clipped to [0, {unit.p_max_mw:g}] MW{night}", actual_col, forecast_col))
+    for kind in ("wind", "pv"):
+        if getattr(base, kind) and kind not in fleets:
+            notes.append(f"{kind}: the files give no {FLEETS[kind][0]}; {kind} units are synthetic")
     say("generating the synthetic series")
-    synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, capacities, frame, seed)
+    synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed)
     columns.update(synthetic)
     provenance.update(sources_text)
     history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source="history.csv")
-    case = _case(base, out.name or "real", history, delivery, provenance, options, first, last)
+    case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last)
     _write(case, out)
     say(f"wrote {out}")
     return BuiltCase(folder=out, case=case, reports=tuple(i.report for i in imports), capacities_mw=capacities,
                      notes=tuple(notes))
 
 
-def _needed_columns(case: Case) -> dict[str, str]:
-    needed = {"price_da": "the day-ahead price"}
-    for kind, label in (("wind", "wind units"), ("pv", "PV units")):
-        units = getattr(case, kind)
-        if units:
-            names = ", ".join(u.name for u in units)
-            for column in FLEETS[kind]:
-                needed[column] = f"{label} {names}"
-    return needed
+def _fleets(case: Case, available) -> dict[str, tuple[str, str | None]]:
+    """Fleet series the units of ``case`` take from the data: ``{kind: (actual, forecast or None)}``.
+
+    A kind whose actual output the files do not give stays synthetic (not listed).
+    """
+    fleets = {}
+    for kind, (actual, forecast) in FLEETS.items():
+        if getattr(case, kind) and actual in available:
+            fleets[kind] = (actual, forecast if forecast in available else None)
+    return fleets
 
 
 def _day(value: dt.date | str | None, label: str) -> dt.date | None:
@@ -282,8 +285,9 @@ def _real(column: str, reports: tuple[ImportReport, ...], how: str) -> dict[str,
 
 
 def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.date, real: dict[str, np.ndarray],
-               capacities: dict[str, float], frame: pd.DataFrame, seed: int):
-    """Reserve prices, CSP solar-field heat and demands from :mod:`rvpp.data.synth` on the same hours."""
+               fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int):
+    """Reserve prices, CSP solar-field heat, demands (and wind or PV the data does not give) from
+    :mod:`rvpp.data.synth` on the same hours."""
     made = synth.build_history(seed, start=first.isoformat(), end=(last + dt.timedelta(days=1)).isoformat())
     stamps = pd.DatetimeIndex(made["timestamp"]).tz_convert("UTC")
     if not stamps.equals(index):
@@ -292,7 +296,7 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
     columns, provenance = {}, {}
     times = pd.DatetimeIndex(made["timestamp"])
     calendar = synth.make_calendar(times)
-    if "pv" in capacities:
+    if "pv" in fleets:
         solar_index = np.clip(frame[FLEETS["pv"][0]].to_numpy(float) / capacities["pv"], 0.0, 1.0)
         solar_text = "the real solar capacity factor"
     else:
@@ -315,39 +319,47 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
         provenance[unit.name] = {"origin": "synthetic", "source": label,
                                  "note": f"solar-field heat from modelled DNI, scaled to {unit.solar_field.p_max_mw_th:g} "
                                          "MW_th"}
-    for kind in ("ed", "td"):
+    profiles = {"wind": synth.WIND_COLUMNS, "pv": synth.PV_COLUMNS, "ed": synth.ED_COLUMNS, "td": synth.TD_COLUMNS}
+    notes = {"wind": "modelled wind farm output", "pv": "modelled PV output", "ed": "modelled consumption",
+             "td": "modelled heat consumption"}
+    for kind in ("wind", "pv", "ed", "td"):
+        if kind in fleets:
+            continue
         for unit in getattr(case, kind):
-            if unit.column not in made.columns:
-                profiles = [c for c in made.columns if c.startswith(kind.upper() + "_")]
+            if unit.column not in profiles[kind]:
                 raise RvppError(f'{kind} "{unit.name}": no synthetic profile {unit.column!r}; name the unit (or '
-                                f"its series) after one of {', '.join(profiles)}")
+                                f"its series) after one of {', '.join(profiles[kind])}")
             columns[unit.column] = made[unit.column].to_numpy(float)
-            provenance[unit.column] = {"origin": "synthetic", "source": label, "note": "modelled consumption"}
+            provenance[unit.column] = {"origin": "synthetic", "source": label, "note": notes[kind]}
     return columns, provenance
 
 
 def _case(base: Case, name: str, history: History, delivery: dt.date, provenance: dict, options: BuildOptions,
-          first: dt.date, last: dt.date) -> Case:
+          fleets: dict, first: dt.date, last: dt.date) -> Case:
     data = base.to_data()
     data["name"] = name
+    real = " and ".join({"wind": "wind", "pv": "PV"}[k] for k in fleets)
     data["description"] = (
-        f"Built from downloaded data ({first} to {last}): real day-ahead prices, wind and PV from the fleet's "
-        f"capacity factor with its day-ahead forecast (errors scaled by {options.errors_scale:g}); reserve prices, "
-        "CSP solar-field heat and demands synthetic. See provenance.")
+        f"Built from downloaded data ({first} to {last}): real day-ahead prices"
+        + (f", {real} from the fleet's capacity factor (forecast errors scaled by {options.errors_scale:g})"
+           if fleets else "")
+        + "; everything else synthetic. See provenance.")
     data["delivery_date"] = delivery.isoformat()
-    for kind in ("wind", "pv"):
+    for kind, (_, forecast) in fleets.items():
         for unit in data["units"][kind]:
-            unit.update(series=None, series_scale=1.0, forecast_series=unit["name"] + FORECAST_SUFFIX)
+            unit.update(series=None, series_scale=1.0,
+                        forecast_series=unit["name"] + FORECAST_SUFFIX if forecast else None)
     for unit in data["units"]["csp"]:
         unit["solar_field"].update(series=None, series_scale=1.0)
-    for kind in ("ed", "td"):
-        for unit in data["units"][kind]:
-            unit["series_scale"] = 1.0
+    for kind in ("wind", "pv", "ed", "td"):
+        if kind not in fleets:
+            for unit in data["units"][kind]:
+                unit.update(series_scale=1.0, forecast_series=None)
+    bands = {"default": "climatology"}
     if options.bands == "forecast":
-        data["uncertainty"]["bands"] = {"default": "climatology", "wind": "forecast", "pv": "forecast",
-                                        "price_da": "forecast"}
-    else:
-        data["uncertainty"]["bands"] = {}
+        bands.update({kind: "forecast" for kind, (_, forecast) in fleets.items() if forecast})
+        bands["price_da"] = "forecast"
+    data["uncertainty"]["bands"] = bands
     data["provenance"] = provenance
     try:
         return parse_case(data, history)
