@@ -158,7 +158,7 @@ def test_level_quantiles_take_the_nearest_fifth():
 # ----------------------------------------------------------------------------- the case fields
 
 
-def _case(bands=None, forecast_series=None, extra_columns=(), **uncertainty):
+def _case(bands=None, forecast_series=None, extra_columns=(), days=20, **uncertainty):
     units = {"wind": [wind("W", p_max=50.0, **({"forecast_series": forecast_series} if forecast_series else {}))],
              "ed": [demand("D", p_max=100.0)]}
     data = {"name": "fc", "delivery_date": DAY.isoformat(),
@@ -169,7 +169,7 @@ def _case(bands=None, forecast_series=None, extra_columns=(), **uncertainty):
                "price_sr_dn": lambda i, h: 3.0 + 0 * i, "W": lambda i, h: 30.0 + 5.0 * np.cos(i) + 0 * h,
                "W_fc": lambda i, h: 30.0 + 0 * i, "D": lambda i, h: 20.0 + 0 * i}
     columns.update({c: (lambda i, h: 0 * i) for c in extra_columns})
-    return parse_case(data, history(columns))
+    return parse_case(data, history(columns, days=days))
 
 
 def test_case_selects_forecast_bands_per_source_and_prepare_uses_them():
@@ -227,6 +227,29 @@ def test_case_round_trips_its_new_fields(tmp_path):
         case.replace(provenance={"nothing": {"origin": "real", "source": "x"}})
 
 
+def test_band_figure_draws_the_model_band_the_other_method_and_the_realized_day():
+    from rvpp.outputs.plots import band_overlays, bands_figure
+    from rvpp.uncertainty.bands import forecast_bands
+
+    case = _case(bands={"wind": "forecast"}, forecast_series="W_fc")
+    problem = prepare(case)
+    overlays = band_overlays(problem, "W")
+    label, lo, hi = overlays["compare"]
+    climatology = forecast_bands(case.history, DAY, problem.periods, {"W": ("W", 1.0)}, n_days=5, q_lo=0.2,
+                                 q_hi=0.8, timezone=TZ)
+    assert label == "Climatology"
+    assert np.allclose(lo, climatology[("W", "lo")]) and np.allclose(hi, climatology[("W", "hi")])
+    assert np.allclose(overlays["realized"], 30.0 + 5.0 * np.cos(day_index(DAY)))
+    figure = bands_figure(problem, "W", **overlays)
+    names = [trace.name for trace in figure.data]
+    assert "Upper bound: forecast + error (80th)" in names and "Realized" in names
+    assert "Climatology: upper" in names and "forecast-error band" in figure.layout.title.text
+    # Tomorrow: a history that ends the day before the delivery day still gives both price bands.
+    tomorrow = prepare(_case(bands={"price_da": "forecast"}, days=17))
+    overlays = band_overlays(tomorrow, "price_da")
+    assert "realized" not in overlays and overlays["compare"][0] == "Climatology"
+
+
 def test_score_counts_misses_and_shortfall_by_hand():
     lo, hi = np.array([0.0, 0.0, 10.0, 10.0]), np.array([10.0, 10.0, 20.0, 20.0])
     actual = np.array([5.0, 12.0, 4.0, 15.0])
@@ -245,3 +268,22 @@ def test_forecast_bands_beat_climatology_on_real_2018_wind():
         "actual_wind_onshore: 1 hour(s) from 2018-11-07T08:00Z to 2018-11-07T08:00Z interpolated linearly"]
     assert fc["width"] < clim["width"] / 4 and fc["shortfall"] < clim["shortfall"] / 3
     assert 0.40 <= fc["miss_rate"] < clim["miss_rate"]
+
+
+def test_uncertainty_page_switches_a_source_to_forecast_bands():
+    from rvpp import prepare as library_prepare
+    from tests.test_app import case_of, figures, open_app, values
+
+    at = open_app("uncertainty")
+    assert "Day-ahead price: forecast band" in figures(at)
+    assert "Climatology: upper" not in [t["name"] for t in figures(at)["Day-ahead price: forecast band"]["data"]]
+    at.multiselect(key="uncertainty_forecast_bands").set_value(["price_da"]).run()
+    assert not at.exception, at.exception
+    case = case_of(at)
+    assert case.uncertainty.band_method("price_da") == "forecast"
+    spec = figures(at)["Day-ahead price: forecast-error band"]
+    names = [t["name"] for t in spec["data"]]
+    assert "Climatology: upper" in names and "Realized" in names
+    expected = library_prepare(case).sources["price_da"]
+    mid = next(t for t in spec["data"] if t["name"] == "Forecast + median error")
+    assert np.allclose(values(mid["y"]), expected.nominal)

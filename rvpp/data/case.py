@@ -447,6 +447,14 @@ class Case(_Frozen):
         """Origin of each history column the case labels (empty: unlabelled, e.g. the paper case)."""
         return dict(self.provenance)
 
+    def provenance_summary(self) -> str | None:
+        """One line naming the real and the synthetic history columns (``None`` if unlabelled)."""
+        if not self.provenance:
+            return None
+        by_origin = {origin: [c for c, p in self.provenance if p.origin == origin] for origin in ("real", "synthetic")}
+        parts = [f"{origin}: {', '.join(columns)}" for origin, columns in by_origin.items() if columns]
+        return "History columns — " + "; ".join(parts) + " (sources and fingerprints in the case's provenance)."
+
     @property
     def ndres(self) -> tuple[NdresUnit, ...]:
         return self.wind + self.pv

@@ -32,7 +32,7 @@ naive price models take the hour before it; where it occurs twice, its first occ
 from __future__ import annotations
 
 import datetime as dt
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -70,29 +70,40 @@ class BandSpec:
 
 
 def band_specs(case: Case) -> dict[str, BandSpec]:
-    """The band of every uncertain source of ``case``, prices first, then units."""
+    """The band of every uncertain source of ``case``, prices first, then units.
+
+    Every spec carries its forecast (the unit's forecast column, or the price model) even
+    when its method is climatology, so the other method can be drawn for comparison.
+    """
     settings = case.uncertainty
     specs = {}
     for name in PRICE_COLUMNS:
-        method = settings.band_method(name)
-        specs[name] = BandSpec(name, 1.0, method, price_model=settings.price_forecast if method == "forecast" else None)
+        specs[name] = BandSpec(name, 1.0, settings.band_method(name), price_model=settings.price_forecast)
     for kind, unit in case.units():
-        method = settings.band_method(unit.name, kind)
         if kind == "csp":
             scale, low, high = unit.solar_field.series_scale, 0.0, unit.solar_field.p_max_mw_th
         elif kind in ("wind", "pv"):
             scale, low, high = unit.series_scale, 0.0, unit.p_max_mw
         else:
             scale, low, high = unit.series_scale, 0.0, None
-        specs[unit.name] = BandSpec(unit.column, scale, method,
-                                    forecast_column=unit.forecast_column if method == "forecast" else None,
-                                    low=low, high=high)
+        specs[unit.name] = BandSpec(unit.column, scale, settings.band_method(unit.name, kind),
+                                    forecast_column=unit.forecast_column, low=low, high=high)
     return specs
 
 
-def case_bands(case: Case, periods: pd.DatetimeIndex) -> pd.DataFrame:
-    """Bands per period of every source of ``case``, each by its method [t = 1..NT; (source, lo|mid|hi)]."""
+def has_forecast(spec: BandSpec) -> bool:
+    """True when forecast bands can be drawn for the source (a forecast column or a price model)."""
+    return spec.forecast_column is not None or spec.price_model is not None
+
+
+def case_bands(case: Case, periods: pd.DatetimeIndex, methods: dict[str, str] | None = None) -> pd.DataFrame:
+    """Bands per period of every source of ``case``, each by its method [t = 1..NT; (source, lo|mid|hi)].
+
+    ``methods`` draws the named sources by another method (e.g. to compare the two).
+    """
     specs = band_specs(case)
+    if methods:
+        specs = {name: replace(specs[name], method=method) for name, method in methods.items()}
     settings = case.uncertainty
     common = dict(n_days=settings.window_days, q_lo=settings.q_lo, q_hi=settings.q_hi, timezone=case.timezone)
     parts = []
@@ -140,7 +151,7 @@ def forecast_and_errors(history: History, day: dt.date, spec: BandSpec, *, n_day
     as a frame with columns ``hour`` (local clock hour), ``forecast`` and ``error``.
     """
     first, _ = window_days(day, n_days)
-    if spec.forecast_column is None and spec.price_model is None:
+    if not has_forecast(spec):
         raise CaseError(f"{spec.column}: forecast bands need a forecast column or a price model")
     if spec.forecast_column is not None:
         # The forecast issued for the day is a history row of the day itself.
