@@ -22,9 +22,10 @@ Why per forecast level rather than per clock hour: the error of a forecast depen
 level (it cannot push output below 0 or above the nameplate; a solar forecast of 0 at
 night is never wrong by much; a naive price forecast errs more at high prices), and a
 fifth of a 30-day window holds 144 errors where one clock hour holds 30, so the quantiles
-are steadier. Measured on 2018 Spanish wind and solar and on 2019-2024 OMIE prices,
-20-80 % bands per clock hour missed 44-45 % of the hours against the nominal 40 %, per
-forecast level 41-43 % (docs/model.md gives the numbers).
+are steadier. Measured on 2018 Spanish wind and solar and on OMIE prices of 2019, 2023
+and 2024 (``benchmarks/band_quality.py``), 20-80 % bands per forecast level missed 41.5 to
+44.5 % of the hours against the nominal 40 % (per clock hour: 42.2 to 44.9 %) and their
+mean shortfall below the lower bound was lower in every case (docs/model.md).
 Where a local clock hour does not exist on a day (02:00 on the day clocks go forward), the
 naive price models take the hour before it; where it occurs twice, its first occurrence.
 """
