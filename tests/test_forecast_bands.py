@@ -257,12 +257,29 @@ def test_score_counts_misses_and_shortfall_by_hand():
     assert result == {"width": 10.0, "miss_rate": 0.5, "below_rate": 0.25, "above_rate": 0.25, "shortfall": 1.5}
 
 
+def test_band_quality_of_a_perfect_forecast_is_a_zero_width_band_that_never_misses():
+    from rvpp.uncertainty.quality import band_quality
+
+    hist = history({"x": lambda i, h: 10.0 + 5.0 * np.sin(i + h), "x_fc": lambda i, h: 10.0 + 5.0 * np.sin(i + h)})
+    days = [DAY, DAY + dt.timedelta(days=1)]
+    result = band_quality(hist, days, BandSpec("x", forecast_column="x_fc", method="forecast"), window_days=5,
+                          q_lo=0.2, q_hi=0.8, timezone=TZ)
+    assert result["hours"] == 48
+    assert result["methods"]["forecast"] == {"width": 0.0, "miss_rate": 0.0, "below_rate": 0.0, "above_rate": 0.0,
+                                             "shortfall": 0.0}
+    climatology = result["methods"]["climatology"]
+    assert climatology["width"] > 1.0 and climatology["miss_rate"] > 0.0
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(not (SPAIN / "entsoe_spain_2015_2018.csv").is_file(), reason="real Spanish data not present")
-def test_forecast_bands_beat_climatology_on_real_2018_wind():
-    from rvpp.uncertainty.quality import band_quality_from_files
+def test_forecast_bands_beat_climatology_on_real_2018_wind(capsys):
+    import json
 
-    result = band_quality_from_files([SPAIN / "entsoe_spain_2015_2018.csv"], series="wind_onshore", year=2018)
+    from rvpp.cli import main
+
+    assert main(["data", "band-quality", str(SPAIN / "entsoe_spain_2015_2018.csv"), "--year", "2018", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
     clim, fc = result["methods"]["climatology"], result["methods"]["forecast"]
     assert result["hours"] == 8760 and result["filled_hours"] == [
         "actual_wind_onshore: 1 hour(s) from 2018-11-07T08:00Z to 2018-11-07T08:00Z interpolated linearly"]

@@ -303,10 +303,11 @@ def hourly(imported: Imported) -> tuple[pd.DataFrame, list[str]]:
     name = imported.report.files[0].name if imported.report.files else imported.report.source
     if (durations > HOUR).any():
         raise DataImportError(f"{name}: periods longer than one hour cannot be placed on an hourly history")
-    if ((HOUR % durations) != pd.Timedelta(0)).any() or (starts.floor("h") != (ends - pd.Timedelta(1)).floor("h")).any():
-        raise DataImportError(f"{name}: some periods do not divide the clock hour evenly; "
-                              "only 15, 30 and 60-minute periods are supported")
     hours = starts.floor("h")
+    misaligned = ((HOUR % durations) != pd.Timedelta(0)) | ((starts - hours) % durations != pd.Timedelta(0))
+    if misaligned.any():
+        raise DataImportError(f"{name}: some periods do not divide the clock hour evenly; "
+                              "only 15, 30 and 60-minute periods aligned to the hour are supported")
     share = (durations / HOUR).to_numpy(float)
     weighted = values.mul(share, axis=0)
     complete = values.notna().mul(share, axis=0)
