@@ -227,6 +227,20 @@ def test_case_round_trips_its_new_fields(tmp_path):
         case.replace(provenance={"nothing": {"origin": "real", "source": "x"}})
 
 
+def test_unit_tables_and_the_workbook_keep_forecast_columns_bands_and_provenance():
+    from rvpp.outputs import workbook
+
+    case = _case(bands={"wind": "forecast"}, forecast_series="W_fc", price_forecast="blend")
+    case = case.replace(provenance={"W": {"origin": "real", "source": "a file, sha256 0123", "note": "scaled"}})
+    table = workbook.unit_table(case, "wind")
+    assert table.at[0, "forecast_series"] == "W_fc"
+    edited = workbook.with_unit_table(case, "wind", table.assign(p_max_mw=60.0))
+    assert edited.wind[0].forecast_series == "W_fc" and edited.wind[0].p_max_mw == 60.0
+    again = workbook.read_case_workbook(workbook.case_workbook_bytes(case))
+    assert again.uncertainty == case.uncertainty and again.provenance_map == case.provenance_map
+    assert again.wind[0].forecast_series == "W_fc"
+
+
 def test_band_figure_draws_the_model_band_the_other_method_and_the_realized_day():
     from rvpp.outputs.plots import band_overlays, bands_figure
     from rvpp.uncertainty.bands import forecast_bands

@@ -100,7 +100,9 @@ def unit_columns(kind: str) -> list[str]:
     """Column names of :func:`unit_table` for ``kind`` (template order, then optional fields)."""
     _check_kind(kind)
     columns = ["name", *(c for c in _flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
-    optional = {"wind": [], "pv": [], "csp": ["storage.e_init_mwh_th"], "ed": ["p_init_mw"], "td": ["h_init_mw_th"]}
+    optional = {"wind": ["forecast_series"], "pv": ["forecast_series"],
+                "csp": ["storage.e_init_mwh_th", "solar_field.forecast_series"],
+                "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"]}
     series = SERIES_FIELDS[kind]
     scale_at = columns.index(series.replace("series", "series_scale"))
     columns.insert(scale_at, series)
