@@ -18,7 +18,8 @@ from typing import Annotated, Any, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, ValidationError, field_serializer, field_validator,
+                      model_validator)
 
 from ..errors import CaseError, CaseFileError
 from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
@@ -336,6 +337,10 @@ class UncertaintySettings(_Frozen):
             return tuple(sorted(value.items()))
         return value
 
+    @field_serializer("bands")
+    def _bands_as_mapping(self, value: tuple[tuple[str, str], ...]) -> dict[str, str]:
+        return dict(value)
+
     @model_validator(mode="after")
     def _unique_bands(self) -> "UncertaintySettings":
         keys = [key for key, _ in self.bands]
@@ -497,7 +502,6 @@ class Case(_Frozen):
         dump = self.model_dump(mode="python", exclude={"history"})
         units = {kind: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
         dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
-        dump["uncertainty"]["bands"] = dict(dump["uncertainty"]["bands"])
         dump["provenance"] = dict(dump["provenance"])
         return {**dump, "units": units}
 
