@@ -123,6 +123,10 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
         raise DataImportError(f"the files give no day-ahead price (price_da); they give "
                               f"{', '.join(table.frame.columns) or 'nothing'}")
     fleets = _fleets(base, table.frame.columns)
+    taken = [u.name + FORECAST_SUFFIX for kind in fleets for u in getattr(base, kind)
+             if u.name + FORECAST_SUFFIX in base.unit_names()]
+    if taken:
+        raise RvppError(f"the template has a unit named {taken[0]!r}, the name of a forecast column; rename it")
     needed = ["price_da"] + [c for pair in fleets.values() for c in pair if c]
     frame, first, last = _span(table.frame[needed], base.timezone, options)
     notes = list(table.notes)
