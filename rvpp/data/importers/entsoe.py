@@ -125,7 +125,7 @@ def _delimiter(text: str) -> str:
 
 
 def _cells(line: str) -> list[str]:
-    return next(csv.reader([line], delimiter=";" if line.count(";") > line.count(",") else ","), [])
+    return next(csv.reader([line], delimiter=_delimiter(line)), [])
 
 
 def _time_column(header: list[str], name: str) -> tuple[int, str]:
