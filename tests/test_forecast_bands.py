@@ -318,3 +318,21 @@ def test_uncertainty_page_switches_a_source_to_forecast_bands():
     expected = library_prepare(case).sources["price_da"]
     mid = next(t for t in spec["data"] if t["name"] == "Forecast + median error")
     assert np.allclose(values(mid["y"]), expected.nominal)
+
+
+def test_the_audit_derives_forecast_bands_on_its_own_and_agrees():
+    from rvpp import solve
+    from rvpp.settle.audit import audit_day, audit_result
+
+    case = _case(bands={"wind": "forecast", "price_da": "forecast"}, forecast_series="W_fc", price_forecast="blend",
+                 days=20)
+    problem = prepare(case)
+    day = audit_day(case)
+    for name in ("W", "price_da", "D"):
+        assert np.allclose(day.sources[name].nominal, problem.sources[name].nominal)
+        assert np.allclose(day.sources[name].deviation, problem.sources[name].deviation)
+    result = solve(case)
+    assert result.status == "optimal" and audit_result(result) == []
+    # Audited as if the case used climatology, the same plan breaks the band checks.
+    flipped = audit_day(case.replace(uncertainty={"bands": {}}))
+    assert not np.allclose(flipped.sources["price_da"].nominal, problem.sources["price_da"].nominal)

@@ -298,5 +298,5 @@ def test_command_line_import_prints_the_report_and_writes_the_hourly_csv(tmp_pat
     written = pd.read_csv(out)
     assert list(written.columns) == ["time_utc", "time_local", "price_da"]
     assert written["time_local"].iloc[2:4].tolist() == ["2018-10-28T02:00:00+02:00", "2018-10-28T02:00:00+01:00"]
-    assert main(["data", "import", str(tmp_path / "nothing.csv")]) == 2
+    assert main(["data", "import", str(tmp_path / "nothing.csv")]) == 1
     assert "does not exist" in capsys.readouterr().err

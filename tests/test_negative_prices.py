@@ -92,7 +92,7 @@ def test_buying_at_negative_prices_earns_money_and_is_protected_against_the_pric
     assert np.allclose(result.market["p_da_mw"], -10.0)
     assert result.objective_eur == pytest.approx(expected, rel=1e-7)
     assert result.protection_eur["price_da"] == pytest.approx(min(gamma, NT) * 150.0, rel=1e-7)
-    assert audit_result(result) == []
+    assert audit_result(result, bands=problem.bands) == []
 
 
 def test_selling_into_negative_prices_is_avoided_by_curtailing():

@@ -7,6 +7,10 @@ import json
 import sys
 from pathlib import Path
 
+from ..cli import Number, path_option
+from ..uncertainty.quality import SERIES
+from .case import PRICE_MODELS
+
 DEFAULT_TEMPLATE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 
 
@@ -17,9 +21,9 @@ def add_data_commands(commands) -> None:
         description="Read OMIE marginalpdbc files (or their zip archives), ENTSO-E Transparency Platform CSV "
                     "exports and hourly tables; print what each holds (span, periods, resolution, gaps, "
                     "duplicates, clock changes, units, zone) and optionally write them as one hourly CSV.")
-    read.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    read.add_argument("files", nargs="+", type=path_option, metavar="FILE")
     read.add_argument("--zone", help="OMIE price zone ES (default) or PT; ENTSO-E area when a file holds several")
-    read.add_argument("--out", type=Path, metavar="CSV", help="write the series on one UTC hour grid "
+    read.add_argument("--out", type=path_option, metavar="CSV", help="write the series on one UTC hour grid "
                       "(time_utc, time_local, series...); quarter-hours are averaged to hours")
     read.set_defaults(run=_run_import)
 
@@ -28,27 +32,28 @@ def add_data_commands(commands) -> None:
         description="Build a case from imported series: real day-ahead prices, wind and PV from the fleet's "
                     "capacity factor (actual and day-ahead forecast); reserve prices, CSP solar-field heat and "
                     "demands stay synthetic. The case's provenance section says which column is which.")
-    build.add_argument("--from", dest="sources", nargs="+", type=Path, required=True, metavar="FILE")
-    build.add_argument("--out", type=Path, required=True, metavar="FOLDER", help="case folder to write")
-    build.add_argument("--template", type=Path, default=DEFAULT_TEMPLATE,
+    build.add_argument("--from", dest="sources", nargs="+", type=path_option, required=True, metavar="FILE")
+    build.add_argument("--out", type=path_option, required=True, metavar="FOLDER", help="case folder to write")
+    build.add_argument("--template", type=path_option, default=DEFAULT_TEMPLATE,
                        help="case whose units and settings are used (default: the paper case)")
-    build.add_argument("--errors-scale", type=float, default=1.0, metavar="K",
+    build.add_argument("--errors-scale", type=Number(0), default=1.0, metavar="K",
                        help="scale the fleet's forecast error for a single farm: forecast = actual − "
                             "K·(actual − fleet forecast) (default 1)")
     build.add_argument("--start", help="first local day YYYY-MM-DD (default: the first whole day of the data)")
     build.add_argument("--end", help="last local day YYYY-MM-DD (default: the last whole day of the data)")
     build.add_argument("--date", help="delivery date of the case (default: the last day)")
     build.add_argument("--zone", help="OMIE price zone ES (default) or PT; ENTSO-E area")
-    build.add_argument("--wind-capacity", type=float, metavar="MW",
+    build.add_argument("--wind-capacity", type=Number(0, low_open=True, unit="MW"), metavar="MW",
                        help="fleet wind capacity (default: the highest output in the data)")
-    build.add_argument("--solar-capacity", type=float, metavar="MW",
+    build.add_argument("--solar-capacity", type=Number(0, low_open=True, unit="MW"), metavar="MW",
                        help="fleet solar capacity (default: the highest output in the data)")
-    build.add_argument("--fill-gaps", type=int, default=0, metavar="HOURS",
+    build.add_argument("--fill-gaps", type=Number(0, whole=True, unit="h"), default=0, metavar="HOURS",
                        help="interpolate gaps of at most HOURS hours linearly, each reported (default 0: refuse gaps)")
     build.add_argument("--bands", choices=("forecast", "climatology"), default="forecast",
                        help="forecast (default): wind, PV and DAM price on forecast-error bands; climatology: "
                             "every source on the paper's bands")
-    build.add_argument("--seed", type=int, help="seed of the synthetic series (default: the published one)")
+    build.add_argument("--seed", type=Number(0, whole=True), help="seed of the synthetic series >= 0 "
+                       "(default: the published one)")
     build.add_argument("--force", action="store_true", help="overwrite a folder that already holds a case")
     build.set_defaults(run=_run_build_case)
 
@@ -57,15 +62,19 @@ def add_data_commands(commands) -> None:
         description="Compare the paper's climatology bands with forecast-error bands on real data: for every "
                     "day, bands from the window before it, scored against the day's actual values "
                     "(capacity-normalised for output).")
-    quality.add_argument("files", nargs="+", type=Path, metavar="FILE")
-    quality.add_argument("--series", default="wind_onshore",
+    quality.add_argument("files", nargs="+", type=path_option, metavar="FILE")
+    quality.add_argument("--series", choices=SERIES, default="wind_onshore",
                          help="wind_onshore (default), solar or price_da")
-    quality.add_argument("--year", type=int, help="score the days of this year (default: the last whole year)")
-    quality.add_argument("--window", type=int, default=30, help="window [days] (default 30)")
-    quality.add_argument("--q-lo", type=float, default=0.2, help="lower quantile (default 0.2)")
-    quality.add_argument("--q-hi", type=float, default=0.8, help="upper quantile (default 0.8)")
-    quality.add_argument("--price-model", default="same_hour_yesterday",
-                         help="point forecast of prices: same_hour_yesterday, same_hour_last_week or blend")
+    quality.add_argument("--year", type=Number(1900, 2200, whole=True),
+                         help="score the days of this year (default: the last whole year)")
+    quality.add_argument("--window", type=Number(1, 366, whole=True, unit="days"), default=30,
+                         help="window [days] (default 30)")
+    quality.add_argument("--q-lo", type=Number(0, 0.5, low_open=True, high_open=True), default=0.2,
+                         help="lower quantile (default 0.2)")
+    quality.add_argument("--q-hi", type=Number(0.5, 1, low_open=True, high_open=True), default=0.8,
+                         help="upper quantile (default 0.8)")
+    quality.add_argument("--price-model", choices=PRICE_MODELS, default="same_hour_yesterday",
+                         help="point forecast of prices (default same_hour_yesterday)")
     quality.add_argument("--zone", help="OMIE price zone ES (default) or PT")
     quality.add_argument("--json", action="store_true", help="print the numbers as JSON")
     quality.set_defaults(run=_run_band_quality)

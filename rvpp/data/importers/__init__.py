@@ -14,8 +14,6 @@ exports instead.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -153,23 +151,13 @@ def fill_gaps(table: pd.DataFrame, max_hours: int) -> tuple[pd.DataFrame, list[s
 def write_table(table: pd.DataFrame, path: str | Path, timezone: str = "Europe/Madrid") -> Path:
     """Write an hourly table as rvpp's normalised CSV (``time_utc, time_local, series...``),
     atomically (a temporary file renamed into place)."""
+    from ...outputs.export import replacing
+
     path = Path(path)
     out = table.copy()
     out.insert(0, "time_local", [t.isoformat() for t in table.index.tz_convert(timezone)])
     out.insert(0, "time_utc", [f"{t:%Y-%m-%dT%H:%M:%SZ}" for t in table.index])
-    write_atomic(path, out.to_csv(index=False, float_format="%.6g", na_rep=""))
-    return path
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as out:
-            out.write(text)
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
-
+    with replacing(path) as temporary:
+        out.to_csv(temporary, index=False, float_format="%.6g", na_rep="")
+    return path
