@@ -113,7 +113,8 @@ c4.slider("Upper percentile", min(Q_HI[0], q.q_hi), max(Q_HI[1], q.q_hi), value=
 specs = band_specs(case)
 eligible = [name for name, spec in specs.items() if has_forecast(spec)]
 b1, b2 = st.columns([3, 1])
-b1.multiselect("Sources on forecast-based bands", eligible, default=[n for n in eligible if specs[n].method == "forecast"],
+b1.multiselect("Sources on forecast-based bands", eligible,
+               default=[n for n in eligible if specs[n].method == "forecast"],
                key="uncertainty_forecast_bands", on_change=set_forecast_bands, args=("uncertainty_forecast_bands",),
                help="Forecast band: the day-ahead point forecast plus percentiles of its past errors (units with a "
                     "forecast column; prices from a naive model). Others keep the paper's climatology.")

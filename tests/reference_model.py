@@ -117,7 +117,8 @@ def forecast_error_band(case, column: str, scale: float, forecast: str | None,
         predicted = frame[forecast] * scale
         point = predicted.reindex(periods.tz_convert("UTC").floor("h")).to_numpy(float)
     else:
-        lags = {"same_hour_yesterday": [1], "same_hour_last_week": [7], "blend": [1, 7]}[case.uncertainty.price_forecast]
+        lags = {"same_hour_yesterday": [1], "same_hour_last_week": [7],
+                "blend": [1, 7]}[case.uncertainty.price_forecast]
         grid = (pd.DataFrame({"date": local.date, "hour": local.hour, "v": frame[column].to_numpy(float) * scale})
                 .drop_duplicates(["date", "hour"]).pivot(index="date", columns="hour", values="v")
                 .reindex(columns=range(24)).ffill(axis=1))

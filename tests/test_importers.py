@@ -135,7 +135,8 @@ def test_omie_zip_archive_reads_like_its_daily_files(tmp_path):
     from_zip = one([archive])
     from_files = one(sorted(OMIE.glob("marginalpdbc_2018*")))
     pd.testing.assert_frame_equal(from_zip.values, from_files.values)
-    assert [f.name.split(":")[1] for f in from_zip.report.files] == [p.name for p in sorted(OMIE.glob("marginalpdbc_2018*"))]
+    members = [f.name.split(":")[1] for f in from_zip.report.files]
+    assert members == [p.name for p in sorted(OMIE.glob("marginalpdbc_2018*"))]
 
 
 # ----------------------------------------------------------------------------- ENTSO-E

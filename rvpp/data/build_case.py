@@ -175,8 +175,8 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
                 actual - options.errors_scale * (actual - forecast_cf * unit.p_max_mw), 0.0, unit.p_max_mw)
             provenance[unit.name + FORECAST_SUFFIX] = _real(
                 forecast_col, table.origins[actual_col] + table.origins[forecast_col], made(
-                    f"{unit.name} − {options.errors_scale:g}·({unit.name} − {forecast_col} / {capacity:,.0f} MW × "
-                    f"{unit.p_max_mw:g} MW), clipped to [0, {unit.p_max_mw:g}] MW{night}", actual_col, forecast_col))
+                    f"{unit.name} − {options.errors_scale:g}·({unit.name} − {forecast_col} / {capacity:,.0f} MW "
+                    f"× {unit.p_max_mw:g} MW), clipped to [0, {unit.p_max_mw:g}] MW{night}", actual_col, forecast_col))
     for kind in ("wind", "pv"):
         if getattr(base, kind) and kind not in fleets:
             notes.append(f"{kind}: the files give no {FLEETS[kind][0]}; {kind} units are synthetic")
@@ -321,8 +321,8 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
         scale = unit.solar_field.p_max_mw_th / SYNTHETIC_CSP_FIELD_MW_TH
         columns[unit.name] = made["CSP1"].to_numpy(float) * scale
         provenance[unit.name] = {"origin": "synthetic", "source": label,
-                                 "note": f"solar-field heat from modelled DNI, scaled to {unit.solar_field.p_max_mw_th:g} "
-                                         "MW_th"}
+                                 "note": "solar-field heat from modelled DNI, scaled to "
+                                         f"{unit.solar_field.p_max_mw_th:g} MW_th"}
     profiles = {"wind": synth.WIND_COLUMNS, "pv": synth.PV_COLUMNS, "ed": synth.ED_COLUMNS, "td": synth.TD_COLUMNS}
     notes = {"wind": "modelled wind farm output", "pv": "modelled PV output", "ed": "modelled consumption",
              "td": "modelled heat consumption"}

@@ -45,6 +45,7 @@ from zoneinfo import ZoneInfo
 import pandas as pd
 
 from ...errors import DataImportError
+from ..files import excerpt, excerpt_names
 from .report import Imported, Rows, SourceFile, assemble, decode, fingerprint, read_bytes, slug
 
 SOURCE = "ENTSO-E Transparency Platform CSV export"
@@ -54,6 +55,7 @@ HEADER_ZONES = {"CET/CEST": CENTRAL_EUROPE, "CET": CENTRAL_EUROPE, "UTC": "UTC",
 MARKER_OFFSETS_H = {"CET": 1, "CEST": 2, "WET": 0, "WEST": 1, "EET": 2, "EEST": 3, "UTC": 0}
 EMPTY = {"", "-", "n/e", "N/A", "n/a", "NA"}
 ALLOWED_MTU_MIN = (15, 30, 60)
+COLUMN_CHARS = 80  # column names are quoted in full up to this length
 
 _STAMP = r"(\d{2})[./](\d{2})[./](\d{4})\s+(\d{2}):(\d{2})(?::(\d{2}))?\s*(?:\(([A-Z/]+)\))?"
 MTU = re.compile(rf"^\s*{_STAMP}\s*-\s*{_STAMP}\s*(?:\(([A-Z/]+)\))?\s*$")
@@ -110,8 +112,8 @@ def read_one(path: str | Path, zone: str | None = None) -> Imported:
     else:
         body = list(enumerate(body, start=2))
     columns, never = _drop_not_expected(columns, body)
-    notes = [f"ignored column {c!r}" for c in ignored]
-    notes += [f"dropped {c!r}: 'n/e' (not expected) in every row" for c in never]
+    notes = [f"ignored column {excerpt(c, COLUMN_CHARS)!r}" for c in ignored]
+    notes += [f"dropped {excerpt(c)!r}: 'n/e' (not expected) in every row" for c in never]
     rows, clock_notes, dropped = _rows(body, columns, time_index, clock, name)
     notes += dropped
     file = SourceFile(name, fingerprint(data), len(table) - 1)
@@ -134,7 +136,8 @@ def _time_column(header: list[str], name: str) -> tuple[int, str]:
         if match:
             label = (match.group("zone") or "").strip().upper()
             if label not in HEADER_ZONES:
-                raise DataImportError(f'{name}: time column "{cell}" uses the time zone {label!r}; known: '
+                raise DataImportError(f'{name}: time column "{excerpt(cell)}" uses the time zone '
+                                      f"{excerpt(label)!r}; known: "
                                       + ", ".join(z for z in HEADER_ZONES if z))
             return i, HEADER_ZONES[label]
     raise DataImportError(f'{name}: no "MTU" time column in the header; is this an ENTSO-E CSV export?')
@@ -151,7 +154,8 @@ def _value_columns(header: list[str], name: str, time_index: int, area_index: in
                 continue
             unit = match.group("unit").strip()
             if unit != EXPECTED_UNITS[kind]:
-                raise DataImportError(f'{name}: column "{cell}" is in {unit}; rvpp reads {EXPECTED_UNITS[kind]}')
+                raise DataImportError(f'{name}: column "{excerpt(cell)}" is in {excerpt(unit)}; rvpp reads '
+                                      f"{EXPECTED_UNITS[kind]}")
             series = kind if kind in ("price_da", "load_forecast", "load_actual") else \
                 f"{kind}_{slug(match.group('type'))}"
             area = (match.groupdict().get("area") or "").strip()
@@ -165,7 +169,7 @@ def _value_columns(header: list[str], name: str, time_index: int, area_index: in
     if not columns:
         raise DataImportError(
             f"{name}: no column rvpp reads (day-ahead price [EUR/MWh], actual generation per type [MW], "
-            "day-ahead wind and solar forecast [MW], total load [MW]); found: " + ", ".join(header))
+            "day-ahead wind and solar forecast [MW], total load [MW]); found: " + excerpt_names(header))
     names = [c.name for c in columns]
     repeated = sorted({n for n in names if names.count(n) > 1})
     if repeated:
@@ -182,12 +186,13 @@ def _choose_area(body: list[list[str]], area_index: int | None, header_areas: se
         return zone
     if zone is None:
         if len(areas) > 1:
-            raise DataImportError(f"{name}: the file holds several areas ({', '.join(sorted(areas))}); "
+            raise DataImportError(f"{name}: the file holds several areas ({excerpt_names(sorted(areas))}); "
                                   "choose one with --zone")
         return next(iter(areas))
     matching = [a for a in areas if a.upper() == zone.upper() or a.upper().endswith("|" + zone.upper())]
     if not matching:
-        raise DataImportError(f"{name}: zone {zone!r} is not in the file (areas: {', '.join(sorted(areas))})")
+        raise DataImportError(f"{name}: zone {excerpt(zone)!r} is not in the file "
+                              f"(areas: {excerpt_names(sorted(areas))})")
     return matching[0]
 
 
@@ -212,7 +217,8 @@ def _rows(body, columns: list[_Column], time_index: int, clock: str, name: str):
             raise DataImportError(f"{where}: the row has no time")
         match = MTU.match(row[time_index])
         if not match:
-            raise DataImportError(f'{where}: time {row[time_index]!r} is not "DD.MM.YYYY HH:MM - DD.MM.YYYY HH:MM"')
+            raise DataImportError(f"{where}: time {excerpt(row[time_index])!r} is not "
+                                  '"DD.MM.YYYY HH:MM - DD.MM.YYYY HH:MM"')
         start, end = _naive(match.groups()[0:6], where), _naive(match.groups()[7:13], where)
         marker = match.group(7) or match.group(15) or match.group(14)
         values = {c.name: _number(row[c.index] if len(row) > c.index else "", where, c.name) for c in columns}
@@ -264,9 +270,9 @@ def _number(text: str, where: str, column: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise DataImportError(f"{where}: {column} value {text!r} is not a number") from None
+        raise DataImportError(f"{where}: {column} value {excerpt(text)!r} is not a number") from None
     if value != value or abs(value) == float("inf"):
-        raise DataImportError(f"{where}: {column} value {text!r} is not a finite number")
+        raise DataImportError(f"{where}: {column} value {excerpt(text)!r} is not a finite number")
     return value
 
 

@@ -38,6 +38,7 @@ from pathlib import Path
 import pandas as pd
 
 from ...errors import DataImportError
+from ..files import excerpt
 from .report import Imported, Rows, SourceFile, assemble, decode, fingerprint, read_bytes
 
 SOURCE = "OMIE day-ahead marginal prices (marginalpdbc)"
@@ -64,7 +65,7 @@ def read(paths: list[str | Path], zone: str = "ES") -> Imported:
     """Read marginalpdbc files (or zip archives of them) into one price series ``price_da``."""
     zone = zone.upper()
     if zone not in ZONES:
-        raise DataImportError(f"zone={zone!r} is not an OMIE zone; choose ES or PT")
+        raise DataImportError(f"zone={excerpt(zone)!r} is not an OMIE zone; choose ES or PT")
     rows, files, days = Rows(), [], {}  # days: periods met per delivery day
     for path in paths:
         data = read_bytes(path)
@@ -164,7 +165,7 @@ def _whole(text: str, field: str, where: str) -> int:
     try:
         return int(text.strip())
     except ValueError:
-        raise DataImportError(f"{where}: {field}={text.strip()!r} must be a whole number") from None
+        raise DataImportError(f"{where}: {field}={excerpt(text.strip())!r} must be a whole number") from None
 
 
 def _price(text: str, where: str) -> float:
@@ -174,9 +175,9 @@ def _price(text: str, where: str) -> float:
     try:
         value = float(text.replace(",", ".") if "." not in text else text)
     except ValueError:
-        raise DataImportError(f"{where}: price {text!r} is not a number") from None
+        raise DataImportError(f"{where}: price {excerpt(text)!r} is not a number") from None
     if value != value or abs(value) == float("inf"):
-        raise DataImportError(f"{where}: price {text!r} is not a finite number")
+        raise DataImportError(f"{where}: price {excerpt(text)!r} is not a finite number")
     return value
 
 

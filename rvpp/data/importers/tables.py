@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from ...errors import DataImportError
+from ..files import excerpt
 from .report import HOUR, Imported, Rows, SourceFile, assemble, decode, fingerprint, read_bytes, slug, unit_of
 
 DATASET = "Spanish energy dataset (hourly, ENTSO-E and OMIE)"
@@ -102,7 +103,8 @@ def read_dataset(path: str | Path) -> Imported:
     for column in frame.columns[1:]:
         found = dataset_series(column)
         if found is None:
-            notes.append(f"ignored column {column!r}" + (f" ({IGNORED[column]})" if column in IGNORED else ""))
+            notes.append(f"ignored column {excerpt(column)!r}"
+                         + (f" ({IGNORED[column]})" if column in IGNORED else ""))
             continue
         meanings[found[0]] = found[1]
         frame = frame.rename(columns={column: found[0]})
@@ -127,7 +129,8 @@ def _dataset_times(text: list[str], name: str) -> tuple[pd.DatetimeIndex, int]:
     for i, value in enumerate(text):
         match = _OFFSET.match(value.strip())
         if not match:
-            raise DataImportError(f"{name} line {i + 2}: time {value!r} must be like 2015-01-01 00:00:00+01:00 "
+            raise DataImportError(f"{name} line {i + 2}: time {excerpt(value)!r} must be like "
+                                  "2015-01-01 00:00:00+01:00 "
                                   "(local time with its UTC offset)")
         parts.append(match.groups())
     written = _instants(parts, name, swap=False)
@@ -141,7 +144,8 @@ def _dataset_times(text: list[str], name: str) -> tuple[pd.DatetimeIndex, int]:
     if written is None:
         raise DataImportError(f"{name}: a time is not a valid date")
     i = int(np.flatnonzero(np.diff(written.asi8) <= 0)[0]) + 1
-    raise DataImportError(f"{name} line {i + 2}: time {text[i]!r} is not after the row before it ({text[i - 1]!r}); "
+    raise DataImportError(f"{name} line {i + 2}: time {excerpt(text[i])!r} is not after the row before it "
+                          f"({excerpt(text[i - 1])!r}); "
                           "rows must be in time order without repeats")
 
 
@@ -198,10 +202,10 @@ def _numbers(frame: pd.DataFrame, columns: list[str], name: str) -> pd.DataFrame
         bad = values.isna() & ~empty
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
-            raise DataImportError(f"{name} line {i + 2}: {column} value {text[i]!r} is not a number")
+            raise DataImportError(f"{name} line {i + 2}: {column} value {excerpt(text[i])!r} is not a number")
         if np.isinf(values.to_numpy(float)).any():
             i = int(np.flatnonzero(np.isinf(values.to_numpy(float)))[0])
-            raise DataImportError(f"{name} line {i + 2}: {column} value {text[i]!r} is not a finite number")
+            raise DataImportError(f"{name} line {i + 2}: {column} value {excerpt(text[i])!r} is not a finite number")
         out[column] = values.to_numpy(float)
     return pd.DataFrame(out)
 
@@ -232,11 +236,11 @@ def read_time_utc(path: str | Path, zone: str | None = None) -> Imported:
                 meanings["price_da"] = f"day-ahead marginal price, {ZONE_NAMES[OMIE_PRICES[column]]}"
                 zones.add(f"{OMIE_PRICES[column]} ({ZONE_NAMES[OMIE_PRICES[column]]})")
             else:
-                notes.append(f"ignored column {column!r} (another zone)")
+                notes.append(f"ignored column {excerpt(column)!r} (another zone)")
         elif unit_of(column) and re.fullmatch(r"[a-z0-9_]+", column):
             meanings[column] = f"{column.replace('_', ' ')} (as written)"
         else:
-            notes.append(f"ignored column {column!r}")
+            notes.append(f"ignored column {excerpt(column)!r}")
     if not meanings:
         raise DataImportError(f"{file.name}: no series rvpp reads (price_es_eur_mwh, price_da, actual_..., "
                               "forecast_..., load_...)")
@@ -254,13 +258,14 @@ def _utc_times(frame: pd.DataFrame, name: str) -> pd.DatetimeIndex:
     bad = ~text.str.match(r"^\d{4}-\d{2}-\d{2}[ T]\d{2}:\d{2}(:\d{2})?(Z|\+00:?00)$")
     if bad.any():
         i = int(np.flatnonzero(bad.to_numpy())[0])
-        raise DataImportError(f"{name} line {i + 2}: time_utc {text[i]!r} must be a UTC time such as "
+        raise DataImportError(f"{name} line {i + 2}: time_utc {excerpt(text[i])!r} must be a UTC time such as "
                               "2018-01-01T00:00:00Z")
     stamps = pd.DatetimeIndex(pd.to_datetime(text, utc=True, format="ISO8601"))
     off_hour = np.flatnonzero((stamps.minute != 0) | (stamps.second != 0))
     if len(off_hour):
         i = int(off_hour[0])
-        raise DataImportError(f"{name} line {i + 2}: time_utc {text[i]!r} is not on the hour; the table is hourly")
+        raise DataImportError(f"{name} line {i + 2}: time_utc {excerpt(text[i])!r} is not on the hour; "
+                              "the table is hourly")
     if "time_local" in frame.columns:
         local = frame["time_local"].astype(str).str.strip()
         try:
@@ -270,6 +275,6 @@ def _utc_times(frame: pd.DataFrame, name: str) -> pd.DatetimeIndex:
         differ = np.flatnonzero(check != stamps)
         if len(differ):
             i = int(differ[0])
-            raise DataImportError(f"{name} line {i + 2}: time_local {local[i]!r} is not the instant time_utc "
-                                  f"{text[i]!r}")
+            raise DataImportError(f"{name} line {i + 2}: time_local {excerpt(local[i])!r} is not the instant time_utc "
+                                  f"{excerpt(text[i])!r}")
     return stamps
