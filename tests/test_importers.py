@@ -301,3 +301,10 @@ def test_command_line_import_prints_the_report_and_writes_the_hourly_csv(tmp_pat
     assert written["time_local"].iloc[2:4].tolist() == ["2018-10-28T02:00:00+02:00", "2018-10-28T02:00:00+01:00"]
     assert main(["data", "import", str(tmp_path / "nothing.csv")]) == 1
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_binary_files_are_named_for_what_they_are(tmp_path):
+    path = tmp_path / "prices.csv"
+    path.write_bytes(b"%PDF-1.7 not a table")
+    with pytest.raises(DataImportError, match='"prices.csv" is a PDF document, not a text file'):
+        detect(path)

@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from ...errors import DataImportError
+from ..files import sniff
 
 HOUR = pd.Timedelta(hours=1)
 SHOWN = 12  # gaps, duplicates and missing runs listed in full before "and N more"
@@ -339,10 +340,12 @@ def read_bytes(path: str | Path, limit_mb: float = 512.0) -> bytes:
 
 
 def decode(data: bytes, name: str) -> str:
-    """Text of a download: UTF-8 (with or without byte-order mark), else Latin-1 as the
-    Spanish and ENTSO-E sites sometimes serve. Binary content is refused."""
-    if b"\x00" in data[:4096]:
-        raise DataImportError(f'"{name}" is not a text file')
+    """Text of a download: UTF-8 (with or without byte-order mark), else Latin-1, as
+    spreadsheet programs on Windows save a CSV. Anything that is not text is refused,
+    naming what it seems to be (:func:`rvpp.data.files.sniff`)."""
+    kind = sniff(data)
+    if kind is not None:
+        raise DataImportError(f'"{name}" is {kind}, not a text file')
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError:
