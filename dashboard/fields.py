@@ -20,6 +20,8 @@ FIELDS = {
     "reserve_share": ("Reserve share [-]", "Largest reserve band as a fraction of P max (0-1)"),
     "series": ("History series", "History column that gives the unit's forecast band"),
     "series_scale": ("Series scale [-]", "Factor applied to the history series"),
+    "forecast_series": ("Forecast series", "History column of the unit's day-ahead forecast, for forecast-error "
+                                           "bands (see Uncertainty); empty: none"),
     "heat_efficiency": ("Heat efficiency [-]", "Fraction of solar-field heat delivered to thermal demands"),
     "p_max_mw_th": ("SF max [MW_th]", "Solar-field thermal capacity"),
     "e_min_mwh_th": ("TS E min [MWh_th]", "Minimum stored energy"),
@@ -65,6 +67,8 @@ def column_config(case: Case, kind: str) -> dict:
         if column == SERIES_FIELDS[kind]:
             config[column] = st.column_config.SelectboxColumn(label, help=help_text, options=series_options,
                                                               default=default, required=True)
+        elif field == "forecast_series":
+            config[column] = st.column_config.SelectboxColumn(label, help=help_text, options=series_options)
         elif field in TEXT_FIELDS:
             config[column] = st.column_config.TextColumn(label, help=help_text, default=default, required=True)
         elif field in BOOL_FIELDS:

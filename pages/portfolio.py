@@ -68,7 +68,10 @@ q = run.uncertainty
 st.caption(f"Per clock hour over the {q.window_days} days before {run.delivery_date:%d %b %Y}: the "
            f"{q.q_lo * 100:g}th percentile, the median and the {q.q_hi * 100:g}th percentile of each unit's "
            "history. Production is planned on the upper bound and may fall to the lower one; consumption is "
-           "planned on the lower bound and may rise to the upper one.")
+           "planned on the lower bound and may rise to the upper one. Sources on forecast-based bands (see "
+           "Uncertainty) take their day-ahead forecast plus percentiles of its past errors instead.")
+if run.provenance_summary():
+    st.caption(run.provenance_summary())
 problem = solving.prepare(run)
 if problem is not None:
     kinds = [k for k in KINDS if getattr(run, k)]

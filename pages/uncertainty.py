@@ -11,8 +11,10 @@ from rvpp import Case, CaseError
 from rvpp.data.case import STRATEGIES
 from rvpp.data.history import PRICE_COLUMNS
 from rvpp.data.periods import delivery_periods
-from rvpp.outputs.plots import bands_figure, deviating_periods, thin_clock_ticks
+from rvpp.data.case import PRICE_MODELS
+from rvpp.outputs.plots import band_overlays, bands_figure, deviating_periods, thin_clock_ticks
 from rvpp.solving.problem import STRATEGY_BUDGETS_H, strategy_budgets
+from rvpp.uncertainty.forecast import band_specs, has_forecast
 
 state.through_app("pages/uncertainty.py")
 
@@ -41,6 +43,10 @@ def apply(**changes) -> None:
 def from_widget(section: str | None, field: str, key: str) -> None:
     value = st.session_state[key]
     apply(**({section: {field: value}} if section else {field: value}))
+
+
+def set_forecast_bands(key: str) -> None:
+    apply(uncertainty={"bands": {"default": "climatology", **{s: "forecast" for s in st.session_state[key]}}})
 
 
 def set_strategy(key: str) -> None:
@@ -104,6 +110,19 @@ c4.slider("Upper percentile", min(Q_HI[0], q.q_hi), max(Q_HI[1], q.q_hi), value=
           key="uncertainty_q_hi",
           on_change=from_widget, args=("uncertainty", "q_hi", "uncertainty_q_hi"),
           help="Nominal of production, bad bound of consumption (paper: 0.8).")
+specs = band_specs(case)
+eligible = [name for name, spec in specs.items() if has_forecast(spec)]
+b1, b2 = st.columns([3, 1])
+b1.multiselect("Sources on forecast-based bands", eligible,
+               default=[n for n in eligible if specs[n].method == "forecast"],
+               key="uncertainty_forecast_bands", on_change=set_forecast_bands, args=("uncertainty_forecast_bands",),
+               help="Forecast band: the day-ahead point forecast plus percentiles of its past errors (units with a "
+                    "forecast column; prices from a naive model). Others keep the paper's climatology.")
+b2.selectbox("Price point forecast", PRICE_MODELS, index=PRICE_MODELS.index(q.price_forecast),
+             format_func=lambda m: m.replace("_", " "), key="uncertainty_price_forecast",
+             on_change=from_widget, args=("uncertainty", "price_forecast", "uncertainty_price_forecast"))
+if case.provenance_summary():
+    st.caption(case.provenance_summary())
 if st.session_state.get("uncertainty_problems"):
     widgets.problems(st.session_state["uncertainty_problems"])
 
@@ -159,6 +178,8 @@ if problem is not None:
     else:
         st.caption("Shaded, with a cross on the bad bound: the periods where the plan assumes the source "
                    "deviates (χ = 1). Prices: the Γ periods of largest loss for this plan.")
+    st.caption("Dotted grey: the band of the other method; solid line with dots: what the day brought, where "
+               "the history covers it.")
     sources = list(PRICE_COLUMNS) + [u.name for _, u in run.units()]
     kinds = {u.name: k for k, u in run.units()}
     groups = {g: [s for s in sources if (kinds.get(s) or "price") in members] for g, members in GROUPS.items()}
@@ -169,5 +190,6 @@ if problem is not None:
             for i, source in enumerate(members):
                 chi = deviating_periods(result, source) if result is not None and result.has_plan else None
                 with columns[i % BAND_COLUMNS]:
-                    figure = thin_clock_ticks(bands_figure(problem, source, chi), NARROW_TICK_HOURS)
+                    figure = bands_figure(problem, source, chi, **band_overlays(problem, source))
+                    figure = thin_clock_ticks(figure, NARROW_TICK_HOURS)
                     st.plotly_chart(figure, key=f"uncertainty_band_{source}")

@@ -173,12 +173,15 @@ def _parser() -> argparse.ArgumentParser:
     solve.add_argument("--quiet", action="store_true", help="print only errors")
     solve.set_defaults(run=_run_solve)
 
-    data = commands.add_parser("data", help="build the default dataset")
+    data = commands.add_parser("data", help="build the default dataset, import real data, build a case from it")
     data_commands = data.add_subparsers(title="data commands")
     build = data_commands.add_parser("build", help="regenerate the synthetic history of the paper case")
     build.add_argument("--seed", type=Number(0, whole=True), help="random seed >= 0 (default: the published one)")
     build.add_argument("--out", type=path_option, default=DEFAULT_CASE / "history.csv", help="CSV to write")
     build.set_defaults(run=_run_data_build)
+    from .data.cli import add_data_commands
+
+    add_data_commands(data_commands)
 
     from .studies.cli import add_study_commands
 

@@ -48,3 +48,13 @@ class UploadLimitError(UploadError):
 
 class ModelError(RvppError):
     """The optimisation could not produce a plan (infeasible, solver failure)."""
+
+
+class DataImportError(RvppError):
+    """A downloaded data file cannot be read or placed in time (unknown format, ambiguous hour,
+    conflicting duplicate); the message names the file, the line and the rule."""
+
+
+class SettlementError(RvppError):
+    """Settlement settings or imbalance prices break a rule (multipliers out of range, a short
+    price below the long price); the message names the field, the value and the rule."""

@@ -10,7 +10,10 @@ from the specification:
 * the forecast bands (§6): the window of the ``window_days`` days before the delivery
   day in local time, per local clock hour the ``q_lo`` percentile, the median and the
   ``q_hi`` percentile (numpy's default linear interpolation); a period takes the band of
-  the clock hour it starts in;
+  the clock hour it starts in. Sources the case puts on forecast bands take the point
+  forecast (a history column, or for prices the price at the same clock hour a day and/or
+  a week before) plus those percentiles of the forecast's window errors, among the window
+  hours whose forecast is nearest (the nearest fifth, at least 24; docs/model.md);
 * the nominal values and deviations of §6's table, availabilities clipped to
   ``[0, nameplate]``;
 * the budgets of the strategy (paper Table 7, hours scaled by ``1/dt``, at most the
@@ -104,6 +107,45 @@ def hourly_band(case, column: str, scale: float, hours: np.ndarray) -> tuple[np.
     return table[:, 0], table[:, 1], table[:, 2]
 
 
+def forecast_error_band(case, column: str, scale: float, forecast: str | None,
+                        periods: pd.DatetimeIndex) -> tuple[np.ndarray, ...]:
+    """``(lo, mid, hi)`` per period: point forecast plus percentiles of its window errors (§6)."""
+    frame = case.history.frame
+    local = frame.index.tz_convert(case.timezone)
+    day = case.delivery_date
+    if forecast is not None:
+        predicted = frame[forecast] * scale
+        point = predicted.reindex(periods.tz_convert("UTC").floor("h")).to_numpy(float)
+    else:
+        lags = {"same_hour_yesterday": [1], "same_hour_last_week": [7],
+                "blend": [1, 7]}[case.uncertainty.price_forecast]
+        grid = (pd.DataFrame({"date": local.date, "hour": local.hour, "v": frame[column].to_numpy(float) * scale})
+                .drop_duplicates(["date", "hour"]).pivot(index="date", columns="hour", values="v")
+                .reindex(columns=range(24)).ffill(axis=1))
+
+        def naive(dates, hours) -> np.ndarray:
+            looked = [[grid.at[d - dt.timedelta(days=lag), h] if d - dt.timedelta(days=lag) in grid.index
+                       else np.nan for d, h in zip(dates, hours)] for lag in lags]
+            return np.mean(np.array(looked, dtype=float), axis=0)
+
+        predicted = pd.Series(naive(local.date, local.hour), index=frame.index)
+        point = naive([day] * len(periods), periods.hour)
+    in_window = (np.array(local.date) >= day - dt.timedelta(days=case.uncertainty.window_days)) & \
+        (np.array(local.date) < day)
+    past = predicted.to_numpy(float)[in_window]
+    error = frame[column].to_numpy(float)[in_window] * scale - past
+    ok = np.isfinite(past) & np.isfinite(error)
+    past, error = past[ok], error[ok]
+    k = min(len(error), max(24, int(np.ceil(0.2 * len(error)))))
+    quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
+    table = []
+    for f in point:
+        gap = np.abs(past - f)
+        table.append(f + np.quantile(error[gap <= np.partition(gap, k - 1)[k - 1]], quantiles))
+    table = np.array(table)
+    return table[:, 0], table[:, 1], table[:, 2]
+
+
 def budgets(case, nt: int) -> dict[str, int]:
     """Γ [periods] per source: Table 7 hours scaled by ``1/dt``, at most ``nt``, then the case's edits."""
     preset, per_hour = TABLE7[case.budgets.strategy], round(1 / case.dt_h)
@@ -115,13 +157,20 @@ def budgets(case, nt: int) -> dict[str, int]:
 
 def day_data(case) -> DayData:
     """Bands, budgets and tariffs of the case's delivery day (MODEL_SPEC §1, §6), from its history."""
-    hours = np.asarray(local_periods(case).hour)
+    periods = local_periods(case)
+    hours = np.asarray(periods.hour)
     nt = len(hours)
     gamma = budgets(case, nt)
-    lo, mid, hi = hourly_band(case, "price_da", 1.0, hours)
+
+    def band(name, column, scale, kind=None, forecast=None):
+        if case.uncertainty.band_method(name, kind) == "forecast":
+            return forecast_error_band(case, column, scale, forecast, periods)
+        return hourly_band(case, column, scale, hours)
+
+    lo, mid, hi = band("price_da", "price_da", 1.0)
     price = {"price_da_mid": mid, "price_da_pos": hi - mid, "price_da_neg": mid - lo}
     for name in ("price_sr_up", "price_sr_dn"):
-        lo, _, hi = hourly_band(case, name, 1.0, hours)
+        lo, _, hi = band(name, name, 1.0)
         price[f"{name}_hi"], price[f"{name}_neg"] = hi, hi - lo
     price["tariff_hpa"] = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in hours], dtype=float)
     uncertain = {}
@@ -129,13 +178,17 @@ def day_data(case) -> DayData:
         if kind == "csp":
             column, scale, cap = unit.solar_field.series or unit.name, unit.solar_field.series_scale, \
                 unit.solar_field.p_max_mw_th
+            forecast = unit.solar_field.forecast_series
         else:
             column, scale, cap = unit.series or unit.name, unit.series_scale, getattr(unit, "p_max_mw", None)
-        lo, _, hi = hourly_band(case, column, scale, hours)
+            forecast = unit.forecast_series
+        lo, _, hi = band(unit.name, column, scale, kind, forecast)
         if kind in ("wind", "pv", "csp"):
             top, bottom = np.clip(hi, 0.0, cap), np.clip(lo, 0.0, cap)
             uncertain[unit.name] = Uncertain(top, top - bottom, gamma[unit.name], -1.0)
         else:
+            if case.uncertainty.band_method(unit.name, kind) == "forecast":
+                lo, hi = np.maximum(lo, 0.0), np.maximum(hi, 0.0)
             uncertain[unit.name] = Uncertain(lo, hi - lo, gamma[unit.name], +1.0)
     return DayData(nt=nt, dt=case.dt_h, price=price, gamma={n: gamma[n] for n in PRICES}, uncertain=uncertain)
 

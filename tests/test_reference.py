@@ -38,6 +38,7 @@ CONFIGS = {
     # Balanced quarter-hour day with the turbine started, storage reserves and HPA heat.
     "15 min": {"dt_h": 0.25, "date": "2025-04-15"},
     "non-default parameters": {"strategy": "deterministic", "date": "2025-05-05"},
+    "forecast bands": {"date": "2025-05-05"},
 }
 
 
@@ -67,7 +68,19 @@ def non_default_parameters(case):
     return case.replace(csp=[csp], ed=ed, wind=wind)
 
 
-CASE_CHANGES = {"non-default parameters": non_default_parameters, "DAM": cyclic_storage, "DAM+SRM": cyclic_storage}
+def forecast_bands(case):
+    """Wind on forecast-error bands (a persistence forecast: the same hour the day before, as
+    history columns) and the DAM price on its same-hour-last-week forecast."""
+    frame = case.history.frame
+    persistence = {f"{u.name}_fc": frame[u.name].shift(24).bfill().to_numpy() for u in case.wind}
+    wind = [u.model_copy(update={"forecast_series": f"{u.name}_fc"}) for u in case.wind]
+    return case.replace(history=case.history.with_columns(persistence), wind=wind,
+                        uncertainty={"bands": {"wind": "forecast", "price_da": "forecast"},
+                                     "price_forecast": "same_hour_last_week"})
+
+
+CASE_CHANGES = {"non-default parameters": non_default_parameters, "DAM": cyclic_storage, "DAM+SRM": cyclic_storage,
+                "forecast bands": forecast_bands}
 
 
 def relative_difference(value: float, reference: float) -> float:
@@ -104,7 +117,7 @@ def test_bid_is_worth_its_objective_in_reference(solved, name):
     assert relative_difference(result.objective_eur, best_for_bid) <= REL_TOL, (result.objective_eur, best_for_bid)
 
 
-@pytest.mark.parametrize("name", ["balanced", "25-hour day", "15 min"])
+@pytest.mark.parametrize("name", ["balanced", "25-hour day", "15 min", "forecast bands"])
 def test_plan_tables_carry_the_bands_the_reference_derives(solved, name):
     """rvpp's exported bands are those of MODEL_SPEC §6 as the reference computes them."""
     case, result = solved(name)

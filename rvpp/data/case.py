@@ -18,7 +18,8 @@ from typing import Annotated, Any, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, ValidationError, field_serializer, field_validator,
+                      model_validator)
 
 from ..errors import CaseError, CaseFileError
 from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
@@ -55,11 +56,19 @@ class _Frozen(BaseModel):
 
 
 class _FollowsSeries(_Frozen):
-    """A unit whose forecast band follows one history column: ``series`` if set, else its name."""
+    """A unit whose forecast band follows one history column: ``series`` if set, else its name.
+
+    ``forecast_series`` names the history column of its day-ahead point forecast, used
+    when the unit's band is ``forecast`` (``uncertainty.bands``).
+    """
 
     @property
     def column(self) -> str:
         return self.series or self.name
+
+    @property
+    def forecast_column(self) -> str | None:
+        return self.forecast_series
 
 
 class NdresUnit(_FollowsSeries):
@@ -75,6 +84,7 @@ class NdresUnit(_FollowsSeries):
     reserve_share: Fraction = 0.1
     series: str | None = None
     series_scale: Positive = 1.0
+    forecast_series: str | None = None
 
     @model_validator(mode="after")
     def _limits(self) -> "NdresUnit":
@@ -88,6 +98,7 @@ class SolarField(_Frozen):
     p_max_mw_th: Positive
     series: str | None = None
     series_scale: Positive = 1.0
+    forecast_series: str | None = None
 
 
 class ThermalStorage(_Frozen):
@@ -150,6 +161,10 @@ class CSP(_Frozen):
         return self.solar_field.series or self.name
 
     @property
+    def forecast_column(self) -> str | None:
+        return self.solar_field.forecast_series
+
+    @property
     def p_max_mw(self) -> float:
         """Electrical nameplate [MW]."""
         return self.power_block.p_el_max_mw
@@ -210,6 +225,7 @@ class ElectricalDemand(_FollowsSeries):
     flex_dn: Fraction = 0.1
     series: str | None = None
     series_scale: Positive = 1.0
+    forecast_series: str | None = None
 
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":
@@ -228,6 +244,7 @@ class ThermalDemand(_FollowsSeries):
     h_init_mw_th: NonNegative | None = None
     series: str | None = None
     series_scale: Positive = 1.0
+    forecast_series: str | None = None
 
     @model_validator(mode="after")
     def _limits(self) -> "ThermalDemand":
@@ -238,8 +255,17 @@ class ThermalDemand(_FollowsSeries):
         return self
 
 
+class ImbalancePrices(_Frozen):
+    """History columns of real imbalance prices [EUR/MWh] that replace the settlement's
+    ``π_def`` (``short``: paid for energy delivered short of the DAM bid) and ``π_sur``
+    (``long``: received for energy delivered beyond it) (MODEL_SPEC §10)."""
+
+    short: str = Field(min_length=1)
+    long: str = Field(min_length=1)
+
+
 class Markets(_Frozen):
-    """Market switches and parameters (MODEL_SPEC §2, §7)."""
+    """Market switches and parameters (MODEL_SPEC §2, §7, §10)."""
 
     dam: Literal[True] = True
     srm: bool = True
@@ -247,6 +273,7 @@ class Markets(_Frozen):
     kappa: Fraction = 0.3
     reserve_duration_min: Positive = 15.0
     hpa_tariff_eur_per_mwh: Annotated[tuple[NonNegative, ...], Field(min_length=24, max_length=24)]
+    imbalance_prices: ImbalancePrices | None = None
 
     @field_validator("hpa_tariff_eur_per_mwh", mode="before")
     @classmethod
@@ -277,12 +304,55 @@ class Markets(_Frozen):
         return self.reserve_duration_min / 60.0
 
 
+BAND_METHODS = ("climatology", "forecast")
+BandMethod = Literal["climatology", "forecast"]
+PRICE_MODELS = ("same_hour_yesterday", "same_hour_last_week", "blend")
+DEFAULT_BANDS = "default"
+
+
 class UncertaintySettings(_Frozen):
-    """How forecast bands are drawn from the history (MODEL_SPEC §6)."""
+    """How forecast bands are drawn from the history (MODEL_SPEC §6).
+
+    ``bands`` chooses the method per source: ``climatology`` (the paper: percentiles of
+    the window's observations per clock hour) or ``forecast`` (a point forecast plus
+    percentiles of its past errors). Keys are ``default``, a unit kind (``wind``, ``pv``,
+    ``csp``, ``ed``, ``td``) or a source name (a unit, ``price_da``, ``price_sr_up``,
+    ``price_sr_dn``); the most specific key wins. ``price_forecast`` is the point
+    forecast of prices with forecast bands.
+    """
 
     window_days: Annotated[int, Field(ge=1, le=366)] = 30
     q_lo: Annotated[float, Field(gt=0.0, lt=0.5)] = 0.2
     q_hi: Annotated[float, Field(gt=0.5, lt=1.0)] = 0.8
+    bands: tuple[tuple[str, BandMethod], ...] = ()
+    price_forecast: Literal["same_hour_yesterday", "same_hour_last_week", "blend"] = "same_hour_yesterday"
+
+    @field_validator("bands", mode="before")
+    @classmethod
+    def _bands_from_mapping(cls, value: Any) -> Any:
+        if isinstance(value, Mapping):
+            for key, method in value.items():
+                if method not in BAND_METHODS:
+                    raise ValueError(f"{key}={method!r} must be one of {', '.join(BAND_METHODS)}")
+            return tuple(sorted(value.items()))
+        return value
+
+    @field_serializer("bands")
+    def _bands_as_mapping(self, value: tuple[tuple[str, str], ...]) -> dict[str, str]:
+        return dict(value)
+
+    @model_validator(mode="after")
+    def _unique_bands(self) -> "UncertaintySettings":
+        keys = [key for key, _ in self.bands]
+        duplicated = sorted({k for k in keys if keys.count(k) > 1})
+        if duplicated:
+            raise ValueError(f"bands names {duplicated[0]!r} more than once")
+        return self
+
+    def band_method(self, source: str, kind: str | None = None) -> str:
+        """``climatology`` or ``forecast`` for ``source`` (of unit ``kind``; ``None`` for prices)."""
+        chosen = dict(self.bands)
+        return chosen.get(source) or (chosen.get(kind) if kind else None) or chosen.get(DEFAULT_BANDS, "climatology")
 
 
 class Budgets(_Frozen):
@@ -338,6 +408,15 @@ class SolverSettings(_Frozen):
     pwl_encoding: Literal["incremental", "convex_combination"] = "incremental"
 
 
+class ColumnSource(_Frozen):
+    """Where a history column comes from: ``real`` (a public record, named with its
+    fingerprint) or ``synthetic`` (generated), and how it was made from its source."""
+
+    origin: Literal["real", "synthetic"]
+    source: str = Field(min_length=1)
+    note: str = ""
+
+
 class Case(_Frozen):
     """One RVPP: its units, market settings, uncertainty settings and history."""
 
@@ -358,7 +437,28 @@ class Case(_Frozen):
     csp: tuple[CSP, ...] = ()
     ed: tuple[ElectricalDemand, ...] = ()
     td: tuple[ThermalDemand, ...] = ()
+    provenance: tuple[tuple[str, ColumnSource], ...] = ()
     history: History
+
+    @field_validator("provenance", mode="before")
+    @classmethod
+    def _provenance_from_mapping(cls, value: Any) -> Any:
+        if isinstance(value, Mapping):
+            return tuple(value.items())
+        return value
+
+    @property
+    def provenance_map(self) -> dict[str, ColumnSource]:
+        """Origin of each history column the case labels (empty: unlabelled, e.g. the paper case)."""
+        return dict(self.provenance)
+
+    def provenance_summary(self) -> str | None:
+        """One line naming the real and the synthetic history columns (``None`` if unlabelled)."""
+        if not self.provenance:
+            return None
+        by_origin = {origin: [c for c, p in self.provenance if p.origin == origin] for origin in ("real", "synthetic")}
+        parts = [f"{origin}: {', '.join(columns)}" for origin, columns in by_origin.items() if columns]
+        return "History columns — " + "; ".join(parts) + " (sources and fingerprints in the case's provenance)."
 
     @property
     def ndres(self) -> tuple[NdresUnit, ...]:
@@ -402,6 +502,7 @@ class Case(_Frozen):
         dump = self.model_dump(mode="python", exclude={"history"})
         units = {kind: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
         dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
+        dump["provenance"] = dict(dump["provenance"])
         return {**dump, "units": units}
 
     @field_validator("delivery_date", mode="before")
@@ -456,6 +557,7 @@ class Case(_Frozen):
         for price in PRICE_COLUMNS:
             if price not in columns:
                 problems.append(f"{self.history.source}: price column {price!r} is missing")
+        problems += self._band_problems(known, columns)
         for csp in self.csp:
             for field in ("min_up_h", "min_down_h", "startup_duration_h"):
                 hours = getattr(csp.power_block, field)
@@ -466,11 +568,41 @@ class Case(_Frozen):
             raise ValueError("\n".join(problems))
         return self
 
+    def _band_problems(self, sources: set[str], columns: set[str]) -> list[str]:
+        """Band methods, forecast columns, imbalance prices and provenance name what exists."""
+        problems = []
+        keys = sources | set(UNIT_KINDS) | {DEFAULT_BANDS}
+        for key, _ in self.uncertainty.bands:
+            if key not in keys:
+                problems.append(f"uncertainty.bands: unknown key {excerpt(key)!r}; keys are {DEFAULT_BANDS}, a unit "
+                                f"kind ({', '.join(UNIT_KINDS)}) or a source ({excerpt_names(sorted(sources), 12)})")
+        for kind, unit in self.units():
+            column = unit.forecast_column
+            if column is not None and column not in columns:
+                problems.append(f'{kind} "{unit.name}": forecast history column {excerpt(column)!r} is missing from '
+                                f"{self.history.source}")
+            if self.uncertainty.band_method(unit.name, kind) == "forecast" and column is None:
+                field = "solar_field.forecast_series" if kind == "csp" else "forecast_series"
+                problems.append(f'{kind} "{unit.name}": uncertainty.bands asks for forecast bands but the unit '
+                                f"has no {field} (the history column of its day-ahead forecast)")
+        imbalance = self.markets.imbalance_prices
+        if imbalance is not None:
+            for side in ("short", "long"):
+                column = getattr(imbalance, side)
+                if column not in columns:
+                    problems.append(f"markets.imbalance_prices.{side}: history column {excerpt(column)!r} is missing "
+                                    f"from {self.history.source}")
+        for column, _ in self.provenance:
+            if column not in columns:
+                problems.append(f"provenance: {excerpt(column)!r} is not a column of {self.history.source}")
+        return problems
+
 
 UNIT_KINDS = ("wind", "pv", "csp", "ed", "td")
 _UNIT_MODELS = {"wind": NdresUnit, "pv": NdresUnit, "csp": CSP, "ed": ElectricalDemand, "td": ThermalDemand}
 _SECTIONS = {"markets": Markets, "uncertainty": UncertaintySettings, "budgets": Budgets, "solver": SolverSettings}
-_TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "history", "units", *_SECTIONS}
+_TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "history", "units", "provenance",
+               *_SECTIONS}
 
 
 def _plain(kind: str, unit: Any) -> dict[str, Any]:
@@ -529,7 +661,8 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
     units = _parse_units(data.get("units"), problems)
     if problems:
         raise CaseError(problems)
-    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h") if k in data}
+    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "provenance")
+           if k in data and not (k == "provenance" and data[k] is None)}
     case = _validate(Case, {**top, **sections, **units, "history": history}, "", problems)
     if problems:
         raise CaseError(problems)
@@ -870,6 +1003,8 @@ def save_case(case: Case, folder: str | Path, history_file: str = "history.csv")
     ordered = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "history")}
     ordered.update({k: data[k] for k in ("markets", "uncertainty", "budgets", "solver", "units")})
     ordered["markets"]["hpa_tariff_eur_per_mwh"] = list(ordered["markets"]["hpa_tariff_eur_per_mwh"])
+    if data["provenance"]:
+        ordered["provenance"] = data["provenance"]
     text = yaml.safe_dump(ordered, sort_keys=False, allow_unicode=True, width=100)
     (folder / CASE_FILE).write_text(text, encoding="utf-8")
     case.history.to_csv(folder / history_file, case.timezone)

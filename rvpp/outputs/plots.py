@@ -180,8 +180,16 @@ def reserve_share_figure(result: Result) -> go.Figure:
 # ----------------------------------------------------------------------------- forecast bands
 
 
-def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarray | None = None) -> go.Figure:
-    """Forecast band of one uncertain source: lower percentile, median, upper percentile.
+def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarray | None = None,
+                 compare: tuple[str, np.ndarray, np.ndarray] | None = None,
+                 realized: Sequence[float] | np.ndarray | None = None) -> go.Figure:
+    """Forecast band of one uncertain source: lower bound, middle and upper bound.
+
+    The band is the one the model uses, by the source's method (MODEL_SPEC §6): the
+    window's percentiles per clock hour (climatology, the paper's) or the point forecast
+    plus percentiles of its past errors (forecast). ``compare`` = ``(label, lo, hi)``
+    outlines another band (e.g. the other method's); ``realized`` draws what the day then
+    brought. Price axes follow the data, below zero included.
 
     ``chi`` (one value per period) marks the periods where the source deviates: the
     marker sits on the adverse bound (lower for production and prices, upper for
@@ -196,16 +204,28 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
     lo, mid, hi = _model_band(problem, source)
     unit = _source_unit(problem, source)
     q = problem.case.uncertainty
+    method = q.band_method(source, src.unit_kind)
     x = problem.labels
     color = SERIES_COLORS[0] if src.is_price else KIND_COLORS[src.unit_kind]
+    names = (("Upper percentile", "Lower percentile", "Median") if method == "climatology" else
+             ("Upper bound: forecast + error", "Lower bound: forecast + error", "Forecast + median error"))
     fig = go.Figure()
-    fig.add_scatter(x=x, y=hi, name=f"Upper percentile ({_percent(q.q_hi)})", mode="lines",
+    fig.add_scatter(x=x, y=hi, name=f"{names[0]} ({_percent(q.q_hi)})", mode="lines",
                     line=dict(color=color, width=1), hovertemplate=f"%{{y:.2f}} {unit}")
-    fig.add_scatter(x=x, y=lo, name=f"Lower percentile ({_percent(q.q_lo)})", mode="lines",
+    fig.add_scatter(x=x, y=lo, name=f"{names[1]} ({_percent(q.q_lo)})", mode="lines",
                     line=dict(color=color, width=1), fill="tonexty", fillcolor=_rgba(color, 0.22),
                     hovertemplate=f"%{{y:.2f}} {unit}")
-    fig.add_scatter(x=x, y=mid, name="Median", mode="lines", line=dict(color=color, width=3, dash="dash"),
+    fig.add_scatter(x=x, y=mid, name=names[2], mode="lines", line=dict(color=color, width=3, dash="dash"),
                     hovertemplate=f"%{{y:.2f}} {unit}")
+    if compare is not None:
+        label, other_lo, other_hi = compare
+        for name, values in ((f"{label}: upper", other_hi), (f"{label}: lower", other_lo)):
+            fig.add_scatter(x=x, y=np.asarray(values, float), name=name, mode="lines",
+                            line=dict(color=GREY, width=2, dash="dot"), hovertemplate=f"%{{y:.2f}} {unit}")
+    if realized is not None:
+        fig.add_scatter(x=x, y=np.asarray(realized, float), name="Realized", mode="lines+markers",
+                        line=dict(color=PURPLE if color == ORANGE else ORANGE, width=2), marker=dict(size=5),
+                        hovertemplate=f"realized %{{y:.2f}} {unit}")
     if chi is not None:
         chi = np.asarray(chi, dtype=float)
         if len(chi) != problem.nt:
@@ -222,8 +242,39 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
                         mode="markers", marker=dict(color=VERMILION, size=11, symbol="x"),
                         hovertemplate=f"deviates to %{{y:.2f}} {unit}")
     title = SOURCE_TITLES[source] if src.is_price else f"{source} ({KIND_LABELS[src.unit_kind].lower()})"
-    _style_axes(fig, problem.labels, problem.dt_h, f"{title}: forecast band", _source_axis(source, src, unit))
+    kind_of_band = "forecast band" if method == "climatology" else "forecast-error band"
+    _style_axes(fig, problem.labels, problem.dt_h, f"{title}: {kind_of_band}", _source_axis(source, src, unit))
     return fig
+
+
+def band_overlays(problem: Problem, source: str) -> dict:
+    """What :func:`bands_figure` can draw beside a source's band: the other method's band
+    (``compare``, where that method applies) and the delivery day's observed values
+    (``realized``, where the history covers the day)."""
+    from ..errors import CaseError
+    from ..uncertainty.bands import realized_values
+    from ..uncertainty.forecast import band_specs, case_bands, has_forecast
+
+    case = problem.case
+    spec = band_specs(case)[source]
+    out: dict = {}
+    other = "forecast" if spec.method == "climatology" else "climatology"
+    if other == "climatology" or has_forecast(spec):
+        try:
+            bands = case_bands(case, problem.periods, {source: other})
+            lo, hi = bands[(source, "lo")].to_numpy(float), bands[(source, "hi")].to_numpy(float)
+            if spec.high is not None:  # output is clipped to [0, nameplate], as the model's band
+                lo, hi = np.clip(lo, spec.low, spec.high), np.clip(hi, spec.low, spec.high)
+            out["compare"] = (other.capitalize(), lo, hi)
+        except CaseError:
+            pass
+    try:
+        observed = realized_values(case.history, problem.day, problem.periods, {source: (spec.column, spec.scale)},
+                                   case.timezone)
+        out["realized"] = observed[source].to_numpy(float)
+    except CaseError:
+        pass
+    return out
 
 
 def deviating_periods(result: Result, source: str) -> np.ndarray:

@@ -100,7 +100,9 @@ def unit_columns(kind: str) -> list[str]:
     """Column names of :func:`unit_table` for ``kind`` (template order, then optional fields)."""
     _check_kind(kind)
     columns = ["name", *(c for c in _flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
-    optional = {"wind": [], "pv": [], "csp": ["storage.e_init_mwh_th"], "ed": ["p_init_mw"], "td": ["h_init_mw_th"]}
+    optional = {"wind": ["forecast_series"], "pv": ["forecast_series"],
+                "csp": ["storage.e_init_mwh_th", "solar_field.forecast_series"],
+                "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"]}
     series = SERIES_FIELDS[kind]
     scale_at = columns.index(series.replace("series", "series_scale"))
     columns.insert(scale_at, series)
@@ -184,8 +186,11 @@ def write_case_workbook(case: Case, target: str | Path | io.BytesIO) -> str | Pa
     settings["delivery_date"] = case.delivery_date.isoformat()
     for section in SETTING_SECTIONS:
         for key, value in data[section].items():
-            if key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam"):
+            if isinstance(value, Mapping):  # band methods, imbalance price columns
+                settings.update(_flatten(value, f"{section}.{key}."))
+            elif key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam") and value is not None:
                 settings[f"{section}.{key}"] = value
+    settings.update(_flatten({"provenance": data["provenance"]}))
     tariff = pd.DataFrame({"hour": range(HOURS_PER_DAY),
                            "tariff_eur_per_mwh": list(case.markets.hpa_tariff_eur_per_mwh)})
     budgets = pd.DataFrame(list(case.budgets.overrides), columns=["source", "gamma"])

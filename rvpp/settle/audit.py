@@ -4,7 +4,8 @@ The audit reads only the exported tables (``market``, ``units``, ``csp``), the s
 and the case; it never touches the optimisation model nor the preparation of the day
 (:mod:`rvpp.solving.problem`, :mod:`rvpp.uncertainty`). What the plan had to respect
 is derived here from the case and its history with the audit's own arithmetic
-(:func:`audit_day`): the forecast bands of MODEL_SPEC §6 (:func:`band`), the nominal
+(:func:`audit_day`): the bands of MODEL_SPEC §6 (:func:`band` for the paper's climatology,
+:func:`forecast_band` for a point forecast and its past errors), the nominal
 values and deviations, the budgets of paper Table 7, and the power-block curve as a
 piecewise-linear interpolation of the breakpoints. It re-checks every balance in all
 three activation scenarios, the market limits, every unit's bounds, the power-block
@@ -31,6 +32,8 @@ from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods
 
 TOLERANCE = 1e-4  # [MW], [MWh]: exported values carry 6 decimals
+NEAREST_SHARE, NEAREST_MIN = 0.2, 24  # forecast bands: errors of the nearest fifth of the window, >= 24 hours
+PRICE_LAGS = {"same_hour_yesterday": (1,), "same_hour_last_week": (7,), "blend": (1, 7)}  # [days]
 MONEY_TOLERANCE = 1e-2  # [EUR]: one cent on any objective part
 
 
@@ -108,6 +111,56 @@ def band(case: Case, column: str, scale: float, hours: np.ndarray) -> tuple[np.n
     return lo, mid, hi
 
 
+def forecast_band(case: Case, column: str, scale: float, forecast: str | None,
+                  periods: pd.DatetimeIndex) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(lo, mid, hi)`` per period from a point forecast and its past errors (MODEL_SPEC §6).
+
+    The forecast ``f`` is the history column ``forecast`` (rows of the delivery day), or for
+    prices (``forecast`` None) the case's naive model: the price at the same local clock hour
+    one day and/or a week before (the first of a repeated hour; the hour before a skipped
+    one). Over the window's hours, errors ``e = actual - f``; for each period, the errors of
+    the window hours whose ``f`` lies nearest (the nearest fifth, at least 24, ties kept)
+    give ``f + (q_lo percentile, median, q_hi percentile)``. Not clipped here.
+    """
+    frame = case.history.frame
+    local = frame.index.tz_convert(case.timezone)
+    dates, clock = np.array(local.date), np.asarray(local.hour)
+    day = case.delivery_date
+    window = (dates >= day - dt.timedelta(days=case.uncertainty.window_days)) & (dates < day)
+    actual = frame[column].to_numpy(float) * scale
+    if forecast is not None:
+        guess = frame[forecast].to_numpy(float) * scale
+        by_instant = dict(zip(frame.index, guess))
+        point = np.array([by_instant[t] for t in periods.tz_convert("UTC").floor("h")])
+    else:
+        seen: dict = {}
+        for d, h, v in zip(dates, clock, actual):
+            seen.setdefault((d, h), v)
+
+        def value(d: dt.date, h: int) -> float:
+            while (d, h) not in seen and h > 0:
+                h -= 1
+            return seen.get((d, h), np.nan)
+
+        def naive(d: dt.date, h: int) -> float:
+            return float(np.mean([value(d - dt.timedelta(days=lag), h)
+                                  for lag in PRICE_LAGS[case.uncertainty.price_forecast]]))
+
+        guess = np.array([naive(d, h) if w else np.nan for d, h, w in zip(dates, clock, window)])
+        point = np.array([naive(day, h) for h in periods.hour])
+    past, error = guess[window], (actual - guess)[window]
+    known = ~np.isnan(past) & ~np.isnan(error)
+    past, error = past[known], error[known]
+    count = min(len(error), max(NEAREST_MIN, int(np.ceil(NEAREST_SHARE * len(error)))))
+    quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
+    rows = []
+    for level in point:
+        distance = np.abs(past - level)
+        rows.append(level + np.quantile(error[distance <= np.sort(distance)[count - 1]], quantiles))
+    lo, mid, hi = np.array(rows).T
+    return lo, mid, hi
+
+
 def budgets(case: Case, nt: int) -> dict[str, int]:
     """Γ [periods] per source: the strategy's Table 7 hours scaled by ``1/dt`` (at most ``nt``),
     then the case's edits."""
@@ -127,9 +180,11 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
     hours, nt = np.asarray(periods.hour), len(periods)
     gammas = budgets(case, nt)
 
-    def lo_mid_hi(name: str, column: str, scale: float):
+    def lo_mid_hi(name: str, column: str, scale: float, kind: str | None = None, forecast: str | None = None):
         if bands is not None:
             return tuple(bands[(name, stat)].to_numpy(float) for stat in ("lo", "mid", "hi"))
+        if case.uncertainty.band_method(name, kind) == "forecast":
+            return forecast_band(case, column, scale, forecast, periods)
         return band(case, column, scale, hours)
 
     sources = {}
@@ -141,15 +196,17 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
     for kind, unit in case.units():
         if kind == "csp":
             field = unit.solar_field
-            lo, _, hi = lo_mid_hi(unit.name, field.series or unit.name, field.series_scale)
+            lo, _, hi = lo_mid_hi(unit.name, field.series or unit.name, field.series_scale, kind, field.forecast_series)
             top, bottom = np.clip(hi, 0.0, field.p_max_mw_th), np.clip(lo, 0.0, field.p_max_mw_th)
         else:
-            lo, _, hi = lo_mid_hi(unit.name, unit.series or unit.name, unit.series_scale)
+            lo, _, hi = lo_mid_hi(unit.name, unit.series or unit.name, unit.series_scale, kind, unit.forecast_series)
         if kind in ("wind", "pv"):
             top, bottom = np.clip(hi, 0.0, unit.p_max_mw), np.clip(lo, 0.0, unit.p_max_mw)
         if kind in ("wind", "pv", "csp"):
             sources[unit.name] = Series("production", kind, top, top - bottom, gammas[unit.name])
         else:
+            if case.uncertainty.band_method(unit.name, kind) == "forecast" and bands is None:
+                lo, hi = np.maximum(lo, 0.0), np.maximum(hi, 0.0)  # a forecast consumption band stays >= 0
             sources[unit.name] = Series("consumption", kind, lo, hi - lo, gammas[unit.name])
     tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in hours], dtype=float)
     return AuditDay(case=case, nt=nt, dt_h=case.dt_h, sources=sources, tariff_hpa=tariff)

@@ -15,9 +15,13 @@ slack                 meaning                                                uni
 ====================  =====================================================  ===========
 
 Settlement at realized prices: market cost ``= −(DAM revenue + SR revenue) + HPA cost
-+ operating cost``; penalty ``= Σt dt·[m_def·λda·s_neg − m_sur·λda·s_pos
-+ m_sr·(λup·q_up + λdn·q_dn) + c_heat·g]``; net cost = market cost + penalty, which the
-recourse minimizes. The same builder with several realizations and free first-stage
++ operating cost``; penalty ``= Σt dt·[π_def·s_neg − π_sur·s_pos + m_sr·(λup·q_up + λdn·q_dn)
++ c_heat·g]`` with the imbalance prices ``π_def = λda + (m_def − 1)·|λda|`` and
+``π_sur = λda − (1 − m_sur)·|λda|`` (``m_def·λda`` and ``m_sur·λda`` for ``λda ≥ 0``), or the
+case's real imbalance price series; net cost = market cost + penalty, which the recourse
+minimizes. Since ``π_def ≥ π_sur`` for any sign of the price, a deficit and a surplus in
+one period never pay for each other, so the settlement stays bounded at zero and negative
+prices too. The same builder with several realizations and free first-stage
 bids is the scenario-based stochastic benchmark (expected net cost over the scenarios).
 """
 
@@ -35,7 +39,7 @@ import pyomo.environ as pyo
 from pyomo.common.collections import ComponentMap
 
 from ..data.case import Case
-from ..errors import RvppError
+from ..errors import RvppError, SettlementError
 from ..data.history import PRICE_COLUMNS
 from ..model import add_units
 from ..model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
@@ -48,6 +52,7 @@ from ..uncertainty.bands import realized_values
 FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
 START_SCENARIOS = 5  # the stochastic benchmark's MIP start comes from this many scenarios solved first
 START_GAP = 1e-3  # relative gap of the solves that build that MIP start
+IMBALANCE_COLUMNS = ("imbalance_short", "imbalance_long")  # realized π_def, π_sur [EUR/MWh] where the case has them
 HEAT_PRICE_FACTOR = 2.0  # default c_heat = 2 × the highest HPA tariff (MODEL_SPEC §10)
 
 
@@ -55,9 +60,12 @@ HEAT_PRICE_FACTOR = 2.0  # default c_heat = 2 × the highest HPA tariff (MODEL_S
 class Penalties:
     """Penalty settings of the settlement (MODEL_SPEC §10), all editable.
 
-    ``m_def``, ``m_sur``, ``m_sr`` multiply the realized DAM / SR prices [-];
-    ``c_heat_eur_per_mwh`` prices unserved heat [EUR/MWh_th] (``None``: twice the
-    highest HPA tariff of the case).
+    ``m_def`` and ``m_sur`` set the imbalance prices from the realized DAM price λ
+    [EUR/MWh]: a deficit is bought back at ``π_def = λ + (m_def − 1)·|λ|`` and a surplus
+    sold at ``π_sur = λ − (1 − m_sur)·|λ|``, so ``m_def ≥ 1`` and ``0 ≤ m_sur ≤ 1`` make
+    either imbalance cost money whatever the sign of λ. ``m_sr`` multiplies the realized SR
+    prices of undelivered reserve [-]; ``c_heat_eur_per_mwh`` prices unserved heat
+    [EUR/MWh_th] (``None``: twice the highest HPA tariff of the case).
     """
 
     m_def: float = 2.0
@@ -68,14 +76,49 @@ class Penalties:
     def __post_init__(self) -> None:
         for name in ("m_def", "m_sur", "m_sr", "c_heat_eur_per_mwh"):
             value = getattr(self, name)
-            if value is not None and not (np.isfinite(value) and value >= 0):
-                raise RvppError(f"penalties: {name}={value} must be a finite number >= 0")
+            if value is not None and not (isinstance(value, (int, float)) and np.isfinite(value)):
+                raise SettlementError(f"penalties: {name}={value} must be a finite number")
+        if not 0.0 <= self.m_sur <= 1.0:
+            raise SettlementError(f"penalties: m_sur={self.m_sur:g} must lie in [0, 1]: a surplus is sold at most "
+                                  "at the DAM price")
+        if self.m_def < 1.0:
+            raise SettlementError(f"penalties: m_def={self.m_def:g} must be >= 1: a deficit is bought back at least "
+                                  "at the DAM price")
+        if self.m_sr < 0.0:
+            raise SettlementError(f"penalties: m_sr={self.m_sr:g} must be >= 0")
+        if self.c_heat_eur_per_mwh is not None and self.c_heat_eur_per_mwh < 0.0:
+            raise SettlementError(f"penalties: c_heat_eur_per_mwh={self.c_heat_eur_per_mwh:g} must be >= 0")
 
     def heat_price(self, case: Case) -> float:
         """``c_heat`` [EUR/MWh_th]."""
         if self.c_heat_eur_per_mwh is not None:
             return float(self.c_heat_eur_per_mwh)
         return HEAT_PRICE_FACTOR * max(case.markets.hpa_tariff_eur_per_mwh)
+
+    def imbalance_prices(self, price_da: np.ndarray, short: np.ndarray | None = None,
+                         long: np.ndarray | None = None, labels: Sequence[str] | None = None
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """``(π_def, π_sur)`` per period [EUR/MWh] (MODEL_SPEC §10).
+
+        From the DAM price and the multipliers, or the given real series ``short`` (π_def)
+        and ``long`` (π_sur), refused where ``short < long`` (naming the period by ``labels``).
+        """
+        price = np.asarray(price_da, dtype=float)
+        if short is None and long is None:
+            return (price + (self.m_def - 1.0) * np.abs(price), price - (1.0 - self.m_sur) * np.abs(price))
+        if short is None or long is None:
+            raise SettlementError("imbalance prices: both the short and the long series are needed")
+        short, long = np.asarray(short, dtype=float), np.asarray(long, dtype=float)
+        for name, series in (("short", short), ("long", long)):
+            if series.shape != price.shape or not np.isfinite(series).all():
+                raise SettlementError(f"imbalance prices: the {name} series must hold one finite price per period")
+        crossed = np.flatnonzero(short < long)
+        if len(crossed):
+            t = int(crossed[0])
+            where = labels[t] if labels is not None else f"period {t + 1}"
+            raise SettlementError(f"imbalance prices at {where}: short {short[t]:g} EUR/MWh is below long "
+                                  f"{long[t]:g} EUR/MWh; a deficit must cost at least what a surplus earns")
+        return short, long
 
     def describe(self, case: Case) -> dict[str, float]:
         """The settings in force for ``case`` (``c_heat`` resolved) [-], [EUR/MWh_th]."""
@@ -140,9 +183,14 @@ def set_fingerprint(realizations: Sequence[Realization]) -> str:
 
 
 def realization(case: Case, day: dt.date) -> Realization:
-    """What the history observed on ``day`` for every source of ``case``."""
+    """What the history observed on ``day`` for every source of ``case`` (and its real
+    imbalance prices ``imbalance_short``, ``imbalance_long`` when the case names them)."""
     periods = delivery_periods(day, case.timezone, case.dt_h)
-    values = realized_values(case.history, day, periods, source_columns(case), case.timezone)
+    columns = source_columns(case)
+    if case.markets.imbalance_prices is not None:
+        columns.update({name: (getattr(case.markets.imbalance_prices, side), 1.0)
+                        for name, side in zip(IMBALANCE_COLUMNS, ("short", "long"))})
+    values = realized_values(case.history, day, periods, columns, case.timezone)
     return Realization(day=day, values=values)
 
 
@@ -153,7 +201,7 @@ def nominal_realization(problem: Problem) -> Realization:
     return Realization(day=problem.day, values=values)
 
 
-def realized_problem(case: Case, real: Realization) -> Problem:
+def realized_problem(case: Case, real: Realization) -> "RealizedProblem":
     """A :class:`Problem` of the delivery day of ``case`` whose sources carry the realized values.
 
     Budgets are 0 and deviations 0, so the unit builders see the realization as the
@@ -174,8 +222,19 @@ def realized_problem(case: Case, real: Realization) -> Problem:
         role = "production" if kind in ("wind", "pv", "csp") else "consumption"
         sources[unit.name] = _exact(unit.name, role, kind, values)
     tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
-    return Problem(case=case, day=case.delivery_date, periods=periods, bands=pd.DataFrame(),
-                   sources=sources, tariff_hpa=tariff, labels=period_labels(periods))
+    imbalance = [real.values[c].to_numpy(float) if c in real.values.columns else None for c in IMBALANCE_COLUMNS]
+    return RealizedProblem(case=case, day=case.delivery_date, periods=periods, bands=pd.DataFrame(),
+                           sources=sources, tariff_hpa=tariff, labels=period_labels(periods),
+                           imbalance_short=imbalance[0], imbalance_long=imbalance[1])
+
+
+@dataclass(frozen=True, eq=False)
+class RealizedProblem(Problem):
+    """A :class:`Problem` whose sources carry one realization, with the realized imbalance
+    prices [EUR/MWh] where the case has real ones (``None``: from the DAM price, §10)."""
+
+    imbalance_short: np.ndarray | None = None
+    imbalance_long: np.ndarray | None = None
 
 
 def _exact(name: str, kind: str, unit_kind: str | None, values: np.ndarray) -> Source:
@@ -303,8 +362,12 @@ def add_settlement(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalti
     b.cost_hpa = pyo.Expression(expr=total(lambda t, i: float(hpa[i]) * m.h_hpa[t]))
     b.cost_opex = pyo.Expression(expr=operating_cost(b, case, dt_h))
     b.market_cost = pyo.Expression(expr=-(b.revenue_dam + b.revenue_sr) + b.cost_hpa + b.cost_opex)
-    b.penalty_deficit = pyo.Expression(expr=total(lambda t, i: penalties.m_def * float(da[i]) * b.s_neg[t]))
-    b.penalty_surplus = pyo.Expression(expr=total(lambda t, i: -penalties.m_sur * float(da[i]) * b.s_pos[t]))
+    # A realized problem may carry real imbalance prices; otherwise they follow the DAM price.
+    short, long = penalties.imbalance_prices(da, getattr(problem, "imbalance_short", None),
+                                             getattr(problem, "imbalance_long", None),
+                                             [f"{problem.day} {label}" for label in problem.labels])
+    b.penalty_deficit = pyo.Expression(expr=total(lambda t, i: float(short[i]) * b.s_neg[t]))
+    b.penalty_surplus = pyo.Expression(expr=total(lambda t, i: -float(long[i]) * b.s_pos[t]))
     b.penalty_reserve = pyo.Expression(expr=total(lambda t, i: penalties.m_sr * (
         float(up[i]) * b.q_up[t] + float(dn[i]) * b.q_dn[t])))
     b.penalty_heat = pyo.Expression(expr=total(lambda t, i: c_heat * b.g[t]))

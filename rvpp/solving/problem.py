@@ -28,7 +28,7 @@ from ..data.case import STRATEGY_BUDGETS_H, Case
 from ..errors import CaseError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods, period_labels
-from ..uncertainty.bands import forecast_bands
+from ..uncertainty.forecast import band_specs, case_bands
 
 MARGIN = 1e-6  # [MW], [MWh]: a limit counts as broken before solving only beyond the solver's tolerance
 
@@ -103,20 +103,14 @@ def strategy_budgets(case: Case, nt: int) -> dict[str, int]:
 
 def source_columns(case: Case) -> dict[str, tuple[str, float]]:
     """History column and scale of every uncertain source."""
-    columns = {name: (name, 1.0) for name in PRICE_COLUMNS}
-    for kind, unit in case.units():
-        scale = unit.solar_field.series_scale if kind == "csp" else unit.series_scale
-        columns[unit.name] = (unit.column, scale)
-    return columns
+    return {name: (spec.column, spec.scale) for name, spec in band_specs(case).items()}
 
 
 def prepare(case: Case) -> Problem:
-    """Resolve the delivery day of ``case`` into a :class:`Problem`."""
+    """Resolve the delivery day of ``case`` into a :class:`Problem` (bands by each source's
+    method: climatology or forecast, MODEL_SPEC §6)."""
     periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
-    bands = forecast_bands(case.history, case.delivery_date, periods, source_columns(case),
-                           n_days=case.uncertainty.window_days, q_lo=case.uncertainty.q_lo,
-                           q_hi=case.uncertainty.q_hi, timezone=case.timezone)
-    return problem_from_bands(case, periods, bands)
+    return problem_from_bands(case, periods, case_bands(case, periods))
 
 
 def problem_from_bands(case: Case, periods: pd.DatetimeIndex, bands: pd.DataFrame) -> Problem:

@@ -1,0 +1,134 @@
+"""``python -m rvpp data import|build-case|band-quality``: real data in, a case out."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..cli import Number, path_option
+from ..uncertainty.quality import SERIES
+from .case import PRICE_MODELS
+
+DEFAULT_TEMPLATE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
+
+
+def add_data_commands(commands) -> None:
+    """Add ``import``, ``build-case`` and ``band-quality`` to the ``data`` subparsers."""
+    read = commands.add_parser(
+        "import", help="read downloaded OMIE / ENTSO-E files and report what they hold",
+        description="Read OMIE marginalpdbc files (or their zip archives), ENTSO-E Transparency Platform CSV "
+                    "exports and hourly tables; print what each holds (span, periods, resolution, gaps, "
+                    "duplicates, clock changes, units, zone) and optionally write them as one hourly CSV.")
+    read.add_argument("files", nargs="+", type=path_option, metavar="FILE")
+    read.add_argument("--zone", help="OMIE price zone ES (default) or PT; ENTSO-E area when a file holds several")
+    read.add_argument("--out", type=path_option, metavar="CSV", help="write the series on one UTC hour grid "
+                      "(time_utc, time_local, series...); quarter-hours are averaged to hours")
+    read.set_defaults(run=_run_import)
+
+    build = commands.add_parser(
+        "build-case", help="build a case folder from downloaded files",
+        description="Build a case from imported series: real day-ahead prices, wind and PV from the fleet's "
+                    "capacity factor (actual and day-ahead forecast); reserve prices, CSP solar-field heat and "
+                    "demands stay synthetic. The case's provenance section says which column is which.")
+    build.add_argument("--from", dest="sources", nargs="+", type=path_option, required=True, metavar="FILE")
+    build.add_argument("--out", type=path_option, required=True, metavar="FOLDER", help="case folder to write")
+    build.add_argument("--template", type=path_option, default=DEFAULT_TEMPLATE,
+                       help="case whose units and settings are used (default: the paper case)")
+    build.add_argument("--errors-scale", type=Number(0), default=1.0, metavar="K",
+                       help="scale the fleet's forecast error for a single farm: forecast = actual − "
+                            "K·(actual − fleet forecast) (default 1)")
+    build.add_argument("--start", help="first local day YYYY-MM-DD (default: the first whole day of the data)")
+    build.add_argument("--end", help="last local day YYYY-MM-DD (default: the last whole day of the data)")
+    build.add_argument("--date", help="delivery date of the case (default: the last day)")
+    build.add_argument("--zone", help="OMIE price zone ES (default) or PT; ENTSO-E area")
+    build.add_argument("--wind-capacity", type=Number(0, low_open=True, unit="MW"), metavar="MW",
+                       help="fleet wind capacity (default: the highest output in the data)")
+    build.add_argument("--solar-capacity", type=Number(0, low_open=True, unit="MW"), metavar="MW",
+                       help="fleet solar capacity (default: the highest output in the data)")
+    build.add_argument("--fill-gaps", type=Number(0, whole=True, unit="h"), default=0, metavar="HOURS",
+                       help="interpolate gaps of at most HOURS hours linearly, each reported (default 0: refuse gaps)")
+    build.add_argument("--bands", choices=("forecast", "climatology"), default="forecast",
+                       help="forecast (default): wind, PV and DAM price on forecast-error bands; climatology: "
+                            "every source on the paper's bands")
+    build.add_argument("--seed", type=Number(0, whole=True), help="seed of the synthetic series >= 0 "
+                       "(default: the published one)")
+    build.add_argument("--force", action="store_true", help="overwrite a folder that already holds a case")
+    build.set_defaults(run=_run_build_case)
+
+    quality = commands.add_parser(
+        "band-quality", help="width, misses and shortfall of climatology and forecast bands",
+        description="Compare the paper's climatology bands with forecast-error bands on real data: for every "
+                    "day, bands from the window before it, scored against the day's actual values "
+                    "(capacity-normalised for output).")
+    quality.add_argument("files", nargs="+", type=path_option, metavar="FILE")
+    quality.add_argument("--series", choices=SERIES, default="wind_onshore",
+                         help="wind_onshore (default), solar or price_da")
+    quality.add_argument("--year", type=Number(1900, 2200, whole=True),
+                         help="score the days of this year (default: the last whole year)")
+    quality.add_argument("--window", type=Number(1, 366, whole=True, unit="days"), default=30,
+                         help="window [days] (default 30)")
+    quality.add_argument("--q-lo", type=Number(0, 0.5, low_open=True, high_open=True), default=0.2,
+                         help="lower quantile (default 0.2)")
+    quality.add_argument("--q-hi", type=Number(0.5, 1, low_open=True, high_open=True), default=0.8,
+                         help="upper quantile (default 0.8)")
+    quality.add_argument("--price-model", choices=PRICE_MODELS, default="same_hour_yesterday",
+                         help="point forecast of prices (default same_hour_yesterday)")
+    quality.add_argument("--zone", help="OMIE price zone ES (default) or PT")
+    quality.add_argument("--json", action="store_true", help="print the numbers as JSON")
+    quality.set_defaults(run=_run_band_quality)
+
+
+def _run_import(args: argparse.Namespace) -> int:
+    from .importers import hourly_table, import_files, write_table
+
+    imports = import_files(args.files, args.zone)
+    for item in imports:
+        print("\n".join(item.report.lines()))
+    if args.out:
+        table = hourly_table(imports)
+        for note in table.notes:
+            print(f"note: {note}", file=sys.stderr)
+        write_table(table.frame, args.out)
+        print(f"wrote {len(table.frame)} hours of {', '.join(table.frame.columns)} to {args.out}", file=sys.stderr)
+    return 0
+
+
+def _run_build_case(args: argparse.Namespace) -> int:
+    from .build_case import BuildOptions, build_case
+
+    options = BuildOptions(errors_scale=args.errors_scale, start=args.start, end=args.end, date=args.date,
+                           zone=args.zone, wind_capacity_mw=args.wind_capacity,
+                           solar_capacity_mw=args.solar_capacity, seed=args.seed, fill_gaps_h=args.fill_gaps,
+                           bands=args.bands)
+    built = build_case(args.sources, args.out, template=args.template, options=options, overwrite=args.force,
+                       progress=lambda m: print(f"  {m}", file=sys.stderr))
+    print("\n".join(built.lines()))
+    return 0
+
+
+def _run_band_quality(args: argparse.Namespace) -> int:
+    from ..uncertainty.quality import band_quality_from_files
+
+    table = band_quality_from_files(args.files, series=args.series, year=args.year, window_days=args.window,
+                                    q_lo=args.q_lo, q_hi=args.q_hi, price_model=args.price_model, zone=args.zone)
+    if args.json:
+        print(json.dumps(table, indent=2))
+    else:
+        for line in _quality_lines(table):
+            print(line)
+    return 0
+
+
+def _quality_lines(table: dict) -> list[str]:
+    unit = table["unit"]
+    lines = [f"{table['series']} {table['year']}: {table['days']} days, {table['hours']} hours, "
+             f"window {table['window_days']} days, band {table['q_lo']:g}-{table['q_hi']:g}"
+             + (f", capacity {table['capacity']:,.0f} MW" if table.get("capacity") else "")]
+    for method, row in table["methods"].items():
+        lines.append(f"  {method:>12}: width {row['width']:.2f} {unit}, miss {row['miss_rate'] * 100:.1f} % "
+                     f"(below {row['below_rate'] * 100:.1f} %, above {row['above_rate'] * 100:.1f} %), "
+                     f"mean shortfall below the lower bound {row['shortfall']:.2f} {unit}")
+    return lines
+

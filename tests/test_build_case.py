@@ -1,0 +1,173 @@
+"""A case built from downloaded files (rvpp.data.build_case).
+
+The always-run tests use an hourly table written here by formula (hour h of day d: wind
+1,000 + 100·d + 10·h MW, forecast 50 MW lower, ...); the real-data test builds from the
+Spanish files when they are present and skips otherwise.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rvpp import load_case, solve, with_options
+from rvpp.cli import main
+from rvpp.data.build_case import BuildOptions, build_case
+from rvpp.errors import DataImportError, RvppError
+from rvpp.settle.audit import audit_result
+from tests.factories import PAPER
+
+TZ = "Europe/Madrid"
+SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", Path(__file__).resolve().parents[3] / "shared" / "data" / "spain"))
+REAL = [SPAIN / "entsoe_spain_2015_2018.csv", SPAIN / "omie_spain_prices_2018_2025.csv"]
+
+
+def write_table(path: Path, days: int = 45, start: str = "2021-05-01", blank: str | None = None) -> Path:
+    """An hourly ``time_utc`` table in rvpp's normalised layout, every value a formula of (day, hour)."""
+    first = pd.Timestamp(start, tz=TZ)
+    last = (pd.Timestamp(start) + pd.Timedelta(days=days)).tz_localize(TZ)
+    utc = pd.date_range(first.tz_convert("UTC"), last.tz_convert("UTC"), freq="h", inclusive="left")
+    local = utc.tz_convert(TZ)
+    d = np.asarray((local.normalize().tz_localize(None) - pd.Timestamp(start)).days, float)
+    h = np.asarray(local.hour, float)
+    solar = np.where((h >= 8) & (h <= 19), 400.0 * (h - 7.0), 0.0)
+    table = pd.DataFrame({
+        "time_utc": [f"{t:%Y-%m-%dT%H:%M:%SZ}" for t in utc], "time_local": [t.isoformat() for t in local],
+        "price_da": np.where((h >= 12) & (h <= 15), -1.0 + 0 * d, 50.0 + h),
+        "actual_wind_onshore": 1000.0 + 100.0 * d + 10.0 * h, "forecast_wind_onshore": 950.0 + 100.0 * d + 10.0 * h,
+        "actual_solar": solar, "forecast_solar": solar * 0.9})
+    text = table.to_csv(index=False)
+    if blank:
+        lines = text.splitlines()
+        lines = [",".join(line.split(",")[:3] + [""] + line.split(",")[4:]) if line.startswith(blank) else line
+                 for line in lines]
+        text = "\n".join(lines) + "\n"
+    path.write_text(text)
+    return path
+
+
+def test_units_take_the_fleet_capacity_factor_and_scaled_forecast_errors(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    built = build_case([source], tmp_path / "case", template=PAPER, options=BuildOptions(errors_scale=2.0))
+    case = load_case(tmp_path / "case")
+    assert case.delivery_date == dt.date(2021, 6, 14)  # the last day by default
+    frame = case.history.frame
+    capacity = 1000.0 + 100.0 * 44 + 10.0 * 23  # the highest wind output: last day, 23:00
+    assert built.capacities_mw["wind"] == capacity
+    at = pd.Timestamp("2021-05-11 10:00", tz=TZ).tz_convert("UTC")  # day 10, 10:00
+    actual = (1000.0 + 1000.0 + 100.0) / capacity * 50.0
+    fleet_forecast = (950.0 + 1000.0 + 100.0) / capacity * 50.0
+    assert frame.at[at, "WF1"] == pytest.approx(actual, rel=1e-5)
+    assert frame.at[at, "WF1_fc"] == pytest.approx(actual - 2.0 * (actual - fleet_forecast), rel=1e-5)
+    assert frame.at[at, "WF2"] == pytest.approx(actual, rel=1e-5)
+    # PV: solar 400·(h - 7) MW with capacity 4,800 MW (19:00); 0 while the sun is down.
+    assert frame.at[at, "PV1"] == pytest.approx(400.0 * 3 / 4800.0 * 50.0, rel=1e-5)
+    assert frame.at[at, "PV1_fc"] == pytest.approx(12.5 - 2.0 * (12.5 - 0.9 * 12.5), rel=1e-5)
+    midnight = pd.Timestamp("2021-05-11 00:00", tz=TZ).tz_convert("UTC")
+    assert frame.at[midnight, "PV1"] == 0.0 and frame.at[midnight, "PV1_fc"] == 0.0
+    # Prices are the data's, negative ones included; reserve prices stay within the synthetic bounds.
+    assert frame.at[pd.Timestamp("2021-05-11 13:00", tz=TZ).tz_convert("UTC"), "price_da"] == -1.0
+    assert frame["price_sr_up"].between(0.0, 40.0).all() and frame["price_sr_dn"].between(0.0, 30.0).all()
+    provenance = case.provenance_map
+    assert {c: p.origin for c, p in provenance.items() if p.origin == "real"}.keys() == {
+        "price_da", "WF1", "WF1_fc", "WF2", "WF2_fc", "PV1", "PV1_fc", "PV2", "PV2_fc", "PV3", "PV3_fc"}
+    assert {"price_sr_up", "price_sr_dn", "CSP1", "ED_industry", "TD_residential"} <= {
+        c for c, p in provenance.items() if p.origin == "synthetic"}
+    assert "series.csv" in provenance["price_da"].source and "sha256" in provenance["price_da"].source
+    assert case.uncertainty.band_method("WF1", "wind") == "forecast"
+    assert case.uncertainty.band_method("price_sr_up") == "climatology"
+
+
+def test_forecast_errors_scale_zero_is_a_perfect_forecast_and_clipping_holds(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    build_case([source], tmp_path / "case", template=PAPER, options=BuildOptions(errors_scale=0.0))
+    frame = load_case(tmp_path / "case").history.frame
+    assert np.allclose(frame["WF1_fc"], frame["WF1"])
+    build_case([source], tmp_path / "big", template=PAPER, options=BuildOptions(errors_scale=60.0))
+    frame = load_case(tmp_path / "big").history.frame
+    assert frame["WF1_fc"].min() >= 0.0 and frame["WF1_fc"].max() <= 50.0
+
+
+def test_gaps_are_refused_or_interpolated_on_request(tmp_path):
+    source = write_table(tmp_path / "series.csv", blank="2021-05-20T10")
+    with pytest.raises(DataImportError, match=r"actual_wind_onshore has no value in 1 hour.*longest span of whole "
+                                              r"days with every value is 2021-05-21 to 2021-06-14.*--fill-gaps"):
+        build_case([source], tmp_path / "case", template=PAPER)
+    built = build_case([source], tmp_path / "case", template=PAPER, options=BuildOptions(fill_gaps_h=1))
+    wind = load_case(tmp_path / "case").history.frame["WF1"]
+    hour = pd.Timestamp("2021-05-20 10:00", tz="UTC")
+    assert wind[hour] == pytest.approx((wind[hour - pd.Timedelta(hours=1)] + wind[hour + pd.Timedelta(hours=1)]) / 2)
+    assert any("interpolated" in n for n in built.notes)
+    assert "interpolated" in built.case.provenance_map["WF1"].note
+
+
+def test_build_refuses_what_it_cannot_build(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    prices_only = tmp_path / "prices.csv"
+    pd.read_csv(source)[["time_utc", "time_local", "price_da"]].to_csv(prices_only, index=False)
+    no_prices = tmp_path / "wind.csv"
+    pd.read_csv(source).drop(columns="price_da").to_csv(no_prices, index=False)
+    with pytest.raises(DataImportError, match="the files give no day-ahead price"):
+        build_case([no_prices], tmp_path / "a", template=PAPER)
+    with pytest.raises(RvppError, match="--date 2021-05-20 must lie in 2021-06-07 to 2021-06-14"):
+        build_case([source], tmp_path / "b", template=PAPER, options=BuildOptions(date="2021-05-20"))
+    with pytest.raises(RvppError, match="--errors-scale K=-1 must be"):
+        BuildOptions(errors_scale=-1.0)
+    build_case([source], tmp_path / "c", template=PAPER)
+    with pytest.raises(RvppError, match="already holds a case"):
+        build_case([source], tmp_path / "c", template=PAPER)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c", "prices.csv", "series.csv", "wind.csv"]  # no temporary
+
+
+def test_prices_alone_make_a_case_with_every_unit_synthetic(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    prices_only = tmp_path / "prices.csv"
+    pd.read_csv(source)[["time_utc", "time_local", "price_da"]].to_csv(prices_only, index=False)
+    built = build_case([prices_only], tmp_path / "case", template=PAPER)
+    case = load_case(tmp_path / "case")
+    assert {c: p.origin for c, p in case.provenance_map.items() if p.origin == "real"} == {"price_da": "real"}
+    assert case.wind[0].forecast_series is None and case.uncertainty.band_method("WF1", "wind") == "climatology"
+    assert case.uncertainty.band_method("price_da") == "forecast"
+    assert any("wind units are synthetic" in n for n in built.notes)
+    assert "WF1_fc" not in case.history.columns and case.history.frame["WF1"].max() > 0
+
+
+def test_command_line_builds_a_case(tmp_path, capsys):
+    source = write_table(tmp_path / "series.csv")
+    code = main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "case"), "--errors-scale", "3",
+                 "--start", "2021-05-02", "--date", "2021-06-10"])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    assert "WF1: real" in printed.out and "price_sr_up: synthetic" in printed.out
+    case = load_case(tmp_path / "case")
+    assert case.delivery_date == dt.date(2021, 6, 10)
+    assert case.history.local_days(TZ)[0] == dt.date(2021, 5, 2)
+    assert main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "case")]) == 1
+    assert "already holds a case" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not all(p.is_file() for p in REAL), reason="real Spanish data not present")
+def test_real_spanish_case_solves_a_day_of_2018(tmp_path):
+    built = build_case(REAL, tmp_path / "spain", template=PAPER,
+                       options=BuildOptions(errors_scale=3.0, start="2018-01-01", end="2018-03-31"))
+    case = load_case(tmp_path / "spain")
+    raw = pd.read_csv(REAL[0])
+    raw.index = pd.to_datetime(raw["time"], utc=True)
+    first_quarter = raw.loc["2017-12-31 23:00":"2018-03-31 21:00"]
+    capacity = first_quarter["generation wind onshore"].max()
+    assert built.capacities_mw["wind"] == capacity
+    at = pd.Timestamp("2018-03-10 12:00", tz="UTC")
+    assert case.history.frame.at[at, "WF1"] == pytest.approx(
+        raw.at[at, "generation wind onshore"] / capacity * 50.0, rel=1e-5)
+    assert case.history.frame.at[at, "price_da"] == raw.at[at, "price day ahead"]
+    result = solve(with_options(case, date="2018-03-20"))
+    assert result.status == "optimal"
+    assert audit_result(result) == []
+    source = result.problem.sources["WF1"]
+    assert (source.nominal <= 50.0).all() and (source.deviation >= 0.0).all()
