@@ -184,8 +184,10 @@ def _parser() -> argparse.ArgumentParser:
     build.set_defaults(run=_run_data_build)
 
     from .studies.cli import add_study_commands
+    from .backtest.cli import add_backtest_commands
 
     add_study_commands(commands)
+    add_backtest_commands(commands)
     return parser
 
 
