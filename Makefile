@@ -31,7 +31,10 @@ bench: install
 	$(BIN)/python benchmarks/solve_times.py
 	$(BIN)/python benchmarks/studies.py
 	$(BIN)/python benchmarks/history.py
+	$(BIN)/python benchmarks/backtest.py
 
+# The paper's studies, then the rolling backtest and recommended Γ (April/May 2025 on the synthetic
+# case). On real data: RVPP_BACKTEST_CASE=<case folder built from real files> make reproduce
 reproduce: install
 	$(BIN)/python -m rvpp study reproduce --out out/reproduce
 
