@@ -355,3 +355,17 @@ def test_a_day_with_negative_prices_plans_and_settles(paper_case):
         assert record["status"] == "optimal", f"{variant.label}: settlement {record['status']}"
         assert abs(record["net_cost_eur"] - record["market_cost_eur"] - record["penalty_eur"]) < 0.01
         assert record["audit_violations"] == 0
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_computes_the_same_records_as_the_calling_process(paper_case, tmp_path):
+    from rvpp.solving.parallel import open_executor
+
+    settings = BacktestSettings(dt.date(2025, 5, 2), dt.date(2025, 5, 3), variants_of(["optimistic"], [], False))
+    serial = BacktestStore(f"sqlite:///{tmp_path / 'serial.sqlite3'}")
+    dask = BacktestStore(f"sqlite:///{tmp_path / 'dask.sqlite3'}")
+    ident = run_backtest(paper_case, settings, serial)
+    with open_executor("local", 1) as executor:
+        assert run_backtest(paper_case, settings, dask, executor) == ident
+    columns = ["day", "net_cost_eur", "market_cost_eur", "plan_objective_eur", "end_state", "bids"]
+    pd.testing.assert_frame_equal(serial.records(ident)[columns], dask.records(ident)[columns], check_exact=True)
