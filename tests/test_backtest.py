@@ -89,6 +89,20 @@ def test_the_plan_of_a_day_starts_from_the_settled_end_of_the_day_before(week, s
 
 
 @pytest.mark.slow
+def test_a_recorded_day_reopens_with_the_plan_it_was_settled_with(week):
+    from rvpp.backtest.engine import reopen_plan
+    from rvpp.store import RecordKey
+
+    store, ident, settings = week
+    assert BacktestSettings.from_stored(store.load(ident)[1]) == settings
+    records = store.record_map(ident)
+    for key in (RecordKey("2025-05-04", "deterministic", "preset"), RecordKey("2025-05-05", "perfect", "preset")):
+        result = reopen_plan(store, ident, key)
+        assert result.status == "optimal" and result.objective_eur == records[key]["plan_objective_eur"]
+        assert result.market["p_da_mw"].tolist() == records[key]["bids"]["p_da_mw"]
+
+
+@pytest.mark.slow
 def test_every_stored_day_reconciles_and_its_plan_passes_the_audit(week):
     store, ident, _ = week
     records = store.records(ident)

@@ -122,6 +122,20 @@ def run_day(task: DayTask) -> dict[str, Any]:
     return _finish(record, started)
 
 
+def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
+    """The plan of one recorded day, solved again from the day's recorded start state (with every
+    table of a :class:`~rvpp.solving.results.Result`, e.g. to show a worst day)."""
+    case, stored = store.load(ident)
+    settings = BacktestSettings.from_stored(stored)
+    record = store.record_map(ident).get(key)
+    if record is None:
+        raise RvppError(f"backtest {ident} has no record of {key.day}, {key.strategy}, {key.gamma}")
+    variant, day = Variant(key.strategy, key.gamma), dt.date.fromisoformat(key.day)
+    base = case.replace(solver={"threads": 1}) if case.solver.threads != 1 else case
+    day_of = day_case(base, day, variant, record["start_state"], settings.storage_end)
+    return perfect_plan(day_of, realization(day_of, day)) if variant.is_perfect else plan(day_of)
+
+
 def plan_numbers(result: Result) -> dict[str, Any]:
     """How the plan ended and its own numbers (robust objective, budgets, timings)."""
     return {"plan_status": str(result.status), "message": result.message, "periods": result.problem.nt,
