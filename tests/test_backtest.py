@@ -18,7 +18,7 @@ from rvpp.backtest.export import export
 from rvpp.backtest.state import initial_state
 from rvpp.data.history import History
 from rvpp.store import BacktestStore
-from tests.factories import PAPER, ROOT
+from tests.factories import ROOT
 
 WEEK = (dt.date(2025, 5, 1), dt.date(2025, 5, 7))
 

@@ -73,6 +73,12 @@ class DayTask:
         return RecordKey(self.day.isoformat(), self.variant.strategy, self.variant.gamma)
 
 
+def one_thread(case: Case) -> Case:
+    """``case`` solved by HiGHS on one thread: workers side by side do not oversubscribe the cores, and a
+    single-threaded solve is deterministic, so a resumed backtest ends exactly as an uninterrupted one."""
+    return case if case.solver.threads == 1 else case.replace(solver={"threads": 1})
+
+
 def day_case(base: Case, day: dt.date, variant: Variant, state: State, storage_end: str | float) -> Case:
     """The case a day is planned and settled with: its date, its variant's budgets, its start state."""
     return with_state(variant.case(base.replace(delivery_date=day)), state, storage_end)
@@ -131,8 +137,7 @@ def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
     if record is None:
         raise RvppError(f"backtest {ident} has no record of {key.day}, {key.strategy}, {key.gamma}")
     variant, day = Variant(key.strategy, key.gamma), dt.date.fromisoformat(key.day)
-    base = case.replace(solver={"threads": 1}) if case.solver.threads != 1 else case
-    day_of = day_case(base, day, variant, record["start_state"], settings.storage_end)
+    day_of = day_case(one_thread(case), day, variant, record["start_state"], settings.storage_end)
     return perfect_plan(day_of, realization(day_of, day)) if variant.is_perfect else plan(day_of)
 
 
@@ -208,7 +213,7 @@ def run_backtest(case: Case, settings: BacktestSettings, store: BacktestStore | 
     """
     settings.check_case(case)
     store = store or BacktestStore()
-    base = case.replace(solver={"threads": 1}) if case.solver.threads != 1 else case
+    base = one_thread(case)
     keys = backtest_keys(settings)
     ident = store.open(case, settings.stored(), keys_total=len(keys), label=label)
     recorded = store.record_map(ident)
