@@ -383,3 +383,20 @@ def test_a_dask_cluster_computes_the_same_records_as_the_calling_process(paper_c
         assert run_backtest(paper_case, settings, dask, executor) == ident
     columns = ["day", "net_cost_eur", "market_cost_eur", "plan_objective_eur", "end_state", "bids"]
     pd.testing.assert_frame_equal(serial.records(ident)[columns], dask.records(ident)[columns], check_exact=True)
+
+
+@pytest.mark.slow
+def test_a_task_carries_only_the_history_its_day_needs_and_computes_the_same_record(paper_case):
+    from rvpp.backtest.engine import day_history
+
+    day = dt.date(2025, 3, 31)  # the window holds the change to summer time
+    small = day_history(paper_case, day)
+    assert len(small.history.frame) == 24 * (30 + 8 + 1) - 1
+    assert small.history.local_days(paper_case.timezone)[-1] == day
+    settings = BacktestSettings(day, day, variants_of(["balanced"], [], perfect=True))
+    timings = {"wall_s", "plan_build_s", "plan_solve_s", "settle_solve_s", "audit_s"}
+    for variant in settings.variants:
+        full, sliced = (run_day(DayTask(case.replace(solver={"threads": 1}), day, variant, initial_state(case),
+                                        settings)) for case in (paper_case, small))
+        assert {k: v for k, v in full.items() if k not in timings} == {k: v for k, v in sliced.items()
+                                                                       if k not in timings}

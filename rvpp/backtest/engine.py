@@ -31,8 +31,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from ..data.case import Case
+from ..data.history import History
 from ..errors import RvppError
 from ..settle.audit import audit_result
 from ..settle.recourse import FirstStage, Realization, evaluate, first_stage, realization, realized_problem
@@ -46,6 +48,7 @@ Progress = Callable[[int, int, "float | None"], None]  # (records done, records 
 TRADES = {"sold_mwh": ("p_da_mw", 1), "bought_mwh": ("p_da_mw", -1), "sr_up_mwh": ("r_sr_up_mw", 1),
           "sr_dn_mwh": ("r_sr_dn_mw", 1), "heat_bought_mwh": ("h_hpa_mw", 1)}
 BIDS = ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw", "h_hpa_mw")
+HISTORY_MARGIN_DAYS = 8  # days of history kept before a task's band window (e.g. a price a week before)
 
 
 def plan(case: Case) -> Result:
@@ -77,6 +80,20 @@ def one_thread(case: Case) -> Case:
     """``case`` solved by HiGHS on one thread: workers side by side do not oversubscribe the cores, and a
     single-threaded solve is deterministic, so a resumed backtest ends exactly as an uninterrupted one."""
     return case if case.solver.threads == 1 else case.replace(solver={"threads": 1})
+
+
+def day_history(case: Case, day: dt.date, margin_days: int = HISTORY_MARGIN_DAYS) -> Case:
+    """``case`` with only the history a day needs: its band window (plus ``margin_days``) and the day.
+
+    Keeps tasks small when they travel to workers; the plan and settlement are the same
+    as on the whole history (a test checks it), since :func:`rvpp.solving.problem.prepare`
+    reads the window before the day and the settlement the day itself.
+    """
+    first = pd.Timestamp(day - dt.timedelta(days=case.uncertainty.window_days + margin_days)).tz_localize(case.timezone)
+    last = pd.Timestamp(day + dt.timedelta(days=1)).tz_localize(case.timezone)
+    start, end = max(first, case.history.start), min(last, case.history.end)
+    frame = case.history.between(start, end)
+    return case.replace(history=History(frame, source=case.history.source))
 
 
 def day_case(base: Case, day: dt.date, variant: Variant, state: State, storage_end: str | float) -> Case:
@@ -223,12 +240,23 @@ def run_backtest(case: Case, settings: BacktestSettings, store: BacktestStore | 
     report = progress or (lambda _done, _total, _eta: None)
     store.set_progress(ident, "running", clock.done, clock.total, None, "", started_at=_now())
 
+    sliced: dict[dt.date, Case] = {}
+
+    def task_case(day: dt.date) -> Case:
+        """The case of a task, with the history of its day only (shared by the chains, kept while in use)."""
+        if day not in sliced:
+            for old in [d for d in sliced if d < day - dt.timedelta(days=1)]:
+                del sliced[old]
+            sliced[day] = day_history(base, day)
+        return sliced[day]
+
     def advance(chain: _Chain) -> DayTask | None:
         """Skip the recorded days (taking their end state); the next day to compute, if any."""
         while chain.position < len(days):
-            key = RecordKey(days[chain.position].isoformat(), chain.variant.strategy, chain.variant.gamma)
+            day = days[chain.position]
+            key = RecordKey(day.isoformat(), chain.variant.strategy, chain.variant.gamma)
             if key not in recorded:
-                return DayTask(base, days[chain.position], chain.variant, chain.state, settings)
+                return DayTask(task_case(day), day, chain.variant, chain.state, settings)
             chain.state = recorded[key]["end_state"]
             chain.position += 1
         return None
