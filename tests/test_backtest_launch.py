@@ -34,7 +34,8 @@ def wait_for(predicate, timeout_s: float = 600.0):
                      fix_commitment=True, audit=False),
 ])
 def test_the_command_line_of_a_launch_runs_exactly_its_settings(settings, tmp_path):
-    args = _parser().parse_args(command_line(settings, tmp_path, "sqlite:///x")[3:])
+    args = _parser().parse_args(command_line(settings, tmp_path)[3:])
+    assert args.store is None  # the store travels in the environment, not on the command line
     strategies = args.strategies if args.strategies is not None else ()
     parsed = settings_from(args, parse_day(args.first, "--from"), parse_day(args.last, "--to"), strategies,
                            args.fractions or ())

@@ -23,7 +23,7 @@ from pathlib import Path
 from ..data.case import Case, load_case, save_case
 from ..store import BacktestStore
 from ..store.backtests import BacktestProgress, backtest_id
-from ..store.engine import DIR_VARIABLE, DEFAULT_DIR
+from ..store.engine import DEFAULT_DIR, DIR_VARIABLE, URL_VARIABLE
 from .settings import CARRY, FRACTION, PERFECT, BacktestSettings
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -38,13 +38,17 @@ class Launched:
     log: Path
 
 
-def command_line(settings: BacktestSettings, case_folder: Path, store_url: str, label: str = "",
-                 workers: int | None = None) -> list[str]:
-    """The ``python -m rvpp backtest`` arguments that run ``settings`` (the inverse of the CLI's parsing)."""
+def command_line(settings: BacktestSettings, case_folder: Path, label: str = "", workers: int | None = None
+                 ) -> list[str]:
+    """The ``python -m rvpp backtest`` arguments that run ``settings`` (the inverse of the CLI's parsing).
+
+    The store is not among them: the process reads it from ``RVPP_STORE_URL``, so a
+    password in the URL never shows in the process list.
+    """
     strategies = [v.strategy for v in settings.variants if v.strategy not in (FRACTION, PERFECT)]
     fractions = [v.gamma for v in settings.variants if v.strategy == FRACTION]
     penalties = settings.penalties
-    args = [sys.executable, "-m", "rvpp", "backtest", "--case", str(case_folder), "--store", store_url,
+    args = [sys.executable, "-m", "rvpp", "backtest", "--case", str(case_folder),
             "--from", settings.first_day.isoformat(), "--to", settings.last_day.isoformat(),
             "--strategies", ",".join(strategies), "--m-def", repr(penalties.m_def), "--m-sur", repr(penalties.m_sur),
             "--m-sr", repr(penalties.m_sr), "--storage-end",
@@ -95,9 +99,9 @@ def start(case: Case, settings: BacktestSettings, store: BacktestStore | None = 
     log = folder / "backtest.log"
     url = store.engine.url.render_as_string(hide_password=False)
     with open(log, "ab") as output:
-        process = subprocess.Popen(command_line(settings, case_folder, url, label, workers), cwd=ROOT,
+        process = subprocess.Popen(command_line(settings, case_folder, label, workers), cwd=ROOT,
                                    stdin=subprocess.DEVNULL, stdout=output, stderr=output, start_new_session=True,
-                                   env={**os.environ, "PYTHONPATH": str(ROOT)})
+                                   env={**os.environ, "PYTHONPATH": str(ROOT), URL_VARIABLE: url})
     return Launched(ident, process.pid, log)
 
 
