@@ -8,8 +8,10 @@ Two measurements against their targets, each in a fresh SQLite store:
 
 and the cost of resuming: rerunning a finished backtest (every day skipped). Writes one
 JSON document to ``benchmarks/results/backtest.json`` (and prints it): wall times,
-seconds per record, the mean plan and settlement solve times from the records, and
-whether each target was met. ``--days 28`` gives a quick look; the targets are for a
+seconds per record, the CPU seconds the workers spent per record (and the wall time
+they imply on otherwise idle cores: total CPU / workers), the load average before and
+after, the mean plan and settlement solve times from the records, and whether each
+target was met by the measured wall time. ``--days 28`` gives a quick look; the targets are for a
 year. Timings on a shared machine are noisy: repeat and compare.
 """
 
@@ -43,6 +45,7 @@ TARGETS_S = {"strategies": 600.0, "gamma_grid": 1200.0}  # for 365 days on 2 cor
 
 def measure(name: str, case, settings: BacktestSettings, workers: int, folder: Path) -> dict:
     store = BacktestStore(f"sqlite:///{folder / f'{name}.sqlite3'}")
+    load_before = round(os.getloadavg()[0], 2)
     started = time.perf_counter()
     with open_executor("processes", workers) as executor:
         ident = run_backtest(case, settings, store, executor,
@@ -56,9 +59,12 @@ def measure(name: str, case, settings: BacktestSettings, workers: int, folder: P
     run_backtest(case, settings, store)  # everything recorded: opens, restores the chains, skips
     resume_s = time.perf_counter() - resume_started
     target = TARGETS_S[name] * len(settings.days) / 365
+    cpu = float(records["cpu_s"].sum())
     return {"days": len(settings.days), "variants": len(settings.variants), "records": len(records),
             "workers": workers, "wall_s": round(wall, 1), "s_per_record": round(wall / max(1, len(records)), 3),
-            "cpu_s_per_record": round(wall * workers / max(1, len(records)), 3),
+            "worker_cpu_s": round(cpu, 1), "worker_cpu_s_per_record": round(cpu / max(1, len(records)), 3),
+            "wall_on_idle_cores_estimate_s": round(cpu / workers, 1),
+            "load_average_before_after": [load_before, round(os.getloadavg()[0], 2)],
             "mean_plan_solve_s": round(float(records["plan_solve_s"].mean()), 3),
             "mean_settle_solve_s": round(float(records["settle_solve_s"].mean()), 3),
             "mean_record_wall_s": round(float(records["wall_s"].mean()), 3),
