@@ -394,7 +394,7 @@ def test_a_task_carries_only_the_history_its_day_needs_and_computes_the_same_rec
     assert len(small.history.frame) == 24 * (30 + 8 + 1) - 1
     assert small.history.local_days(paper_case.timezone)[-1] == day
     settings = BacktestSettings(day, day, variants_of(["balanced"], [], perfect=True))
-    timings = {"wall_s", "plan_build_s", "plan_solve_s", "settle_solve_s", "audit_s"}
+    timings = {"wall_s", "cpu_s", "plan_build_s", "plan_solve_s", "settle_solve_s", "audit_s"}
     for variant in settings.variants:
         full, sliced = (run_day(DayTask(case.replace(solver={"threads": 1}), day, variant, initial_state(case),
                                         settings)) for case in (paper_case, small))
