@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from rvpp import load_case, solve
-from rvpp.backtest import BacktestSettings, Variant, metrics, run_backtest, variants_of
+from rvpp.backtest import BacktestSettings, BacktestVariant, metrics, run_backtest, variants_of
 from rvpp.backtest.engine import DayTask, day_case, plan, run_day
 from rvpp.backtest.export import export
 from rvpp.backtest.state import initial_state
@@ -75,7 +75,7 @@ def test_the_plan_of_a_day_starts_from_the_settled_end_of_the_day_before(week, s
     chain = records[records["strategy"] == "deterministic"].sort_values("day").to_dict("records")
     before, after = chain[2], chain[3]
     case = day_case(stocked.replace(solver={"threads": 1}), dt.date.fromisoformat(after["day"]),
-                    Variant("deterministic"), before["end_state"], settings.storage_end)
+                    BacktestVariant("deterministic"), before["end_state"], settings.storage_end)
     result = solve(case)
     assert result.status == "optimal"
     assert result.objective_eur == pytest.approx(after["plan_objective_eur"], rel=1e-9)
@@ -149,7 +149,7 @@ def test_the_plan_of_a_day_reads_nothing_of_the_day_itself_or_after(paper_case):
     state = initial_state(paper_case)
 
     def planned(case):
-        result = plan(day_case(case.replace(solver={"threads": 1}), day, Variant("balanced"), state, "carry"))
+        result = plan(day_case(case.replace(solver={"threads": 1}), day, BacktestVariant("balanced"), state, "carry"))
         assert result.status == "optimal"
         return result
 
@@ -175,7 +175,7 @@ def test_a_day_without_a_plan_bids_nothing_and_is_still_settled(paper_case, monk
 
     monkeypatch.setattr(engine, "plan", no_plan)
     settings = BacktestSettings(dt.date(2025, 5, 2), dt.date(2025, 5, 2), variants_of(["balanced"], [], False))
-    record = run_day(DayTask(paper_case.replace(solver={"threads": 1}), dt.date(2025, 5, 2), Variant("balanced"),
+    record = run_day(DayTask(paper_case.replace(solver={"threads": 1}), dt.date(2025, 5, 2), BacktestVariant("balanced"),
                              initial_state(paper_case), settings))
     assert record["plan_status"] == "infeasible" and record["message"] == "no plan today"
     assert record["status"] == "optimal"
@@ -295,20 +295,20 @@ def cli(*args, store=None):
     (["--to", "2025-05-02"], "backtest needs --from D1 and --to D2"),
     (["--from", "2025-05-02", "--to", "2025-05-01"], "--to 2025-05-01 is before --from 2025-05-02"),
     (["--from", "2025-5-2x", "--to", "2025-05-03"], "--from '2025-5-2x' is not a date such as 2025-03-18"),
-    (["--from", "2025-05-02", "--to", "2025-05-03", "--fractions", "6"], "6 is not a fraction of the day in [0, 1]"),
+    (["--from", "2025-05-02", "--to", "2025-05-03", "--fractions", "6"], "--fractions/--gammas: '6' is not allowed; give a number in [0, 1] [fraction of the day]"),
     (["--from", "2025-05-02", "--to", "2025-05-03", "--strategies", "bold"], "unknown strategy 'bold'"),
-    (["--from", "2025-05-02", "--to", "2025-05-03", "--storage-end", "full"], "'full' must be 'carry' or a fraction"),
+    (["--from", "2025-05-02", "--to", "2025-05-03", "--storage-end", "full"], "--storage-end: 'full' is not a number; give a number in [0, 1]"),
 ])
 def test_the_command_line_refuses_bad_options_by_name(args, message, tmp_path):
     done = cli(*args, store=f"sqlite:///{tmp_path / 's.sqlite3'}")
-    assert done.returncode == 2, done.stderr
+    assert done.returncode == 1, done.stderr
     assert message in done.stderr and "Traceback" not in done.stderr
 
 
 def test_recommend_refuses_a_test_period_that_overlaps_the_training(tmp_path):
     done = cli("recommend", "--train", "2025-03-01:2025-03-31", "--test", "2025-03-31:2025-04-30",
                store=f"sqlite:///{tmp_path / 's.sqlite3'}")
-    assert done.returncode == 2
+    assert done.returncode == 1
     assert "--test must start after --train ends (2025-03-31)" in done.stderr
 
 

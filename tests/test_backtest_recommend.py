@@ -122,3 +122,6 @@ def test_the_command_line_recommends_and_exports_the_curve(tmp_path):
     assert chosen == train.idxmin()
     records = pd.read_csv(out / "records.csv")
     assert len(records) == 3 * 6  # 3 days x (4 presets + the 0.25 fraction + perfect information)
+    assert (records["status"] == "optimal").all() and (records["audit_violations"] == 0).all()
+    fraction = records[records["strategy"] == "fraction"]
+    assert set(fraction[[c for c in records.columns if c.startswith("gamma_")]].stack()) == {6}

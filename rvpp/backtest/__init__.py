@@ -12,8 +12,8 @@ checks it on a test period, :mod:`.export` writes records and inputs to a folder
 from .engine import run_backtest, run_day
 from .metrics import aggregates, cvar, daily, monthly, reconcile, worst_days
 from .recommend import Recommendation, recommend, recommendation_from
-from .settings import BacktestError, BacktestSettings, Variant, variants_of
+from .settings import BacktestError, BacktestSettings, BacktestVariant, variants_of
 
-__all__ = ["BacktestError", "BacktestSettings", "Recommendation", "Variant", "aggregates", "cvar", "daily",
+__all__ = ["BacktestError", "BacktestSettings", "Recommendation", "BacktestVariant", "aggregates", "cvar", "daily",
            "monthly", "recommend", "recommendation_from", "reconcile", "run_backtest", "run_day", "variants_of",
            "worst_days"]

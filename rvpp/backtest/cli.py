@@ -12,9 +12,11 @@ import signal
 import sys
 from pathlib import Path
 
+from ..cli import Number, listed, path_option
 from ..data.case import STRATEGIES, load_case
+from ..data.files import excerpt
 from ..settle.recourse import Penalties
-from ..studies.settings import parse_numbers
+from ..studies.cli import _scheduler as scheduler_option
 from .settings import CARRY, BacktestError, BacktestSettings, parse_day, parse_period, variants_of
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
@@ -32,9 +34,10 @@ def add_backtest_commands(commands) -> None:
     _add_run_options(backtest)
     backtest.add_argument("--from", dest="first", metavar="D1", help="first delivery day YYYY-MM-DD")
     backtest.add_argument("--to", dest="last", metavar="D2", help="last delivery day YYYY-MM-DD (included)")
-    backtest.add_argument("--strategies", type=_strategies, help="comma-separated presets among "
-                          + ",".join(STRATEGIES) + " (default: all four, unless --fractions is given)")
-    backtest.add_argument("--fractions", "--gammas", dest="fractions", type=_fractions,
+    backtest.add_argument("--strategies", type=listed(_strategy, "a comma-separated subset of " + ",".join(STRATEGIES)),
+                          help="comma-separated presets among " + ",".join(STRATEGIES)
+                          + " (default: all four, unless --fractions is given)")
+    backtest.add_argument("--fractions", "--gammas", dest="fractions", type=FRACTIONS,
                           help="Γ as fractions of the day applied to every source, e.g. 0,0.125,0.25 "
                                "(Γ = round(f·periods))")
     backtest.set_defaults(run=run_backtest_command)
@@ -50,14 +53,14 @@ def add_backtest_commands(commands) -> None:
     recommend.add_argument("--test", required=True, metavar="D3:D4", help="test period, after the training period")
     recommend.add_argument("--criterion", choices=CRITERIA, default="mean",
                            help="mean daily net cost or CVaR 95 %% of it (default: mean)")
-    recommend.add_argument("--fractions", "--gammas", dest="fractions", type=_fractions,
+    recommend.add_argument("--fractions", "--gammas", dest="fractions", type=FRACTIONS,
                            default=(0.0, 0.0625, 0.125, 0.1875, 0.25, 0.3125, 0.375, 0.5),
                            help="the Γ grid as fractions of the day (default 0,0.0625,...,0.375,0.5)")
     recommend.set_defaults(run=run_recommend_command)
 
     export = actions.add_parser("export", help="write a stored backtest's records and inputs to a folder")
     export.add_argument("ident", metavar="ID", help="the backtest id (see backtest list)")
-    export.add_argument("--out", type=Path, required=True, help="folder to write (replaced as a whole)")
+    export.add_argument("--out", type=path_option, required=True, help="folder to write (replaced as a whole)")
     export.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
     export.set_defaults(run=run_export_command)
 
@@ -67,61 +70,50 @@ def add_backtest_commands(commands) -> None:
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case folder (default: the paper case)")
+    parser.add_argument("--case", type=path_option, default=DEFAULT_CASE, help="case folder (default: the paper case)")
     parser.add_argument("--no-perfect", action="store_true",
                         help="skip the perfect-information plan (no regret figures; one chain less)")
     parser.add_argument("--storage-end", type=_storage_end, default=CARRY, metavar="carry|F",
                         help="end-of-day storage rule: carry (default: end at or above the day's start) or a "
                              "fraction F of the storage range (may run down to that level)")
     penalties = Penalties()
-    parser.add_argument("--m-def", type=float, default=penalties.m_def, help="deficit price multiplier")
-    parser.add_argument("--m-sur", type=float, default=penalties.m_sur, help="surplus price multiplier")
-    parser.add_argument("--m-sr", type=float, default=penalties.m_sr, help="reserve shortfall price multiplier")
-    parser.add_argument("--c-heat", type=float, metavar="EUR_PER_MWH",
+    multiplier = Number(0)
+    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
+    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
+    parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
+                        help="reserve shortfall price multiplier, >= 0")
+    parser.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
                         help="price of unserved heat (default: twice the highest HPA tariff)")
     parser.add_argument("--fix-commitment", action="store_true",
                         help="settle with the plan's CSP turbine schedule: no start where the plan is off")
     parser.add_argument("--no-audit", action="store_true", help="do not audit the plans")
-    parser.add_argument("--scheduler", default="processes",
+    parser.add_argument("--scheduler", type=scheduler_option, default="processes",
                         help="processes (default: local process pool), serial, local (a local Dask cluster) or "
                              "the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    parser.add_argument("--workers", type=int, help="worker processes of a local pool or cluster (default: cores)")
+    parser.add_argument("--workers", type=Number(1, whole=True),
+                        help="worker processes of a local pool or cluster (default: cores)")
     parser.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
     parser.add_argument("--label", default="", help="a name for the backtest in the store")
-    parser.add_argument("--out", type=Path, help="also export records, aggregates and inputs to this folder")
+    parser.add_argument("--out", type=path_option, help="also export records, aggregates and inputs to this folder")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def _strategies(text: str) -> tuple[str, ...]:
-    names = tuple(part.strip() for part in text.split(",") if part.strip())
-    unknown = [n for n in names if n not in STRATEGIES]
-    if unknown:
-        raise argparse.ArgumentTypeError(f"unknown strategy {unknown[0]!r}; choose from {', '.join(STRATEGIES)}")
-    return names
+FRACTIONS = listed(Number(0, 1, unit="fraction of the day"), "Γ as fractions of the day such as 0,0.125,0.25")
 
 
-def _fractions(text: str) -> tuple[float, ...]:
-    try:
-        values = parse_numbers(text, whole=False)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    bad = [v for v in values if not 0.0 <= v <= 1.0]
-    if bad:
-        raise argparse.ArgumentTypeError(f"{bad[0]:g} is not a fraction of the day in [0, 1]; give Γ as a share "
-                                         "of the day, e.g. 0.25 for 6 of 24 hours")
-    return values
+def _strategy(name: str) -> str:
+    if name not in STRATEGIES:
+        raise argparse.ArgumentTypeError(f"unknown strategy {excerpt(name)!r}; choose from {', '.join(STRATEGIES)}")
+    return name
 
 
 def _storage_end(text: str) -> str | float:
     if text.strip() == CARRY:
         return CARRY
     try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} must be {CARRY!r} or a fraction in [0, 1]") from None
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be {CARRY!r} or a fraction in [0, 1]")
-    return value
+        return Number(0, 1, unit="fraction of the storage range")(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc}, or {CARRY}") from None
 
 
 def settings_from(args: argparse.Namespace, first, last, strategies, fractions) -> BacktestSettings:

@@ -41,7 +41,7 @@ from ..settle.recourse import FirstStage, Realization, evaluate, first_stage, re
 from ..solving.plan import solve, solve_problem
 from ..solving.results import Result
 from ..store import BacktestStore, RecordKey
-from .settings import BacktestSettings, Variant
+from .settings import BacktestSettings, BacktestVariant
 from .state import State, initial_state, with_state
 
 Progress = Callable[[int, int, "float | None"], None]  # (records done, records in all, seconds left)
@@ -67,7 +67,7 @@ class DayTask:
 
     case: Case
     day: dt.date
-    variant: Variant
+    variant: BacktestVariant
     state: State
     settings: BacktestSettings
 
@@ -96,9 +96,9 @@ def day_history(case: Case, day: dt.date, margin_days: int = HISTORY_MARGIN_DAYS
     return case.replace(history=History(frame, source=case.history.source))
 
 
-def day_case(base: Case, day: dt.date, variant: Variant, state: State, storage_end: str | float) -> Case:
+def day_case(base: Case, day: dt.date, variant: BacktestVariant, state: State, storage_end: str | float) -> Case:
     """The case a day is planned and settled with: its date, its variant's budgets, its start state."""
-    return with_state(variant.case(base.replace(delivery_date=day)), state, storage_end)
+    return with_state(variant.case(base, delivery_date=day), state, storage_end)
 
 
 def run_day(task: DayTask) -> dict[str, Any]:
@@ -127,7 +127,7 @@ def run_day(task: DayTask) -> dict[str, Any]:
     record.update(trade_numbers(bids, case.dt_h))
     if settings.audit and result.has_plan:
         t0 = time.perf_counter()
-        violations = audit_result(result)
+        violations = audit_result(result, bands=result.problem.bands if task.variant.is_perfect else None)
         record.update(audit_violations=len(violations), audit_first=str(violations[0]) if violations else "",
                       audit_s=time.perf_counter() - t0)
     settled = evaluate(case, bids, real, settings.penalties, with_end_state=True)
@@ -153,7 +153,7 @@ def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
     record = store.record_map(ident).get(key)
     if record is None:
         raise RvppError(f"backtest {ident} has no record of {key.day}, {key.strategy}, {key.gamma}")
-    variant, day = Variant(key.strategy, key.gamma), dt.date.fromisoformat(key.day)
+    variant, day = BacktestVariant(key.strategy, key.gamma), dt.date.fromisoformat(key.day)
     day_of = day_case(one_thread(case), day, variant, record["start_state"], settings.storage_end)
     return perfect_plan(day_of, realization(day_of, day)) if variant.is_perfect else plan(day_of)
 
@@ -216,7 +216,7 @@ def backtest_keys(settings: BacktestSettings) -> list[RecordKey]:
 class _Chain:
     """The days of one variant, where it stands and the state it hands on."""
 
-    variant: Variant
+    variant: BacktestVariant
     position: int
     state: State
 

@@ -24,7 +24,7 @@ from ..data.case import Case, load_case, save_case
 from ..store import BacktestStore
 from ..store.backtests import BacktestProgress, backtest_id
 from ..store.engine import DEFAULT_DIR, DIR_VARIABLE, URL_VARIABLE
-from .settings import CARRY, FRACTION, PERFECT, BacktestSettings
+from .settings import CARRY, FRACTION, PERFECT, BacktestError, BacktestSettings
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -48,11 +48,14 @@ def command_line(settings: BacktestSettings, case_folder: Path, label: str = "",
     strategies = [v.strategy for v in settings.variants if v.strategy not in (FRACTION, PERFECT)]
     fractions = [v.gamma for v in settings.variants if v.strategy == FRACTION]
     penalties = settings.penalties
+    if not strategies and not fractions:
+        raise BacktestError("a backtest needs a strategy or a Γ fraction besides the perfect-information plan")
     args = [sys.executable, "-m", "rvpp", "backtest", "--case", str(case_folder),
-            "--from", settings.first_day.isoformat(), "--to", settings.last_day.isoformat(),
-            "--strategies", ",".join(strategies), "--m-def", repr(penalties.m_def), "--m-sur", repr(penalties.m_sur),
+            "--from", settings.first_day.isoformat(), "--to", settings.last_day.isoformat(), "--m-def", repr(penalties.m_def), "--m-sur", repr(penalties.m_sur),
             "--m-sr", repr(penalties.m_sr), "--storage-end",
             CARRY if settings.storage_end == CARRY else repr(float(settings.storage_end)), "--quiet"]
+    if strategies:
+        args += ["--strategies", ",".join(strategies)]
     if fractions:
         args += ["--fractions", ",".join(fractions)]
     if penalties.c_heat_eur_per_mwh is not None:

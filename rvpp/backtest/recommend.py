@@ -25,7 +25,7 @@ from ..data.case import STRATEGIES, Case
 from ..store import BacktestStore
 from . import metrics
 from .engine import Progress, run_backtest
-from .settings import FRACTION, PERFECT, PRESET, BacktestError, BacktestSettings, Variant, variants_of
+from .settings import FRACTION, PERFECT, PRESET, BacktestError, BacktestSettings, BacktestVariant, variants_of
 
 CRITERIA = {"mean": "mean_net_cost_eur", "cvar95": "cvar95_net_cost_eur"}
 CRITERION_NAMES = {"mean": "mean daily net cost", "cvar95": "CVaR 95 % of the daily net cost"}
@@ -51,9 +51,9 @@ class Recommendation:
     verdict: str
 
     @property
-    def variant(self) -> Variant:
+    def variant(self) -> BacktestVariant:
         """The recommendation as a variant a solve can use (``with_options(gamma_fraction=...)``)."""
-        return Variant.of_fraction(self.fraction)
+        return BacktestVariant.of_fraction(self.fraction)
 
 
 def recommend(case: Case, train: tuple[dt.date, dt.date], test: tuple[dt.date, dt.date],

@@ -1,8 +1,9 @@
 """What a backtest computes: its days, its variants (strategy or Γ fraction) and its rules.
 
-A :class:`Variant` is one bidding rule followed every day: a strategy preset of the
+A :class:`BacktestVariant` is one bidding rule followed every day: a strategy preset of the
 paper (``deterministic`` ... ``pessimistic``), a Γ fraction of the day applied to every
-source, or the perfect-information plan (the benchmark of the regret). Each variant is a
+source, or the perfect-information plan (the benchmark of the regret); it derives its case
+through :class:`rvpp.data.variants.Variant`, the one way cases are varied. Each variant is a
 chain of days: day ``D + 1`` starts from the state that day ``D``'s settlement left.
 :class:`BacktestSettings` is frozen and checked on creation; its :meth:`stored` form is
 what identifies the backtest in the store, so the same settings reopen the same records.
@@ -18,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..data.case import STRATEGIES, Case
+from ..data.variants import Variant as CaseVariant
 from ..errors import RvppError
 from ..settle.recourse import Penalties
 
@@ -33,7 +35,7 @@ class BacktestError(RvppError):
 
 
 @dataclass(frozen=True, order=True)
-class Variant:
+class BacktestVariant:
     """One bidding rule of a backtest: the ``(strategy, gamma)`` of its records.
 
     ``strategy`` is a preset name (``gamma`` = ``"preset"``), ``"fraction"`` (``gamma`` =
@@ -44,19 +46,19 @@ class Variant:
     gamma: str = PRESET
 
     @classmethod
-    def preset(cls, name: str) -> "Variant":
+    def preset(cls, name: str) -> "BacktestVariant":
         if name not in STRATEGIES:
             raise BacktestError(f"strategy {name!r} is not one of {', '.join(STRATEGIES)}")
         return cls(name)
 
     @classmethod
-    def of_fraction(cls, fraction: float) -> "Variant":
+    def of_fraction(cls, fraction: float) -> "BacktestVariant":
         if not (isinstance(fraction, (int, float)) and math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
             raise BacktestError(f"Γ fraction {fraction!r} must be a number in [0, 1] (a share of the day)")
         return cls(FRACTION, f"{float(fraction):g}")
 
     @classmethod
-    def perfect(cls) -> "Variant":
+    def perfect(cls) -> "BacktestVariant":
         return cls(PERFECT)
 
     @property
@@ -75,22 +77,27 @@ class Variant:
             return "perfect information"
         return self.strategy
 
-    def case(self, base: Case) -> Case:
-        """``base`` with this variant's budgets (the perfect plan keeps the base's: it has no deviations)."""
+    @property
+    def case_variant(self) -> CaseVariant:
+        """The variant of the case this rule bids with (:mod:`rvpp.data.variants`): the preset as
+        published or the Γ fraction, the case's own Γ edits set aside; the perfect-information plan
+        has no deviations, so its budgets are the deterministic preset's (all 0)."""
         if self.strategy == FRACTION:
-            return base.replace(budgets={"fraction": self.fraction})
-        if self.is_perfect:
-            return base
-        return base.replace(budgets={"strategy": self.strategy, "fraction": None})
+            return CaseVariant(gamma_fraction=self.fraction)
+        return CaseVariant(strategy="deterministic" if self.is_perfect else self.strategy)
+
+    def case(self, base: Case, **more: Any) -> Case:
+        """``base`` with this rule's budgets (and ``more`` :meth:`Case.replace` changes in the same step)."""
+        return self.case_variant.apply(base, **more)
 
 
 def variants_of(strategies: Sequence[str] = (), fractions: Sequence[float] = (), perfect: bool = True
-                ) -> tuple[Variant, ...]:
+                ) -> tuple[BacktestVariant, ...]:
     """Presets, then fractions (sorted, duplicates dropped), then the perfect-information benchmark."""
-    chosen = [Variant.preset(s) for s in dict.fromkeys(strategies)]
-    chosen += sorted(dict.fromkeys(Variant.of_fraction(f) for f in fractions), key=lambda v: v.fraction)
+    chosen = [BacktestVariant.preset(s) for s in dict.fromkeys(strategies)]
+    chosen += sorted(dict.fromkeys(BacktestVariant.of_fraction(f) for f in fractions), key=lambda v: v.fraction)
     if perfect:
-        chosen.append(Variant.perfect())
+        chosen.append(BacktestVariant.perfect())
     return tuple(chosen)
 
 
@@ -108,7 +115,7 @@ class BacktestSettings:
 
     first_day: dt.date
     last_day: dt.date
-    variants: tuple[Variant, ...]
+    variants: tuple[BacktestVariant, ...]
     penalties: Penalties = field(default_factory=Penalties)
     storage_end: str | float = CARRY
     fix_commitment: bool = False
@@ -153,7 +160,7 @@ class BacktestSettings:
             raise BacktestError(f"the backtest was recorded by engine version {data.get('engine_version')}; "
                                 f"this rvpp computes version {ENGINE_VERSION}")
         return cls(first_day=dt.date.fromisoformat(data["from"]), last_day=dt.date.fromisoformat(data["to"]),
-                   variants=tuple(Variant(*v) for v in data["variants"]), penalties=Penalties(**data["penalties"]),
+                   variants=tuple(BacktestVariant(*v) for v in data["variants"]), penalties=Penalties(**data["penalties"]),
                    storage_end=data["storage_end"], fix_commitment=data["fix_commitment"], audit=data["audit"])
 
     def with_changes(self, **changes: Any) -> "BacktestSettings":

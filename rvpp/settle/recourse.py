@@ -155,7 +155,9 @@ def realized_problem(case: Case, real: Realization) -> Problem:
 
     Budgets are 0 and deviations 0, so the unit builders see the realization as the
     nominal bound. Availabilities are clipped to ``[0, nameplate]`` (as the forecast
-    bands are) and consumptions to each demand's ``[min, max]`` limits.
+    bands are) and consumptions to each demand's ``[min, max]`` limits. Its ``bands`` are
+    of zero width at these values (``lo = mid = hi``), so a plan solved from it (the
+    perfect-information plan) is audited against them.
     """
     periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
     if len(real.values) != len(periods):
@@ -171,7 +173,10 @@ def realized_problem(case: Case, real: Realization) -> Problem:
         role = "production" if kind in ("wind", "pv", "csp") else "consumption"
         sources[unit.name] = _exact(unit.name, role, kind, values)
     tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
-    return Problem(case=case, day=case.delivery_date, periods=periods, bands=pd.DataFrame(),
+    bands = pd.DataFrame({(name, stat): src.nominal for name, src in sources.items() for stat in ("lo", "mid", "hi")},
+                         index=pd.RangeIndex(1, len(periods) + 1, name="t"))
+    bands.columns = pd.MultiIndex.from_tuples(bands.columns, names=["source", "stat"])
+    return Problem(case=case, day=case.delivery_date, periods=periods, bands=bands,
                    sources=sources, tariff_hpa=tariff, labels=period_labels(periods))
 
 
