@@ -173,3 +173,15 @@ def test_a_fraction_outside_the_day_is_refused(paper_case):
     data["budgets"]["fraction"] = 1.5
     with pytest.raises(CaseError, match=r"budgets: fraction=1.5 must be <= 1"):
         parse_case(data, paper_case.history)
+
+
+def test_the_case_variant_of_a_fraction_sets_the_case_edits_aside_and_names_the_fraction(paper_case):
+    from rvpp.data.variants import Variant, describe
+
+    edited = paper_case.replace(budgets={"overrides": {"WF1": 1}})
+    case = Variant(gamma_fraction=0.25, gammas={"PV1": 2}).apply(edited)
+    assert case.budgets.fraction == 0.25 and case.budgets.override_map == {"PV1": 2}
+    assert prepare(case).budgets["WF1"] == 6 and prepare(case).budgets["PV1"] == 2
+    assert describe(case).startswith("Γ 0.25 of the day · DAM+SRM+HPA")
+    preset = Variant(strategy="pessimistic").apply(case)
+    assert preset.budgets.fraction is None and describe(preset).startswith("pessimistic · ")
