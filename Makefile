@@ -33,10 +33,13 @@ test: install
 bench: install
 	$(BIN)/python benchmarks/run.py --mode $(BENCH)
 	$(BIN)/python benchmarks/history.py
+	$(BIN)/python benchmarks/backtest.py
 
 bench-studies: install
 	$(BIN)/python benchmarks/studies.py
 
+# The paper's studies, then the rolling backtest and recommended Γ (April/May 2025 on the synthetic
+# case). On real data: RVPP_BACKTEST_CASE=<case folder built from real files> make reproduce
 reproduce: install
 	$(BIN)/python -m rvpp study reproduce --out out/reproduce
 

@@ -152,6 +152,9 @@ def _parser() -> argparse.ArgumentParser:
     solve.add_argument("--case", type=path_option, default=DEFAULT_CASE, help="case folder (default: the paper case)")
     solve.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
     solve.add_argument("--strategy", choices=STRATEGIES, help="budget preset (default: the case's)")
+    solve.add_argument("--gamma-fraction", type=Number(0, 1, unit="fraction of the day"), metavar="F",
+                       help="Γ of every source as a fraction of the day, Γ = round(F·periods) (replaces the "
+                            "strategy preset; e.g. the recommended Γ of python -m rvpp backtest recommend)")
     solve.add_argument("--gamma", action="append", default=[], metavar="SOURCE=N",
                        help="budget of one source in periods: price_da, price_sr_up, price_sr_dn or a unit "
                             "name (repeatable)")
@@ -184,8 +187,10 @@ def _parser() -> argparse.ArgumentParser:
     add_data_commands(data_commands)
 
     from .studies.cli import add_study_commands
+    from .backtest.cli import add_backtest_commands
 
     add_study_commands(commands)
+    add_backtest_commands(commands)
     return parser
 
 
@@ -216,7 +221,8 @@ def _run_solve(args: argparse.Namespace) -> int:
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(f"  {m}", file=sys.stderr))
     case = load_case(args.case)
-    case = with_options(case, date=args.date, strategy=args.strategy, gammas=_parse_gammas(args.gamma),
+    case = with_options(case, date=args.date, strategy=args.strategy, gamma_fraction=args.gamma_fraction,
+                        gammas=_parse_gammas(args.gamma),
                         markets=args.markets, csp=not args.no_csp, hpa_flat=args.hpa_flat, dt_h=args.dt,
                         budget_mode=args.budget_mode, time_limit_s=args.time_limit, rel_gap=args.gap,
                         threads=args.threads)

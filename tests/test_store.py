@@ -210,3 +210,40 @@ def test_a_save_killed_halfway_loses_nothing_that_was_saved(url, tmp_path):
     if url.startswith("sqlite"):
         with library.engine.connect() as connection:
             assert connection.exec_driver_sql("PRAGMA integrity_check").scalar() == "ok"
+
+
+def test_a_backtest_reopens_with_its_case_and_keeps_its_progress(url, paper_case):
+    store = BacktestStore(url)
+    settings = {"from": "2025-05-01", "to": "2025-05-02"}
+    ident = store.open(paper_case, settings, keys_total=4)
+    case, stored = store.load(ident)
+    assert case == paper_case and case.history.fingerprint == paper_case.history.fingerprint and stored == settings
+    key = RecordKey("2025-05-01", "balanced", "preset")
+    store.record(ident, key, {"status": "optimal", "net_cost_eur": 1.5, "end_state": {"CSP1": {"e_mwh_th": 110.0}}})
+    assert store.record_map(ident) == {key: {"status": "optimal", "net_cost_eur": 1.5,
+                                             "end_state": {"CSP1": {"e_mwh_th": 110.0}}}}
+    assert store.progress(ident) is None
+    store.set_progress(ident, "running", 1, 4, None, started_at="2025-01-01T00:00:00+00:00")
+    store.set_progress(ident, "running", 2, 4, 30.0)
+    progress = store.progress(ident)
+    assert (progress.state, progress.done, progress.total, progress.eta_s, progress.pid) == ("running", 2, 4, 30.0,
+                                                                                          os.getpid())
+    assert progress.started_at == "2025-01-01T00:00:00+00:00"
+    store.set_progress(ident, "finished", 4, 4, 0.0)
+    assert store.progress(ident).state == "finished"
+    with pytest.raises(StoreError, match="no backtest has the id"):
+        store.load("nope")
+    store.delete(ident)
+    assert store.progress(ident) is None
+
+
+def test_a_running_backtest_whose_process_is_gone_reads_stopped(tmp_path, paper_case):
+    store = BacktestStore(f"sqlite:///{tmp_path / 'store.sqlite3'}")
+    ident = store.open(paper_case, {"x": 1}, keys_total=2)
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    store.set_progress(ident, "running", 1, 2, 5.0, started_at="2025-01-01T00:00:00+00:00")
+    with store.engine.begin() as connection:
+        connection.execute(sa.text("UPDATE backtest_progress SET pid = :pid"), {"pid": gone.pid})
+    progress = store.progress(ident)
+    assert progress.state == "stopped" and progress.eta_s is None and "resume" in progress.message

@@ -104,16 +104,27 @@ def test_cost_never_falls_as_the_budget_grows(case):
     assert (np.diff(table["cost_keur"]) >= -1e-3).all()
 
 
-def test_reproduce_runs_end_to_end(tmp_path):
+def test_reproduce_runs_end_to_end(tmp_path, monkeypatch):
+    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    monkeypatch.delenv("RVPP_BACKTEST_CASE", raising=False)
     out = tmp_path / "reproduce"
     png = shutil.which("chromium") is not None
     code = main(["study", "reproduce", "--out", str(out), "--scheduler", "serial",
                  "--strategies", "optimistic,pessimistic", "--market-sets", "DAM,DAM+SRM+HPA",
                  "--gammas", "0,6", "--hpa-prices", "60", "--test-days", "2", "--scenarios", "2",
-                 "--sp-time-limit", "60", "--quiet"] + ([] if png else ["--no-png"]))
+                 "--sp-time-limit", "60", "--backtest-train", "2025-05-02:2025-05-02",
+                 "--backtest-test", "2025-05-03:2025-05-03", "--backtest-fractions", "0", "--quiet"]
+                + ([] if png else ["--no-png"]))
     assert code == 0
     info = json.loads((out / "run.json").read_text())
-    assert set(info["studies"]) == {"case1", "strategies", "sensitivity", "markets", "out_of_sample", "stochastic"}
+    assert set(info["studies"]) == {"case1", "strategies", "sensitivity", "markets", "out_of_sample", "stochastic",
+                                    "backtest"}
+    backtest = info["backtest"]
+    assert backtest["records"] == 2 * 5 and backtest["reconcile_problems"] == 0 and backtest["audit_violations"] == 0
+    assert backtest["recommended_fraction"] == 0.0 and backtest["verdict"].startswith("Recommended Γ = 0 ")
+    assert (out / "tables" / "backtest_comparison.csv").is_file()
+    assert (out / "figures" / "backtest_price_of_robustness.html").is_file()
     assert info["consistency"]["days_with_differing_realizations"] == 0
     assert len(info["consistency"]["realization_sets"]) == 1
     assert info["consistency"]["max_abs_net_minus_cost_plus_penalty_eur"] < 1e-6
@@ -152,6 +163,8 @@ def test_reproduce_runs_end_to_end(tmp_path):
     assert "DAM+HPA costs less than DAM alone" not in verdicts  # no DAM+HPA column in this run
     report = (out / "report.md").read_text()
     assert "## Findings of the paper, checked on this run" in report
+    assert "## Rolling backtest and the recommended Γ (beyond the paper)" in report
+    assert "## Consistency of the backtest settlements" in report
     assert report.count("| yes |") + report.count("| no |") == len(info["findings"])
 
 

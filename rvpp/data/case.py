@@ -113,11 +113,27 @@ class ThermalStorage(_Frozen):
     eta_ch: Annotated[float, Field(gt=0.0, le=1.0)]
     eta_dis: Annotated[float, Field(gt=0.0, le=1.0)]
     e_init_mwh_th: NonNegative | None = None
+    e_end_min_mwh_th: NonNegative | None = None
 
     @property
     def cyclic(self) -> bool:
         """True when the day is cyclic (no fixed initial energy)."""
         return self.e_init_mwh_th is None
+
+    @property
+    def end_floor_mwh_th(self) -> float | None:
+        """Least energy at the end of a day that starts from ``e_init`` [MWh_th].
+
+        ``min(e_end_min, e_init)``: the day ends at or above the target level
+        ``e_end_min``, or at or above its start if it started below the target (so the
+        storage may always idle); without a target, at or above its start. ``None`` on
+        a cyclic day.
+        """
+        if self.e_init_mwh_th is None:
+            return None
+        if self.e_end_min_mwh_th is None:
+            return self.e_init_mwh_th
+        return min(self.e_end_min_mwh_th, self.e_init_mwh_th)
 
 
 class PowerBlock(_Frozen):
@@ -142,6 +158,17 @@ class PowerBlock(_Frozen):
     startup_fraction: NonNegative = 0.0
     startup_duration_h: Positive | None = None
     initially_on: bool = False
+    initial_status_h: NonNegative | None = None
+
+    def initial_periods(self, dt_h: float) -> tuple[int, int]:
+        """Periods ``(N_on, N_off)`` at the start of the day during which the turbine must stay
+        online / offline to complete the minimum up / down time begun before the day
+        (paper Appendix A, STU12 and STU15). Both are 0 when ``initial_status_h`` is unset."""
+        if self.initial_status_h is None:
+            return 0, 0
+        needed = self.min_up_h if self.initially_on else self.min_down_h
+        left = int(round(max(0.0, needed - self.initial_status_h) / dt_h))
+        return (left, 0) if self.initially_on else (0, left)
 
 
 class CSP(_Frozen):
@@ -180,6 +207,11 @@ class CSP(_Frozen):
                  "<=", "storage.p_dis_max_mw_th", ts.p_dis_max_mw_th)
         _require_within("storage.e_init_mwh_th", ts.e_init_mwh_th, "storage.e_min_mwh_th", ts.e_min_mwh_th,
                         "storage.e_max_mwh_th", ts.e_max_mwh_th)
+        _require_within("storage.e_end_min_mwh_th", ts.e_end_min_mwh_th, "storage.e_min_mwh_th", ts.e_min_mwh_th,
+                        "storage.e_max_mwh_th", ts.e_max_mwh_th)
+        if ts.e_end_min_mwh_th is not None and ts.e_init_mwh_th is None:
+            raise ValueError(f"storage.e_end_min_mwh_th={ts.e_end_min_mwh_th:g} needs storage.e_init_mwh_th: "
+                             "a cyclic day (no initial energy) has no end target")
         _require(pb.p_in_min_mw_th < pb.p_in_max_mw_th, "power_block.p_in_min_mw_th", pb.p_in_min_mw_th,
                  "<", "power_block.p_in_max_mw_th", pb.p_in_max_mw_th)
         _check_breakpoints(pb)
@@ -356,11 +388,22 @@ class UncertaintySettings(_Frozen):
 
 
 class Budgets(_Frozen):
-    """Strategy preset, per-source overrides of Γ [periods] and the budget variant."""
+    """Strategy preset, per-source overrides of Γ [periods] and the budget variant.
+
+    ``fraction`` (a fraction of the day in [0, 1]), when set, replaces the preset: every
+    source gets ``Γ = ⌊fraction·NT + ½⌋`` periods (e.g. 0.25 → 6 of 24 hours); overrides
+    still apply on top.
+    """
 
     strategy: Strategy = "balanced"
     overrides: tuple[tuple[str, Annotated[int, Field(ge=0)]], ...] = ()
     mode: Literal["paper", "planner_chosen"] = "paper"
+    fraction: Fraction | None = None
+
+    @property
+    def label(self) -> str:
+        """The strategy's name, or e.g. ``Γ 25 % of the day`` for a fraction."""
+        return self.strategy if self.fraction is None else f"Γ {self.fraction:.4g} of the day"
 
     @field_validator("overrides", mode="before")
     @classmethod
@@ -559,7 +602,7 @@ class Case(_Frozen):
                 problems.append(f"{self.history.source}: price column {price!r} is missing")
         problems += self._band_problems(known, columns)
         for csp in self.csp:
-            for field in ("min_up_h", "min_down_h", "startup_duration_h"):
+            for field in ("min_up_h", "min_down_h", "startup_duration_h", "initial_status_h"):
                 hours = getattr(csp.power_block, field)
                 if hours is not None and not _is_multiple(hours, self.dt_h):
                     problems.append(f'csp "{csp.name}": power_block.{field}={hours:g} must be a multiple of '
@@ -1035,6 +1078,7 @@ def with_options(
     *,
     date: dt.date | str | None = None,
     strategy: str | None = None,
+    gamma_fraction: float | None = None,
     gammas: Mapping[str, int] | None = None,
     markets: str | None = None,
     csp: bool = True,
@@ -1049,14 +1093,14 @@ def with_options(
 ) -> Case:
     """A copy of ``case`` with run options applied (what the command line offers).
 
-    Strategy, Γ edits, markets, CSPs, HPA tariff and period length make a
+    Strategy, Γ fraction, Γ edits, markets, CSPs, HPA tariff and period length make a
     :class:`~rvpp.data.variants.Variant` (a strategy sets the case's own Γ edits aside);
     the date, budget mode and solver settings are changed in the same step.
     """
     from .variants import Variant
 
-    variant = Variant(strategy=strategy, gammas=dict(gammas or {}), markets=markets, dt_h=dt_h, csp=csp,
-                      hpa_flat=hpa_flat)
+    variant = Variant(strategy=strategy, gamma_fraction=gamma_fraction, gammas=dict(gammas or {}), markets=markets,
+                      dt_h=dt_h, csp=csp, hpa_flat=hpa_flat)
     changes: dict[str, Any] = variant.changes(case)
     if date is not None:
         changes["delivery_date"] = date

@@ -29,6 +29,8 @@ class Variant:
     """What a run changes in a case; ``None`` (or ``csp=True``) keeps the case's own setting.
 
     ``strategy``: a preset of paper Table 7 (the case's Γ edits are then dropped);
+    ``gamma_fraction``: Γ of every source as a fraction of the day, ``⌊f·NT + ½⌋`` periods,
+    in place of any preset (the case's Γ edits are dropped too);
     ``gammas``: Γ per source [periods], as ``{name: Γ}`` or sorted pairs;
     ``markets``: a market set such as ``"DAM+SRM"`` or ``"DAM,SRM"``; ``dt_h``: period
     length [h]; ``csp``: ``False`` removes every CSP (and its Γ edit); ``hpa_flat``: one
@@ -36,6 +38,7 @@ class Variant:
     """
 
     strategy: str | None = None
+    gamma_fraction: float | None = None
     gammas: tuple[tuple[str, int], ...] = ()
     markets: str | None = None
     dt_h: float | None = None
@@ -52,8 +55,10 @@ class Variant:
         if self.dt_h is not None:
             changes["dt_h"] = self.dt_h
         budgets: dict[str, Any] = {}
-        if self.strategy is not None:
-            budgets = {"strategy": self.strategy, "overrides": dict(self.gammas)}
+        if self.gamma_fraction is not None:
+            budgets = {"fraction": self.gamma_fraction, "overrides": dict(self.gammas)}
+        elif self.strategy is not None:
+            budgets = {"strategy": self.strategy, "fraction": None, "overrides": dict(self.gammas)}
         elif self.gammas:
             budgets = {"overrides": {**case.budgets.override_map, **dict(self.gammas)}}
         markets: dict[str, Any] = parse_markets(self.markets) if self.markets is not None else {}
@@ -84,11 +89,12 @@ class Variant:
 def describe(case: Case) -> str:
     """What a case solves, in one line: strategy, markets, then what differs from a plain run.
 
-    ``balanced · DAM+SRM+HPA``; Γ edits follow as ``Γ WF1=12, price_da=3`` (or ``Γ=6 for
-    every source`` when one value covers every source); then ``no CSP``, ``HPA flat 60
+    ``balanced · DAM+SRM+HPA`` (``Γ 0.25 of the day · DAM+SRM+HPA`` for a Γ fraction); Γ edits
+    follow as ``Γ WF1=12, price_da=3`` (or ``Γ=6 for every source`` when one value covers every
+    source); then ``no CSP``, ``HPA flat 60
     EUR/MWh_th``, ``15-min periods`` and ``planner-chosen hours`` where they apply.
     """
-    parts = [case.budgets.strategy, case.markets.label]
+    parts = [case.budgets.label, case.markets.label]
     overrides = case.budgets.override_map
     if overrides:
         values = set(overrides.values())

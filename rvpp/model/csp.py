@@ -37,7 +37,8 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     ``P̲dis·(1−u) ≤ p_dis − r_dis↓``; ``r_ts↑ = r_ch↑ + r_dis↑``, ``r_ts↓ = r_ch↓ + r_dis↓``
     (TS5-TS6). Energy ``e[t] = e[t−1] + η_ch·p_ch·dt − p_dis·dt/η_dis`` for every ``t``
     with ``e[0] ≡ e[NT]`` (cyclic day; MODEL_SPEC corrects TS7-TS8), or from a fixed
-    ``e_init`` with ``e[NT] ≥ e_init``. Reserve energy shares (TS9-TS10)
+    ``e_init`` with ``e[NT] ≥ min(e_end_min, e_init)`` (``e[NT] ≥ e_init`` without an end
+    target ``e_end_min``). Reserve energy shares (TS9-TS10)
     ``Σ r_ts↑·dt/η_dis ≤ σ↑·ΔE``, ``Σ r_ts↓·η_ch·dt ≤ σ↓·ΔE`` and margins (TS11, corrected)
     ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``.
 
@@ -91,7 +92,7 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.energy_balance = pyo.Constraint(m.T, rule=lambda b, t: (
         b.e_ts[t] == previous_energy(b, t) + ts.eta_ch * b.p_ch[t] * dt - b.p_dis[t] * dt / ts.eta_dis))
     if not ts.cyclic:
-        b.energy_end = pyo.Constraint(expr=b.e_ts[m.T.last()] >= ts.e_init_mwh_th)
+        b.energy_end = pyo.Constraint(expr=b.e_ts[m.T.last()] >= ts.end_floor_mwh_th)
     b.reserve_energy_up = pyo.Constraint(expr=sum(b.r_ts_up[t] * dt / ts.eta_dis for t in m.T)
                                          <= b.sigma_up * span)
     b.reserve_energy_dn = pyo.Constraint(expr=sum(b.r_ts_dn[t] * ts.eta_ch * dt for t in m.T)
@@ -105,8 +106,10 @@ def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None
 
     ``u[t] − u[t−1] = v_su[t] − v_sd[t]``, ``v_su + v_sd ≤ 1``, and in the equivalent
     tight form of Rajan and Takriti (2005): ``Σ_{τ=t−UT+1..t} v_su[τ] ≤ u[t]``,
-    ``Σ_{τ=t−DT+1..t} v_sd[τ] ≤ 1 − u[t]``. ``u[0]`` is the initial status; no up or down
-    time is carried over from the day before.
+    ``Σ_{τ=t−DT+1..t} v_sd[τ] ≤ 1 − u[t]``. ``u[0]`` is the initial status. A minimum
+    time begun before the day carries over (STU12, STU15): with ``initial_status_h`` hours
+    already in the initial status, ``u[t] = u[0]`` for the first ``N_on`` (or ``N_off``)
+    periods that complete it; unset, nothing carries over.
     """
     b = m.csp[csp.name]
     pb = csp.power_block
@@ -127,6 +130,9 @@ def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None
         sum(b.startup[k] for k in _window(m, t, up_periods)) <= b.online[t]))
     b.min_down = pyo.Constraint(m.T, rule=lambda b, t: (
         sum(b.shutdown[k] for k in _window(m, t, down_periods)) <= 1 - b.online[t]))
+    n_on, n_off = pb.initial_periods(problem.dt_h)
+    held = list(m.T)[:n_on + n_off]
+    b.initial_status_held = pyo.Constraint(held, rule=lambda b, t: b.online[t] == initial)
 
 
 def _window(m: pyo.ConcreteModel, t: int, length: int) -> list[int]:

@@ -162,8 +162,13 @@ def forecast_band(case: Case, column: str, scale: float, forecast: str | None,
 
 
 def budgets(case: Case, nt: int) -> dict[str, int]:
-    """Γ [periods] per source: the strategy's Table 7 hours scaled by ``1/dt`` (at most ``nt``),
-    then the case's edits."""
+    """Γ [periods] per source: the strategy's Table 7 hours scaled by ``1/dt`` (at most ``nt``), or
+    ``budgets.fraction`` of the ``nt`` periods rounded half up for every source; then the case's edits."""
+    names = [*PRICE_COLUMNS, *(unit.name for _, unit in case.units())]
+    if case.budgets.fraction is not None:
+        share = case.budgets.fraction * nt
+        gamma = int(share) + (1 if share - int(share) >= 0.5 else 0)
+        return {**{name: min(gamma, nt) for name in names}, **case.budgets.override_map}
     preset, per_hour = STRATEGY_BUDGETS_H[case.budgets.strategy], int(round(1.0 / case.dt_h))
     gammas = {name: min(preset["price"] * per_hour, nt) for name in PRICE_COLUMNS}
     gammas.update({unit.name: min(preset[kind] * per_hour, nt) for kind, unit in case.units()})
@@ -466,7 +471,8 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
     previous = np.roll(energy, 1)
     if not ts.cyclic:
         previous[0] = ts.e_init_mwh_th
-        a.leq("csp.ts_energy_end", ts.e_init_mwh_th, energy[-1], n)
+        floor = ts.e_init_mwh_th if ts.e_end_min_mwh_th is None else min(ts.e_end_min_mwh_th, ts.e_init_mwh_th)
+        a.leq("csp.ts_energy_end", floor, energy[-1], n)
     a.eq("csp.ts_energy_balance", energy,
          previous + ts.eta_ch * col["ts_charge_mw"] * dt - col["ts_discharge_mw"] * dt / ts.eta_dis, n)
     # Reserve energy shares and margins (TS9-TS11, corrected).
@@ -486,6 +492,10 @@ def _audit_commitment(a: _Auditor, day: AuditDay, unit, u, v_su, v_sd) -> None:
     state = np.round(u).astype(int)
     previous = np.concatenate([[1 if pb.initially_on else 0], state[:-1]])
     a.eq("csp.commitment_transition", state - previous, np.round(v_su) - np.round(v_sd), n)
+    if pb.initial_status_h is not None:  # a minimum time begun the day before is completed first (STU12, STU15)
+        need_h = pb.min_up_h if pb.initially_on else pb.min_down_h
+        held = state[:day.periods_for_hours(max(0.0, need_h - pb.initial_status_h))]
+        a.eq("csp.initial_status_held", held, np.full(len(held), previous[0]), n)
     for name, value, need in (("min_up", 1, day.periods_for_hours(pb.min_up_h)),
                               ("min_down", 0, day.periods_for_hours(pb.min_down_h))):
         t = 0

@@ -206,7 +206,9 @@ def realized_problem(case: Case, real: Realization) -> "RealizedProblem":
 
     Budgets are 0 and deviations 0, so the unit builders see the realization as the
     nominal bound. Availabilities are clipped to ``[0, nameplate]`` (as the forecast
-    bands are) and consumptions to each demand's ``[min, max]`` limits.
+    bands are) and consumptions to each demand's ``[min, max]`` limits. Its ``bands`` are
+    of zero width at these values (``lo = mid = hi``), so a plan solved from it (the
+    perfect-information plan) is audited against them.
     """
     periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
     if len(real.values) != len(periods):
@@ -222,8 +224,11 @@ def realized_problem(case: Case, real: Realization) -> "RealizedProblem":
         role = "production" if kind in ("wind", "pv", "csp") else "consumption"
         sources[unit.name] = _exact(unit.name, role, kind, values)
     tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
+    bands = pd.DataFrame({(name, stat): src.nominal for name, src in sources.items() for stat in ("lo", "mid", "hi")},
+                         index=pd.RangeIndex(1, len(periods) + 1, name="t"))
+    bands.columns = pd.MultiIndex.from_tuples(bands.columns, names=["source", "stat"])
     imbalance = [real.values[c].to_numpy(float) if c in real.values.columns else None for c in IMBALANCE_COLUMNS]
-    return RealizedProblem(case=case, day=case.delivery_date, periods=periods, bands=pd.DataFrame(),
+    return RealizedProblem(case=case, day=case.delivery_date, periods=periods, bands=bands,
                            sources=sources, tariff_hpa=tariff, labels=period_labels(periods),
                            imbalance_short=imbalance[0], imbalance_long=imbalance[1])
 
@@ -296,6 +301,7 @@ def add_scenario(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalties
     """One realization: units, slacks, balances and settlement on block ``b``."""
     add_time(b, problem)
     add_units(b, problem)
+    allow_trip(b, problem.case)
     if bids is not None:
         fix_commitment(b, bids)
     add_slacks(m, b)
@@ -315,6 +321,16 @@ def fix_commitment(b: pyo.Block, bids: FirstStage) -> None:
         for t in b.T:
             if round(float(online[t - 1])) == 0:
                 b.csp[name].online[t].fix(0)
+
+
+def allow_trip(b: pyo.Block, case: Case) -> None:
+    """A turbine online at the start of the day may stop before completing a minimum up time
+    begun the day before (STU12 is lifted): a trip is always possible in operation, and the
+    realized day may lack the heat to keep it running. A minimum down time begun the day
+    before still holds, since staying off is always possible."""
+    for csp in case.csp:
+        if csp.power_block.initially_on:
+            b.csp[csp.name].initial_status_held.deactivate()
 
 
 def add_slacks(m: pyo.ConcreteModel, b: pyo.Block) -> None:
@@ -384,12 +400,16 @@ SLACKS = {"deficit_mwh": "s_neg", "surplus_mwh": "s_pos", "reserve_up_short_mwh"
           "reserve_dn_short_mwh": "q_dn", "unserved_heat_mwh": "g"}
 
 
-def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalties = Penalties()) -> dict:
+def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalties = Penalties(),
+             with_end_state: bool = False) -> dict:
     """Settle fixed ``bids`` against one realization: a plain record of the outcome.
 
     Keys: ``day``, ``fingerprint``, ``status``, ``solve_s``, the settlement in [EUR]
-    (``market_cost_eur``, ``penalty_eur``, ``net_cost_eur`` and their parts) and the
-    slack energies [MWh] (``deficit_mwh``, ...). Values are ``None`` without a solution.
+    (``market_cost_eur``, ``penalty_eur``, ``net_cost_eur`` and their parts), the
+    slack energies [MWh] (``deficit_mwh``, ...) and, ``with_end_state``, the state at the
+    end of the day (``end_state``, see :func:`end_state`) and the settled turbine status and
+    storage energy (``settled_csp``, see :func:`csp_dispatch`). Values are ``None`` without a
+    solution.
     """
     problem = realized_problem(case, real)
     m = build_recourse_model([problem], penalties, bids)
@@ -397,7 +417,40 @@ def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalti
     record = {"day": real.day.isoformat(), "fingerprint": real.fingerprint, "status": outcome.status,
               "solve_s": outcome.seconds, "mip_gap": outcome.gap}
     record.update(scenario_record(m.scenario[0], problem.dt_h, outcome.usable))
+    if with_end_state:
+        record["end_state"] = end_state(m.scenario[0], case, problem.dt_h) if outcome.usable else None
+        record["settled_csp"] = csp_dispatch(m.scenario[0], case) if outcome.usable else None
     return record
+
+
+def csp_dispatch(b: pyo.Block, case: Case) -> dict[str, dict[str, list]]:
+    """Per CSP, the settled turbine status and storage energy of every period [-], [MWh_th]."""
+    return {csp.name: {"online": [round(float(pyo.value(b.csp[csp.name].online[t]))) for t in b.T],
+                       "e_mwh_th": [float(pyo.value(b.csp[csp.name].e_ts[t])) for t in b.T]} for csp in case.csp}
+
+
+def end_state(b: pyo.Block, case: Case, dt_h: float) -> dict[str, dict]:
+    """The state a settled day hands to the next, per CSP (the next day's initial conditions).
+
+    ``e_mwh_th``: storage energy at the last period [MWh_th] (solver round-off clipped to
+    the storage limits); ``online``: the turbine's status in the last period; ``status_h``:
+    hours in that status at the end of the day [h], counting into the day before when the
+    turbine never switched (``initial_status_h`` of the case added; ``None`` if that was unset,
+    i.e. long enough that no minimum time binds).
+    """
+    state = {}
+    for csp in case.csp:
+        c, ts, pb = b.csp[csp.name], csp.storage, csp.power_block
+        online = [round(float(pyo.value(c.online[t]))) for t in b.T]
+        last = online[-1]
+        run = next((k for k, value in enumerate(reversed(online)) if value != last), len(online))
+        hours: float | None = run * dt_h
+        if run == len(online) and bool(last) == pb.initially_on:
+            hours = None if pb.initial_status_h is None else pb.initial_status_h + hours
+        energy = float(pyo.value(c.e_ts[b.T.last()]))
+        state[csp.name] = {"e_mwh_th": min(max(energy, ts.e_min_mwh_th), ts.e_max_mwh_th),
+                           "online": bool(last), "status_h": hours}
+    return state
 
 
 def scenario_record(b: pyo.Block, dt_h: float, solved: bool) -> dict:

@@ -19,6 +19,7 @@ Availabilities are clipped to ``[0, nameplate]``; budgets of the strategy preset
 from __future__ import annotations
 
 import datetime as dt
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -86,19 +87,29 @@ class Problem:
 
 
 def strategy_budgets(case: Case, nt: int) -> dict[str, int]:
-    """Γ [periods] per source: strategy preset scaled to the period length, then overrides."""
-    preset = STRATEGY_BUDGETS_H[case.budgets.strategy]
-    per_hour = int(round(1.0 / case.dt_h))
-    budgets = {name: preset["price"] * per_hour for name in PRICE_COLUMNS}
-    for kind, unit in case.units():
-        budgets[unit.name] = preset[kind] * per_hour
-    budgets = {name: min(g, nt) for name, g in budgets.items()}
+    """Γ [periods] per source: strategy preset scaled to the period length (or the fraction
+    ``⌊f·NT + ½⌋`` of the day when ``budgets.fraction`` is set), then overrides."""
+    if case.budgets.fraction is not None:
+        gamma = fraction_budget(case.budgets.fraction, nt)
+        budgets = {name: gamma for name in case.sources()}
+    else:
+        preset = STRATEGY_BUDGETS_H[case.budgets.strategy]
+        per_hour = int(round(1.0 / case.dt_h))
+        budgets = {name: preset["price"] * per_hour for name in PRICE_COLUMNS}
+        for kind, unit in case.units():
+            budgets[unit.name] = preset[kind] * per_hour
+        budgets = {name: min(g, nt) for name, g in budgets.items()}
     for name, gamma in case.budgets.overrides:
         if gamma > nt:
             raise CaseError(f"budgets.overrides: Γ for {name!r}={gamma} exceeds the {nt} periods of "
                             f"{case.delivery_date} at dt_h={case.dt_h:g}")
         budgets[name] = gamma
     return budgets
+
+
+def fraction_budget(fraction: float, nt: int) -> int:
+    """Γ [periods] of a fraction of a day of ``nt`` periods, rounded half up: ``⌊f·NT + ½⌋``."""
+    return min(nt, int(math.floor(fraction * nt + 0.5)))
 
 
 def source_columns(case: Case) -> dict[str, tuple[str, float]]:

@@ -80,6 +80,7 @@ class Result:
             "solve_s": round(self.solve_s, 4),
             "extract_s": round(self.extract_s, 4),
             "strategy": case.budgets.strategy,
+            "budget_fraction": case.budgets.fraction,
             "budget_mode": case.budgets.mode,
             "budgets": self.problem.budgets,
             "markets": case.markets.label,

@@ -8,8 +8,11 @@ transaction; an interrupted run loses at most the records in flight.
 
 from __future__ import annotations
 
+import datetime as dt
 import hashlib
 import json
+import os
+import socket
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -17,9 +20,12 @@ from typing import Any
 import pandas as pd
 import sqlalchemy as sa
 
-from ..data.case import Case
-from .codec import case_data, history_bytes, jsonable
-from .engine import StoreError, backtest_records, backtests, connect, now, put_blob
+from ..data.case import Case, parse_case
+from .codec import case_data, history_bytes, history_from, jsonable
+from .engine import (StoreError, backtest_progress, backtest_records, backtests, connect, get_blob, now,
+                     put_blob)
+
+STALE_AFTER_S = 600.0  # a run on another machine silent this long is taken as stopped [s]
 
 
 @dataclass(frozen=True, order=True)
@@ -39,6 +45,31 @@ class BacktestInfo:
     keys_total: int
     keys_done: int
     settings: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class BacktestProgress:
+    """Where a backtest's process stands: its state, records held and expected time left.
+
+    ``state`` is ``running``, ``finished``, ``failed``, ``interrupted`` or ``stopped`` (the
+    row still says running but the process is gone: killed, or the machine restarted);
+    ``eta_s`` [s] is ``None`` until the first record of the run.
+    """
+
+    backtest_id: str
+    state: str
+    host: str
+    pid: int
+    started_at: str
+    updated_at: str
+    done: int
+    total: int
+    eta_s: float | None
+    message: str
+
+    @property
+    def running(self) -> bool:
+        return self.state == "running"
 
 
 def backtest_id(case: Case, settings: Mapping[str, Any]) -> str:
@@ -92,6 +123,52 @@ class BacktestStore:
             rows = [dict(row) for row in connection.execute(query).scalars()]
         return pd.DataFrame(rows)
 
+    def record_map(self, ident: str) -> dict[RecordKey, dict[str, Any]]:
+        """Every record of a backtest by its key."""
+        query = sa.select(backtest_records.c.day, backtest_records.c.strategy, backtest_records.c.gamma,
+                          backtest_records.c.record).where(backtest_records.c.backtest_id == ident)
+        with self.engine.connect() as connection:
+            return {RecordKey(day, strategy, gamma): dict(record)
+                    for day, strategy, gamma, record in connection.execute(query)}
+
+    def load(self, ident: str) -> tuple[Case, dict[str, Any]]:
+        """The case (with its history) and the settings a backtest was opened with."""
+        with self.engine.connect() as connection:
+            row = connection.execute(sa.select(backtests).where(backtests.c.id == ident)).first()
+            if row is None:
+                raise StoreError(f"no backtest has the id {ident!r}; it may have been deleted")
+            history = get_blob(connection, row.history_digest)
+        return parse_case(row.case, history_from(history, "history")), dict(row.settings)
+
+    def set_progress(self, ident: str, state: str, done: int, total: int, eta_s: float | None = None,
+                     message: str = "", started_at: str | None = None) -> None:
+        """Write the progress row of the process running ``ident`` (this process, this machine)."""
+        values = {"state": state, "host": socket.gethostname(), "pid": os.getpid(), "updated_at": now(),
+                  "done": done, "total": total, "eta_s": eta_s, "message": message}
+        with self.engine.begin() as connection:
+            where = backtest_progress.c.backtest_id == ident
+            if started_at is None:
+                if connection.execute(backtest_progress.update().where(where).values(**values)).rowcount:
+                    return
+                started_at = values["updated_at"]
+            connection.execute(backtest_progress.delete().where(where))
+            connection.execute(backtest_progress.insert().values(backtest_id=ident, started_at=started_at,
+                                                                 **values))
+
+    def progress(self, ident: str) -> BacktestProgress | None:
+        """The progress of ``ident``'s latest run (``None`` if it never ran); a ``running`` row whose
+        process is gone reads ``stopped``."""
+        with self.engine.connect() as connection:
+            row = connection.execute(sa.select(backtest_progress).where(
+                backtest_progress.c.backtest_id == ident)).first()
+        if row is None:
+            return None
+        info = BacktestProgress(**row._asdict())
+        if info.running and not _alive(info):
+            info = BacktestProgress(**{**row._asdict(), "state": "stopped", "eta_s": None,
+                                       "message": "the process stopped before the end; run it again to resume"})
+        return info
+
     def list(self) -> list[BacktestInfo]:
         """Every backtest with its progress, newest first."""
         done = sa.select(backtest_records.c.backtest_id, sa.func.count().label("n")).group_by(
@@ -105,6 +182,7 @@ class BacktestStore:
     def delete(self, ident: str) -> None:
         with self.engine.begin() as connection:
             connection.execute(backtest_records.delete().where(backtest_records.c.backtest_id == ident))
+            connection.execute(backtest_progress.delete().where(backtest_progress.c.backtest_id == ident))
             if not connection.execute(backtests.delete().where(backtests.c.id == ident)).rowcount:
                 raise StoreError(f"no backtest has the id {ident!r}")
 
@@ -112,3 +190,27 @@ class BacktestStore:
 def pending(keys: Iterable[RecordKey], done: set[RecordKey]) -> list[RecordKey]:
     """The keys still to compute, in their given order."""
     return [key for key in keys if key not in done]
+
+
+def _alive(info: BacktestProgress) -> bool:
+    """Whether the process of a ``running`` row still runs: asked directly on this machine, judged by
+    the age of its last update elsewhere."""
+    if info.host == socket.gethostname():
+        try:
+            os.kill(info.pid, 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            return True
+        return not _zombie(info.pid)
+    updated = dt.datetime.fromisoformat(info.updated_at)
+    return (dt.datetime.now(dt.timezone.utc) - updated).total_seconds() < STALE_AFTER_S
+
+
+def _zombie(pid: int) -> bool:
+    """A process that ended but was not yet reaped by its parent (Linux; False elsewhere)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="utf-8") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except (OSError, IndexError):
+        return False

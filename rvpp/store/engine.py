@@ -87,6 +87,20 @@ backtest_records = sa.Table(
     sa.Column("record", sa.JSON, nullable=False),             # every number of the day, plain data
 )
 
+backtest_progress = sa.Table(
+    "backtest_progress", metadata,
+    sa.Column("backtest_id", sa.String(64), sa.ForeignKey("backtests.id", ondelete="CASCADE"), primary_key=True),
+    sa.Column("state", sa.String(16), nullable=False),        # running, finished, failed, interrupted
+    sa.Column("host", sa.String(255), nullable=False),        # machine of the process running it
+    sa.Column("pid", sa.Integer, nullable=False),             # its process id there
+    sa.Column("started_at", sa.String(32), nullable=False),
+    sa.Column("updated_at", sa.String(32), nullable=False),
+    sa.Column("done", sa.Integer, nullable=False),            # records held (including earlier runs')
+    sa.Column("total", sa.Integer, nullable=False),
+    sa.Column("eta_s", sa.Float, nullable=True),              # expected seconds left [s]
+    sa.Column("message", sa.Text, nullable=False),
+)
+
 
 class StoreError(RvppError):
     """The store cannot be opened or refuses an operation (unknown run, label taken, ...)."""

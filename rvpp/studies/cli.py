@@ -11,9 +11,11 @@ from ..cli import Number, choice_of, listed, path_option
 from ..data.case import STRATEGIES, load_case, parse_markets, with_options
 from ..data.files import excerpt
 from ..data.periods import ALLOWED_DT_H
+from ..errors import RvppError
 from ..settle.recourse import Penalties
 from ..solving.parallel import SCHEDULERS
-from .settings import HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings
+from .settings import (BACKTEST_CRITERIA, BACKTEST_FRACTIONS, HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED,
+                       SP_TIME_LIMIT_S, TEST_DAYS, StudySettings)
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 
@@ -27,7 +29,7 @@ def add_study_commands(commands) -> None:
         description="Run one of the paper's case studies on a case and write its tables (CSV, Markdown, "
                     "tables.xlsx), figures (HTML, PNG) and report.md to --out.")
     study.add_argument("name", choices=[*STUDIES, REPRODUCE],
-                       help="the study; reproduce runs those of the paper (all but stress)")
+                       help="the study; reproduce runs those of the paper and the backtest (all but stress)")
     study.add_argument("--case", type=path_option, default=DEFAULT_CASE,
                        help="case folder (default: the paper case)")
     study.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
@@ -71,6 +73,15 @@ def add_study_commands(commands) -> None:
                        help="price of unserved heat (default: twice the highest HPA tariff)")
     study.add_argument("--fix-commitment", action="store_true",
                        help="settle with the plan's CSP turbine schedule: no start where the plan is off")
+    study.add_argument("--backtest-train", type=_period, metavar="D1:D2",
+                       help="backtest: training period of the recommended Γ (default: April 2025 on the paper case)")
+    study.add_argument("--backtest-test", type=_period, metavar="D3:D4",
+                       help="backtest: test period, after the training period (default: May 2025)")
+    study.add_argument("--backtest-fractions", type=listed(Number(0, 1), "fractions of the day such as 0,0.125,0.25"),
+                       help="backtest: the Γ grid as fractions of the day (default "
+                            f"{','.join(f'{f:g}' for f in BACKTEST_FRACTIONS)})")
+    study.add_argument("--backtest-criterion", choices=BACKTEST_CRITERIA, default="mean",
+                       help="backtest: choose Γ by the mean daily net cost or its CVaR 95 %% (default: mean)")
     study.add_argument("--no-png", action="store_true", help="write interactive HTML figures only")
     study.add_argument("--quiet", action="store_true", help="no progress bars")
     study.set_defaults(run=run_study_command)
@@ -97,15 +108,26 @@ def _scheduler(text: str) -> str:
                                      "address such as tcp://10.0.0.5:8786")
 
 
+def _period(text: str):
+    """``--backtest-train`` / ``--backtest-test``: ``FIRST:LAST`` as two dates."""
+    from ..backtest.settings import parse_period
+
+    try:
+        return parse_period(text, "period")
+    except RvppError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def settings_from(args: argparse.Namespace) -> StudySettings:
     """The study settings of the command line's options."""
     changes = {"strategies": args.strategies, "gammas": args.gammas, "hpa_flat_prices": args.hpa_prices,
                "market_sets": args.market_sets,
-               "scenario_counts": args.scenarios}
+               "scenario_counts": args.scenarios, "backtest_train": args.backtest_train,
+               "backtest_test": args.backtest_test, "backtest_fractions": args.backtest_fractions}
     settings = StudySettings(
         sources=args.sources, test_days=args.test_days, seed=args.seed, sp_time_limit_s=args.sp_time_limit,
         penalties=Penalties(m_def=args.m_def, m_sur=args.m_sur, m_sr=args.m_sr, c_heat_eur_per_mwh=args.c_heat),
-        fix_commitment=args.fix_commitment, png=not args.no_png)
+        fix_commitment=args.fix_commitment, png=not args.no_png, backtest_criterion=args.backtest_criterion)
     return settings.with_changes(**{k: v for k, v in changes.items() if v is not None})
 
 

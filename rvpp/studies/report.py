@@ -31,6 +31,7 @@ REPORT_TABLES = {  # the tables shown in report.md; every table is in tables/ an
     "out_of_sample": ("table13_out_of_sample",),
     "stochastic": ("table14_stochastic",),
     "stress": ("stress",),
+    "backtest": ("backtest_aggregates", "backtest_comparison", "backtest_curve"),
 }
 REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
     "strategies": ["strategy", "variant", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
@@ -43,6 +44,14 @@ REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
                               "solve_s", "settlements_optimal", "realization_set"],
     "table14_stochastic": ["method", "status", "mip_gap", "avg_market_cost_keur", "avg_penalty_keur",
                            "avg_net_cost_keur", "solve_s", "settlements_optimal", "realization_set"],
+    "backtest_aggregates": ["period", "label", "days_settled", "mean_market_cost_eur", "mean_penalty_eur",
+                            "mean_net_cost_eur", "median_net_cost_eur", "cvar95_net_cost_eur", "penalty_share",
+                            "mean_regret_eur", "audit_violations"],
+    "backtest_comparison": ["variant", "train_mean_net_cost_eur", "train_cvar95_net_cost_eur",
+                            "test_mean_market_cost_eur", "test_mean_penalty_eur", "test_mean_net_cost_eur",
+                            "test_cvar95_net_cost_eur", "test_mean_regret_eur"],
+    "backtest_curve": ["fraction", "period", "days_settled", "mean_market_cost_eur", "mean_penalty_eur",
+                       "mean_net_cost_eur", "cvar95_net_cost_eur"],
 }
 
 
@@ -184,9 +193,22 @@ def write_report(outputs: Sequence[StudyOutput], folder: Path, case: Case, setti
                   f"- Realization sets used: {', '.join(f'`{s}`' for s in checks['realization_sets'])} "
                   f"({'one set for every method' if len(checks['realization_sets']) == 1 else 'DIFFERENT sets'}); "
                   f"days whose realization differs between methods: {checks['days_with_differing_realizations']}."]
+    if "backtest" in by_name:
+        lines += backtest_checks(by_name["backtest"].facts)
     path = folder / "report.md"
     _write(path, "\n".join(lines) + "\n")
     return path
+
+
+def backtest_checks(facts: dict[str, Any]) -> list[str]:
+    """The backtest's reconciliation, as lines of report.md."""
+    return ["", "## Consistency of the backtest settlements", "",
+            f"- {facts['records']} stored days (day x variant) of backtest `{facts['backtest_id']}`; "
+            f"{facts['reconcile_problems']} do not reconcile or were not settled "
+            f"(`tables/backtest_problems.csv`).",
+            f"- Largest |net cost − (market cost + penalty)|: "
+            f"{facts['max_abs_net_minus_cost_plus_penalty_eur']:.2e} EUR.",
+            f"- Plans audited: {facts['audited']}; rules broken: {facts['audit_violations']}."]
 
 
 def write_run_info(folder: Path, case: Case, settings: StudySettings, outputs: Sequence[StudyOutput],
@@ -199,6 +221,7 @@ def write_run_info(folder: Path, case: Case, settings: StudySettings, outputs: S
                                    "notes": out.notes, "warnings": out.warnings} for out in outputs},
             "consistency": consistency(outputs),
             "findings": [asdict(f) for f in findings({out.name: out for out in outputs})], **run_info}
+    info.update({"backtest": out.facts for out in outputs if out.name == "backtest"})
     path = folder / "run.json"
     _write(path, json.dumps(info, indent=2, default=str) + "\n")
     return path

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 import numbers
 from dataclasses import dataclass, field, replace
@@ -17,6 +18,8 @@ SCENARIO_COUNTS = (5, 10, 15, 20, 25)  # paper Table 14
 TEST_DAYS = 30
 SEED = 20250318
 SP_TIME_LIMIT_S = 600.0
+BACKTEST_FRACTIONS = (0.0, 0.125, 0.25, 0.375)  # Γ grid of the reproduce backtest [fraction of the day]
+BACKTEST_CRITERIA = ("mean", "cvar95")
 
 
 @dataclass(frozen=True)
@@ -28,7 +31,10 @@ class StudySettings:
     once); ``test_days``: out-of-sample days from the delivery date on;
     ``scenario_counts``: N of the stochastic benchmark; ``sp_time_limit_s``: time limit
     of each stochastic solve [s]; ``threads``: HiGHS threads per solve (1 keeps serial
-    and parallel runs identical); ``png``: also write static figures.
+    and parallel runs identical); ``png``: also write static figures. The backtest study
+    (:mod:`.backtest`) trains Γ on ``backtest_train`` and tests it on ``backtest_test``
+    (``None``: its documented periods) over the grid ``backtest_fractions`` by the
+    criterion ``backtest_criterion`` (``mean`` or ``cvar95``).
 
     Checked on creation: an :class:`~rvpp.errors.RvppError` names every broken rule, e.g.
     ``study settings: test_days=0 must be at least 1``. Rules that need the case (Γ up
@@ -49,6 +55,10 @@ class StudySettings:
     fix_commitment: bool = False
     threads: int = 1
     png: bool = True
+    backtest_train: tuple[dt.date, dt.date] | None = None
+    backtest_test: tuple[dt.date, dt.date] | None = None
+    backtest_fractions: tuple[float, ...] = BACKTEST_FRACTIONS
+    backtest_criterion: str = "mean"
 
     def __post_init__(self) -> None:
         problems = self._problems()
@@ -78,6 +88,16 @@ class StudySettings:
             problems.append(f"sp_time_limit_s={self.sp_time_limit_s} must be a number > 0 [s]")
         if self.threads < 1:
             problems.append(f"threads={self.threads} must be at least 1")
+        problems += [f"backtest_fractions: {f} must be a fraction of the day in [0, 1]"
+                     for f in self.backtest_fractions if not 0.0 <= f <= 1.0]
+        if not self.backtest_fractions:
+            problems.append("backtest_fractions is empty; give the Γ grid, e.g. 0, 0.125, 0.25")
+        if self.backtest_criterion not in BACKTEST_CRITERIA:
+            problems.append(f"backtest_criterion={self.backtest_criterion!r} must be one of "
+                            f"{', '.join(BACKTEST_CRITERIA)}")
+        if self.backtest_train and self.backtest_test and self.backtest_test[0] <= self.backtest_train[1]:
+            problems.append(f"backtest_test starts on {self.backtest_test[0]}, before the training period ends "
+                            f"({self.backtest_train[1]})")
         return problems
 
     def with_changes(self, **changes) -> "StudySettings":

@@ -1,0 +1,253 @@
+"""``python -m rvpp backtest``: the rolling backtest, the recommended Γ and exports of stored backtests.
+
+* ``backtest --from D1 --to D2 [--strategies ...] [--fractions ...]``: run or resume;
+* ``backtest recommend --train D1:D2 --test D3:D4 [--criterion cvar95]``: choose Γ;
+* ``backtest export ID --out FOLDER`` and ``backtest list``: what the store holds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from pathlib import Path
+
+from ..cli import Number, listed, path_option
+from ..data.case import STRATEGIES, load_case
+from ..data.files import excerpt
+from ..settle.recourse import Penalties
+from ..studies.cli import _scheduler as scheduler_option
+from .settings import CARRY, BacktestError, BacktestSettings, parse_day, parse_period, variants_of
+
+DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
+CRITERIA = ("mean", "cvar95")
+
+
+def add_backtest_commands(commands) -> None:
+    """Add the ``backtest`` subcommand (and its ``recommend``, ``export``, ``list``) to the command line."""
+    backtest = commands.add_parser(
+        "backtest", help="settle every day's plan against its own realized day, over a period",
+        description="Rolling backtest: for every day of --from..--to and every strategy or Γ fraction, plan from "
+                    "the history before the day, settle against the day's observations, carry the storage and "
+                    "turbine state to the next day. Records go to the store as each day finishes; running the "
+                    "same command again resumes where it stopped.")
+    _add_run_options(backtest)
+    backtest.add_argument("--from", dest="first", metavar="D1", help="first delivery day YYYY-MM-DD")
+    backtest.add_argument("--to", dest="last", metavar="D2", help="last delivery day YYYY-MM-DD (included)")
+    backtest.add_argument("--strategies", type=listed(_strategy, "a comma-separated subset of " + ",".join(STRATEGIES)),
+                          help="comma-separated presets among " + ",".join(STRATEGIES)
+                          + " (default: all four, unless --fractions is given)")
+    backtest.add_argument("--fractions", "--gammas", dest="fractions", type=FRACTIONS,
+                          help="Γ as fractions of the day applied to every source, e.g. 0,0.125,0.25 "
+                               "(Γ = round(f·periods))")
+    backtest.set_defaults(run=run_backtest_command)
+    actions = backtest.add_subparsers(title="other actions", dest="action")
+
+    recommend = actions.add_parser(
+        "recommend", help="choose Γ on a training period, check it on a later test period",
+        description="Backtest a grid of Γ fractions and the four presets over --train and --test, pick the "
+                    "fraction that minimises the criterion on the training days, and report how it does on the "
+                    "test days against the presets.")
+    _add_run_options(recommend)
+    recommend.add_argument("--train", required=True, metavar="D1:D2", help="training period, both days included")
+    recommend.add_argument("--test", required=True, metavar="D3:D4", help="test period, after the training period")
+    recommend.add_argument("--criterion", choices=CRITERIA, default="mean",
+                           help="mean daily net cost or CVaR 95 %% of it (default: mean)")
+    recommend.add_argument("--fractions", "--gammas", dest="fractions", type=FRACTIONS,
+                           default=(0.0, 0.0625, 0.125, 0.1875, 0.25, 0.3125, 0.375, 0.5),
+                           help="the Γ grid as fractions of the day (default 0,0.0625,...,0.375,0.5)")
+    recommend.set_defaults(run=run_recommend_command)
+
+    export = actions.add_parser("export", help="write a stored backtest's records and inputs to a folder")
+    export.add_argument("ident", metavar="ID", help="the backtest id (see backtest list)")
+    export.add_argument("--out", type=path_option, required=True, help="folder to write (replaced as a whole)")
+    export.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
+    export.set_defaults(run=run_export_command)
+
+    listing = actions.add_parser("list", help="the backtests of the store and their progress")
+    listing.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
+    listing.set_defaults(run=run_list_command)
+
+
+def _add_run_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--case", type=path_option, default=DEFAULT_CASE, help="case folder (default: the paper case)")
+    parser.add_argument("--no-perfect", action="store_true",
+                        help="skip the perfect-information plan (no regret figures; one chain less)")
+    parser.add_argument("--storage-end", type=_storage_end, default=CARRY, metavar="carry|F",
+                        help="end-of-day storage rule: carry (default: end at or above the day's start) or a "
+                             "fraction F of the storage range (may run down to that level)")
+    penalties = Penalties()
+    multiplier = Number(0)
+    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
+    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
+    parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
+                        help="reserve shortfall price multiplier, >= 0")
+    parser.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
+                        help="price of unserved heat (default: twice the highest HPA tariff)")
+    parser.add_argument("--fix-commitment", action="store_true",
+                        help="settle with the plan's CSP turbine schedule: no start where the plan is off")
+    parser.add_argument("--no-audit", action="store_true", help="do not audit the plans")
+    parser.add_argument("--scheduler", type=scheduler_option, default="processes",
+                        help="processes (default: local process pool), serial, local (a local Dask cluster) or "
+                             "the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    parser.add_argument("--workers", type=Number(1, whole=True),
+                        help="worker processes of a local pool or cluster (default: cores)")
+    parser.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
+    parser.add_argument("--label", default="", help="a name for the backtest in the store")
+    parser.add_argument("--out", type=path_option, help="also export records, aggregates and inputs to this folder")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+FRACTIONS = listed(Number(0, 1, unit="fraction of the day"), "Γ as fractions of the day such as 0,0.125,0.25")
+
+
+def _strategy(name: str) -> str:
+    if name not in STRATEGIES:
+        raise argparse.ArgumentTypeError(f"unknown strategy {excerpt(name)!r}; choose from {', '.join(STRATEGIES)}")
+    return name
+
+
+def _storage_end(text: str) -> str | float:
+    if text.strip() == CARRY:
+        return CARRY
+    try:
+        return Number(0, 1, unit="fraction of the storage range")(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc}, or {CARRY}") from None
+
+
+def settings_from(args: argparse.Namespace, first, last, strategies, fractions) -> BacktestSettings:
+    """Backtest settings from the command line's options."""
+    penalties = Penalties(m_def=args.m_def, m_sur=args.m_sur, m_sr=args.m_sr, c_heat_eur_per_mwh=args.c_heat)
+    return BacktestSettings(first_day=first, last_day=last,
+                            variants=variants_of(strategies, fractions, perfect=not args.no_perfect),
+                            penalties=penalties, storage_end=args.storage_end, fix_commitment=args.fix_commitment,
+                            audit=not args.no_audit)
+
+
+def stop_on_terminate() -> None:
+    """End on SIGTERM as on Ctrl-C: the store then records the backtest as interrupted."""
+    def terminate(_signum, _frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, terminate)
+
+
+class ProgressBar:
+    """A tqdm bar on standard error with the records done and the time left."""
+
+    def __init__(self, enabled: bool, title: str):
+        self.enabled, self.title, self.bar = enabled, title, None
+
+    def __call__(self, done: int, total: int, _eta_s: float | None) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, initial=done, desc=self.title, unit="day", file=sys.stderr,
+                            dynamic_ncols=True)
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def run_backtest_command(args: argparse.Namespace) -> int:
+    from ..solving.parallel import open_executor
+    from ..store import BacktestStore
+    from .engine import run_backtest
+
+    if not args.first or not args.last:
+        raise BacktestError("backtest needs --from D1 and --to D2 (delivery days, YYYY-MM-DD)")
+    strategies = args.strategies if args.strategies is not None else (() if args.fractions else STRATEGIES)
+    settings = settings_from(args, parse_day(args.first, "--from"), parse_day(args.last, "--to"), strategies,
+                             args.fractions or ())
+    case = load_case(args.case)
+    settings.check_case(case)
+    store = BacktestStore(args.store)
+    say = (lambda _m: None) if args.quiet else (lambda m: print(m, file=sys.stderr))
+    say(f"rvpp backtest: case {case.name}, {settings.first_day} to {settings.last_day}, "
+        f"{len(settings.variants)} variant(s) ({', '.join(v.label for v in settings.variants)}), "
+        f"scheduler {args.scheduler}")
+    bar = ProgressBar(not args.quiet, "backtest")
+    stop_on_terminate()
+    try:
+        with open_executor(args.scheduler, args.workers) as executor:
+            ident = run_backtest(case, settings, store, executor, bar, label=args.label)
+    except KeyboardInterrupt:
+        bar.close()
+        print("interrupted: the finished days are stored; run the same command again to resume", file=sys.stderr)
+        return 130
+    bar.close()
+    return _report(store, ident, args.out, say)
+
+
+def _report(store, ident: str, out: Path | None, say) -> int:
+    from . import metrics
+    from .export import export
+
+    records = store.records(ident)
+    problems = metrics.reconcile(records)
+    say(f"backtest {ident}: {len(records)} records")
+    table = metrics.aggregates(records)
+    columns = ["label", "days_settled", "mean_net_cost_eur", "cvar95_net_cost_eur", "mean_penalty_eur",
+               "mean_regret_eur"]
+    say(table[columns].to_string(index=False, float_format=lambda v: f"{v:,.0f}"))
+    if len(problems):
+        say(f"warning: {len(problems)} day(s) do not reconcile or were not settled, e.g. "
+            f"{problems.iloc[0].to_dict()}")
+    if out is not None:
+        export(store, ident, out)
+        say(f"wrote {out}")
+    return 0 if problems.empty else 1
+
+
+def run_recommend_command(args: argparse.Namespace) -> int:
+    from ..solving.parallel import open_executor
+    from ..store import BacktestStore
+    from .recommend import recommend, write_recommendation
+
+    train = parse_period(args.train, "--train")
+    test = parse_period(args.test, "--test")
+    case = load_case(args.case)
+    store = BacktestStore(args.store)
+    template = settings_from(args, train[0], test[1], STRATEGIES, ())
+    bar = ProgressBar(not args.quiet, "backtest")
+    stop_on_terminate()
+    try:
+        with open_executor(args.scheduler, args.workers) as executor:
+            result = recommend(case, train, test, args.fractions, args.criterion, template=template, store=store,
+                               executor=executor, progress=bar, label=args.label)
+    except KeyboardInterrupt:
+        bar.close()
+        print("interrupted: the finished days are stored; run the same command again to resume", file=sys.stderr)
+        return 130
+    bar.close()
+    print(result.verdict)
+    print(result.comparison.to_string(index=False, float_format=lambda v: f"{v:,.0f}"))
+    if args.out is not None:
+        write_recommendation(result, store, args.out)
+        print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+def run_export_command(args: argparse.Namespace) -> int:
+    from ..store import BacktestStore
+    from .export import export
+
+    export(BacktestStore(args.store), args.ident, args.out)
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+def run_list_command(args: argparse.Namespace) -> int:
+    from ..store import BacktestStore
+
+    store = BacktestStore(args.store)
+    for info in store.list():
+        progress = store.progress(info.id)
+        state = progress.state if progress else "not run"
+        print(f"{info.id}  {info.keys_done}/{info.keys_total}  {state:<11}  {info.created_at[:19]}  {info.label}")
+    return 0

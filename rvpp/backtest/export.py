@@ -1,0 +1,163 @@
+"""A backtest's records and the exact inputs it used, as files others can reproduce it from.
+
+``export(store, ident, folder)`` writes (CSV for spreadsheets, Parquet for programs):
+
+* ``records.csv`` / ``.parquet``: one row per day and variant, every number of the day
+  (budgets as ``gamma_<source>``, start and end state as ``start_<csp>_<field>``, ...);
+* ``bids.csv`` / ``.parquet``: the first-stage bids, one row per day, variant and period;
+* ``dispatch.csv`` / ``.parquet``: the settled turbine status and storage energy, one row
+  per day, variant, CSP and period;
+* ``aggregates.csv`` / ``.parquet`` and ``monthly.csv`` / ``.parquet`` (:mod:`.metrics`);
+* ``case/``: ``case.yaml`` and ``history.csv`` (full precision) exactly as stored with the
+  backtest: ``rvpp.load_case`` on it gives the same history fingerprint;
+* ``manifest.json``: backtest id, settings, data fingerprints, rvpp version, git commit
+  (when the code runs from a git checkout) and the time of the export.
+
+The folder appears complete or not at all: everything is written into a temporary
+sibling folder that replaces ``folder`` in one rename.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import shutil
+import subprocess
+import tempfile
+import uuid
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..data.case import save_case
+from ..store import BacktestStore
+from . import metrics
+from .engine import BIDS
+
+ROOT = Path(__file__).resolve().parents[2]
+NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp")
+
+
+def records_table(records: pd.DataFrame) -> pd.DataFrame:
+    """The records with nested values spread into flat columns (bids go to :func:`bids_table`)."""
+    rows = []
+    for record in records.to_dict("records"):
+        row = {k: v for k, v in record.items() if k not in NESTED}
+        for source, gamma in (record.get("budgets") or {}).items():
+            row[f"gamma_{source}"] = gamma
+        for when in ("start", "end"):
+            for unit, state in (record.get(f"{when}_state") or {}).items():
+                for field, value in state.items():
+                    row[f"{when}_{unit}_{field}"] = value
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def bids_table(records: pd.DataFrame) -> pd.DataFrame:
+    """First-stage bids, one row per day, variant and period ``t`` [MW], [MW_th]."""
+    frames = []
+    for record in records.to_dict("records"):
+        bids = record.get("bids")
+        if not isinstance(bids, dict):
+            continue
+        frame = pd.DataFrame({name: bids[name] for name in BIDS})
+        frame.insert(0, "t", range(1, len(frame) + 1))
+        for position, key in enumerate(("day", "strategy", "gamma")):
+            frame.insert(position, key, record[key])
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["day", "strategy", "gamma", "t",
+                                                                                       *BIDS])
+
+
+def dispatch_table(records: pd.DataFrame) -> pd.DataFrame:
+    """The settled turbine status and storage energy, one row per day, variant, CSP and period."""
+    frames = []
+    for record in records.to_dict("records"):
+        for unit, values in (record.get("settled_csp") or {}).items():
+            frame = pd.DataFrame({"t": range(1, len(values["online"]) + 1), "online": values["online"],
+                                  "e_mwh_th": values["e_mwh_th"]})
+            for position, (key, value) in enumerate((("day", record["day"]), ("strategy", record["strategy"]),
+                                                     ("gamma", record["gamma"]), ("unit", unit))):
+                frame.insert(position, key, value)
+            frames.append(frame)
+    columns = ["day", "strategy", "gamma", "unit", "t", "online", "e_mwh_th"]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=columns)
+
+
+def git_commit() -> str | None:
+    """The commit of the code when it runs from a git checkout (``None`` otherwise)."""
+    try:
+        out = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True,
+                             timeout=10, check=True)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None
+
+
+def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str, pd.DataFrame] | None = None,
+           notes: dict[str, Any] | None = None) -> Path:
+    """Write the backtest ``ident`` into ``folder`` (replaced as a whole); return the folder.
+
+    ``extra`` tables are written beside the others (CSV and Parquet); ``notes`` go into the manifest.
+    """
+    from .. import __version__
+
+    folder = Path(folder)
+    case, settings = store.load(ident)
+    records = store.records(ident)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    try:
+        tables = {"records": records_table(records), "bids": bids_table(records), "dispatch": dispatch_table(records),
+                  "aggregates": metrics.aggregates(records), "monthly": metrics.monthly(records), **(extra or {})}
+        for name, table in tables.items():
+            table.to_csv(staging / f"{name}.csv", index=False, float_format="%.6f")
+            _plain_for_parquet(table).to_parquet(staging / f"{name}.parquet", index=False)
+        save_case(case, staging / "case")
+        _exact_history(case, staging / "case" / "history.csv")
+        manifest = {"backtest_id": ident, "settings": settings, "case": case.name,
+                    "history_fingerprint": case.history.fingerprint, "records": len(records),
+                    "rvpp_version": __version__, "git_commit": git_commit(),
+                    "exported_at": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+                    **(notes or {}),
+                    "files": sorted(p.name for p in staging.iterdir())}
+        (staging / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str) + "\n", encoding="utf-8")
+        _replace(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return folder
+
+
+def _exact_history(case, path: Path) -> None:
+    """The history CSV at full precision, so the exported case has the backtest's fingerprint."""
+    frame = case.history.frame
+    frame.insert(0, "timestamp", [t.isoformat() for t in frame.index.tz_convert(case.timezone)])
+    frame.to_csv(path, index=False)
+
+
+def _plain_for_parquet(table: pd.DataFrame) -> pd.DataFrame:
+    """Columns Parquet can hold: dates and mixed objects as text."""
+    out = table.copy()
+    for column in out.columns:
+        if out[column].dtype == object:
+            values = out[column].dropna()
+            if not values.map(lambda v: isinstance(v, str)).all():
+                out[column] = out[column].map(lambda v: None if v is None or v != v else _text(v))
+    return out
+
+
+def _text(value: Any) -> str:
+    return value.isoformat() if isinstance(value, (dt.date, dt.datetime)) else str(value)
+
+
+def _replace(staging: Path, folder: Path) -> None:
+    """Move ``staging`` to ``folder`` in one rename, the old folder (if any) set aside first."""
+    old = None
+    if folder.exists():
+        old = folder.with_name(f".{folder.name}.old-{uuid.uuid4().hex[:8]}")
+        folder.rename(old)
+    staging.rename(folder)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
