@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import os
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,8 @@ from rvpp.data.periods import delivery_periods
 from rvpp.solving.problem import problem_from_bands
 
 ROOT = Path(__file__).resolve().parent.parent
+# The real Spanish data (never committed): RVPP_SPAIN_DATA, or shared/data/spain beside the project.
+SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", ROOT.parent / "shared" / "data" / "spain"))
 PAPER = ROOT / "data" / "cases" / "paper"
 DAY = dt.date(2025, 3, 18)
 

@@ -18,7 +18,7 @@ from rvpp.backtest.export import export
 from rvpp.backtest.state import initial_state
 from rvpp.data.history import History
 from rvpp.store import BacktestStore
-from tests.factories import ROOT
+from tests.factories import ROOT, SPAIN
 
 WEEK = (dt.date(2025, 5, 1), dt.date(2025, 5, 7))
 
@@ -331,23 +331,14 @@ def test_the_command_line_runs_resumes_and_exports(tmp_path):
     assert info.id in listing.stdout and "finished" in listing.stdout
 
 
-SPAIN = ROOT.parent.parent / "shared" / "data" / "spain"
-
-
 def spain_folder():
-    import os
-    from pathlib import Path
-
-    folder = Path(os.environ.get("RVPP_SPAIN_DATA", SPAIN))
+    folder = SPAIN
     return folder if (folder / "omie_spain_prices_2018_2025.csv").is_file() else None
 
 
 @pytest.mark.slow
 @pytest.mark.skipif(spain_folder() is None, reason="the real Spanish data (shared/data/spain, or RVPP_SPAIN_DATA) "
                                                    "is not on this machine")
-@pytest.mark.xfail(reason="settlement penalties priced m_def·λ and m_sur·λ reward deficit and surplus together at "
-                          "a negative price (unbounded); MODEL_SPEC §10's π_def ≥ π_sur imbalance prices fix it",
-                   strict=False)
 def test_a_day_with_negative_prices_plans_and_settles(paper_case):
     # OMIE's 2024 day-ahead prices moved 52 weeks later (weekdays and clock changes line up) into the
     # paper case's history: 2024-04-21 had 8 hours below zero and becomes 2025-04-20.

@@ -146,7 +146,7 @@ def raw_case():
 
 
 BAD = {
-    "end target without a start": (lambda c: c["storage"].update(e_end_min_mwh_th=300),
+    "end target without a start": (lambda c: c["storage"].update(e_init_mwh_th=None, e_end_min_mwh_th=300),
                                     "storage.e_end_min_mwh_th=300 needs storage.e_init_mwh_th"),
     "end target above the storage": (lambda c: c["storage"].update(e_init_mwh_th=500, e_end_min_mwh_th=2000),
                                      "storage.e_end_min_mwh_th=2000 must lie in [storage.e_min_mwh_th=110, "

@@ -8,7 +8,6 @@ Spanish files when they are present and skips otherwise.
 from __future__ import annotations
 
 import datetime as dt
-import os
 from pathlib import Path
 
 import numpy as np
@@ -20,10 +19,9 @@ from rvpp.cli import main
 from rvpp.data.build_case import BuildOptions, build_case
 from rvpp.errors import DataImportError, RvppError
 from rvpp.settle.audit import audit_result
-from tests.factories import PAPER
+from tests.factories import PAPER, SPAIN
 
 TZ = "Europe/Madrid"
-SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", Path(__file__).resolve().parents[3] / "shared" / "data" / "spain"))
 REAL = [SPAIN / "entsoe_spain_2015_2018.csv", SPAIN / "omie_spain_prices_2018_2025.csv"]
 
 

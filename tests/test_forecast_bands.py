@@ -7,7 +7,6 @@ q-quantile lies at position q·(n - 1).
 from __future__ import annotations
 
 import datetime as dt
-import os
 from pathlib import Path
 
 import numpy as np
@@ -21,11 +20,10 @@ from rvpp.errors import CaseError
 from rvpp.solving.problem import prepare
 from rvpp.uncertainty.forecast import BandSpec, forecast_and_errors, forecast_error_bands, level_quantiles
 from rvpp.uncertainty.quality import score
-from tests.factories import demand, wind
+from tests.factories import SPAIN, demand, wind
 
 TZ = "Europe/Madrid"
 DAY = dt.date(2025, 3, 18)
-SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", Path(__file__).resolve().parents[3] / "shared" / "data" / "spain"))
 
 
 def history(columns: dict, start: str = "2025-03-01", days: int = 20) -> History:

@@ -7,7 +7,6 @@ for λ < 0 they are ``(2 − m_def)·λ`` and ``(2 − m_sur)·λ``, worked out 
 from __future__ import annotations
 
 import datetime as dt
-import os
 from pathlib import Path
 
 import numpy as np
@@ -26,10 +25,9 @@ from rvpp.settle.recourse import (FirstStage, Penalties, Realization, build_reco
 from rvpp.solving.highs import run_highs
 from rvpp.solving.outcome import Outcome
 from rvpp.solving.plan import solve_problem
-from tests.factories import DAY, PAPER, demand, tiny_case, tiny_problem, wind
+from tests.factories import DAY, PAPER, SPAIN, demand, tiny_case, tiny_problem, wind
 
 NT = 24
-SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", Path(__file__).resolve().parents[3] / "shared" / "data" / "spain"))
 OMIE_HOURLY = SPAIN / "omie_spain_prices_2018_2025.csv"
 prices = st.floats(-500.0, 3000.0, allow_nan=False)
 m_defs = st.floats(1.0, 5.0)
