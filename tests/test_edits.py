@@ -88,3 +88,15 @@ def test_labels_carry_their_units():
     assert label("storage.e_max_mwh_th") == "TS E max [MWh_th]"
     assert label("markets.kappa") == "κ: reserve band cap [-]"
     assert label("unknown_field") == "unknown_field"
+
+
+def test_a_run_label_names_strategy_markets_and_edits(paper_case):
+    from rvpp.data.edits import run_label
+
+    edited = follow_capacity(paper_case, with_unit(paper_case, "wind", 0, p_max_mw=80.0))
+    assert run_label(paper_case, edited) == "balanced · DAM+SRM+HPA · WF1 80 MW"
+    pessimistic = rvpp.with_options(edited, strategy="pessimistic", markets="DAM,SRM")
+    assert run_label(paper_case, pessimistic, csp=False) == "pessimistic · DAM+SRM · WF1 80 MW · no CSP"
+    many = paper_case.replace(markets={"kappa": 0.2}, budgets={"overrides": {"WF1": 1, "WF2": 2, "PV1": 3}})
+    short = run_label(paper_case, many, limit=55)
+    assert short == "balanced · DAM+SRM+HPA · κ 0.2 · … and 3 more edits" and len(short) <= 55

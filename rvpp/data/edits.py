@@ -100,7 +100,7 @@ CAPACITY_FIELDS = {"wind": "p_max_mw", "pv": "p_max_mw", "csp": "solar_field.p_m
                    "td": "h_max_mw_th"}
 UNIT_WORDS = {"wind": "wind farm", "pv": "PV plant", "csp": "CSP plant", "ed": "electrical demand",
               "td": "thermal demand"}
-HOURS = 24
+LABEL_LIMIT = 120  # characters of a default run label
 
 
 def label(field: str) -> str:
@@ -157,6 +157,26 @@ def describe_edits(origin: Case, edited: Case) -> list[str]:
     words += _budget_edits(origin, edited)
     words += _unit_edits(origin, edited)
     return words
+
+
+def run_label(origin: Case, edited: Case, csp: bool = True, limit: int = LABEL_LIMIT) -> str:
+    """A run's default label: strategy, market set and what was edited, e.g.
+    ``"balanced · DAM+SRM+HPA · WF1 80 MW"``; ``csp=False`` adds ``"no CSP"``.
+
+    Past ``limit`` characters the last edits are summed up (``"… and 3 more edits"``).
+    """
+    edits = describe_edits(origin, edited) + (["no CSP"] if not csp and edited.csp else [])
+    head = [edited.budgets.strategy, edited.markets.label]
+    shown, hidden = list(edits), 0
+
+    def joined() -> str:
+        more = [f"… and {hidden} more edit{'s' if hidden > 1 else ''}"] if hidden else []
+        return " · ".join(head + shown + more)
+
+    while len(joined()) > limit and shown:
+        shown.pop()
+        hidden += 1
+    return joined()
 
 
 def plain_message(message: str) -> str:
