@@ -27,7 +27,8 @@ def column_config(case: Case, kind: str) -> dict:
             config[column] = st.column_config.SelectboxColumn(name, help=help_text, options=series_options,
                                                               default=default, required=True)
         elif field in TEXT_FIELDS:
-            config[column] = st.column_config.TextColumn(name, help=help_text, default=default, required=True)
+            config[column] = st.column_config.TextColumn(name, help=help_text, default=default, required=True,
+                                                         pinned=True)
         elif field in BOOL_FIELDS:
             config[column] = st.column_config.CheckboxColumn(name, help=help_text, default=bool(default))
         else:

@@ -57,10 +57,11 @@ c4.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=min
                      required=True, on_change=from_widget, args=("dt_h", "markets_dt", None, PERIOD_MINUTES.get),
                      help="Period length; 15 minutes is the EU day-ahead market time unit (96 periods).")
 c1, c2 = st.columns(2)
-c1.number_input("κ: reserve band cap [-]", min_value=0.0, max_value=1.0, step=0.05, value=markets.kappa,
+c1.number_input("κ: reserve band cap [-], from 0 to 1", min_value=0.0, max_value=1.0, step=0.05, value=markets.kappa,
                 key="markets_kappa", on_change=from_widget, args=("kappa", "markets_kappa", "markets"),
                 help="Each SR band is at most κ × (generation capacity − demand capacity); paper: 0.3.")
-c2.number_input("Reserve delivery time [min]", min_value=1.0, step=1.0, value=markets.reserve_duration_min,
+c2.number_input("Reserve delivery time [min], at least 1", min_value=1.0, step=1.0,
+                value=markets.reserve_duration_min,
                 key="markets_duration", on_change=from_widget,
                 args=("reserve_duration_min", "markets_duration", "markets"),
                 help="A reserve band must be deliverable for this long: ramp [MW/min] × time caps each band.")
@@ -87,7 +88,8 @@ with left:
         apply=lambda table: state.case().replace(
             markets={"hpa_tariff_eur_per_mwh": [v for v in table["tariff_eur_per_mwh"]]}),
         column_config={"hour": st.column_config.TextColumn("Clock hour", disabled=True),
-                       "tariff_eur_per_mwh": st.column_config.NumberColumn("Tariff [EUR/MWh_th]")},
+                       "tariff_eur_per_mwh": st.column_config.NumberColumn(
+                           "Tariff [EUR/MWh_th]", format="%.2f", help="At least 0 EUR/MWh_th")},
         hide_index=True, height=400,
     )
 problem = solving.prepare(state.run_case())
