@@ -128,11 +128,11 @@ def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list()
     at = open_app("market_sets")
     at.text_input(key="market_sets_prices").input("70, -5")
     click(at, "market_sets_run")
-    assert "hpa_flat_prices: -5.0 must be a finite number >= 0" in errors(at)
+    assert "Flat HPA tariffs [EUR/MWh_th]: −5.0 must be a finite number ≥ 0" in errors(at)
     at.text_input(key="market_sets_prices").input("70")
     at.multiselect(key="market_sets_strategies").set_value([])
     click(at, "market_sets_run")
-    assert "strategies is empty" in errors(at)
+    assert "Strategies is empty" in errors(at)
     assert not at.exception
 
 
@@ -172,7 +172,7 @@ def test_out_of_sample_page_refuses_empty_scenario_counts():
     assert "give at least one" in errors(at)
     at.text_input(key="out_of_sample_scenarios").input("0")
     click(at, "out_of_sample_run")
-    assert "N=0 must be at least 1" in errors(at)
+    assert "Scenario counts N: N = 0 must be at least 1" in errors(at)
     assert not at.exception
 
 

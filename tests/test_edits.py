@@ -77,7 +77,7 @@ def test_a_unit_kept_fixed_or_with_its_scale_edited_is_not_rescaled(paper_case):
     ("markets: hpa_tariff_eur_per_mwh.3=-5 must be >= 0", "HPA tariff at 03:00 [EUR/MWh_th] = −5 must be ≥ 0"),
     ("markets: kappa=2 must be <= 1", "κ: reserve band cap [-] = 2 must be ≤ 1"),
     ('wind "WF1": p_max_mw=-5 must be > 0', "WF1: P max [MW] = −5 must be > 0"),
-    ("study settings: test_days=0 must be at least 1", "study settings: test_days=0 must be at least 1"),
+    ("the history does not cover 2025-05-05", "the history does not cover 2025-05-05"),
 ])
 def test_messages_name_fields_as_the_forms_show_them(message, plain):
     assert plain_message(message) == plain
@@ -100,3 +100,10 @@ def test_a_run_label_names_strategy_markets_and_edits(paper_case):
     many = paper_case.replace(markets={"kappa": 0.2}, budgets={"overrides": {"WF1": 1, "WF2": 2, "PV1": 3}})
     short = run_label(paper_case, many, limit=55)
     assert short == "balanced · DAM+SRM+HPA · κ 0.2 · … and 3 more edits" and len(short) <= 55
+
+
+def test_study_settings_are_named_as_the_study_pages_show_them():
+    assert plain_message("study settings: hpa_flat_prices: -5.0 must be a finite number >= 0 [EUR/MWh_th]") == \
+        "study settings: Flat HPA tariffs [EUR/MWh_th]: −5.0 must be a finite number ≥ 0 [EUR/MWh_th]"
+    assert plain_message("study settings: test_days=0 must be at least 1; scenario_counts: N=0 must be at least 1") \
+        == "study settings: Test days = 0 must be at least 1; Scenario counts N: N = 0 must be at least 1"

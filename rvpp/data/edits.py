@@ -96,6 +96,18 @@ SETTING_WORDS = {
     "solver.rel_gap": "gap {:g}",
     "solver.threads": "{:d} threads",
 }
+# Study settings as the study pages name them.
+STUDY_FIELDS: dict[str, str] = {
+    "strategies": "Strategies",
+    "gammas": "Γ grid [periods]",
+    "market_sets": "Market sets",
+    "market_sets_without_csp": "Market sets without the CSP",
+    "hpa_flat_prices": "Flat HPA tariffs [EUR/MWh_th]",
+    "test_days": "Test days",
+    "scenario_counts": "Scenario counts N",
+    "sp_time_limit_s": "Time limit per stochastic program [s]",
+    "threads": "Threads",
+}
 CAPACITY_FIELDS = {"wind": "p_max_mw", "pv": "p_max_mw", "csp": "solar_field.p_max_mw_th", "ed": "p_max_mw",
                    "td": "h_max_mw_th"}
 UNIT_WORDS = {"wind": "wind farm", "pv": "PV plant", "csp": "CSP plant", "ed": "electrical demand",
@@ -188,6 +200,10 @@ def plain_message(message: str) -> str:
     ``HPA tariff at 03:00 [EUR/MWh_th] = −5 must be ≥ 0``.
     """
     text = re.sub(r'^(?:wind|pv|csp|ed|td) "([^"]+)": ', r"\1: ", message)
+    if text.startswith("study settings: "):
+        text = re.sub(r"(?:(?<=^study settings: )|(?<=; ))([a-z_]+)(?=[=: ])",
+                      lambda m: STUDY_FIELDS.get(m.group(1), m.group(1)), text)
+        text = re.sub(r"(?<=\w)=(?=[-\d])", " = ", text)
     section = re.match(r"^(markets|uncertainty|budgets|solver): ", text)
     prefix = ""
     if section:
