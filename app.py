@@ -1,8 +1,8 @@
 """rvpp dashboard: ``streamlit run app.py`` (or ``make run``).
 
 Sets the shared session state once, then hands over to the page the user chose; the
-sidebar's summary of the current case is drawn after the page ran, so it shows the case
-with the page's edits. New pages are one ``st.Page`` line in :func:`main`. The
+sidebar's summary of the current case is drawn again after the page ran, so it shows the
+case with the page's edits. New pages are one ``st.Page`` line in :func:`main`. The
 ``__main__`` guard matters: processes started by the dashboard may import this file and
 must not run the app.
 """
@@ -41,12 +41,12 @@ def main() -> None:
     page = st.navigation(pages)
     state.resume_deep_link()
     widgets.open_linked_run(page)
-    summary = st.sidebar.container()
-    try:
-        page.run()
-    finally:  # also after st.stop(): the summary shows the case as this run left it
-        with summary:
-            widgets.sidebar(state.case())
+    summary = st.sidebar.empty()
+    with summary.container():  # stays if the page stops early (st.stop() ends the run)
+        widgets.sidebar(state.case())
+    page.run()
+    with summary.container():  # drawn again after the page: the case as the page's edits left it
+        widgets.sidebar(state.case())
 
 
 if __name__ == "__main__":

@@ -22,7 +22,7 @@ from . import library, state
 KIND_TITLES = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP plants", "ed": "Electrical demands",
                "td": "Thermal demands"}
 KPI_COLUMNS = 4
-NET = "Net result of the day"
+NET = "Net result [kEUR]"
 PERCENT = 100.0
 KILO = 1000.0
 UNIT_FORMATS = {"[EUR]": "%.0f", "[kEUR]": "%.1f", "[%]": "%.1f", "[s]": "%.2f", "[MWh]": "%.1f", "[h]": "%.2f",
@@ -49,20 +49,20 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
     money = {
         NET: (result.objective_eur, "The objective: revenues minus costs minus the robust protection. Negative is a "
                                     "net cost (the paper's cost), positive a net profit."),
-        "DAM revenue": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
-        "Reserve revenue": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
+        "DAM revenue [kEUR]": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
+        "Reserve revenue [kEUR]": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
                                                          "upper-percentile prices."),
-        "HPA cost": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
-        "Operating cost": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
-        "Robust protection": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
+        "HPA cost [kEUR]": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
+        "Operating cost [kEUR]": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
+        "Robust protection [kEUR]": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
                                           "price (DAM, SR up, SR down), charged in the objective."),
     }
-    shown = {label: (f"{keur(v)} kEUR", f"{text} Exact: {eur(v)}.")
+    shown = {label: (keur(v), f"{text} Exact: {eur(v)}.")
              for label, (v, text) in money.items()}
-    gap = "–" if result.mip_gap is None else f"{result.mip_gap * PERCENT:.3f} %"
+    gap = "–" if result.mip_gap is None else f"{result.mip_gap * PERCENT:.3f}"
     total_s = result.build_s + result.solve_s + result.extract_s
-    shown["MIP gap"] = (gap, "Relative distance between the plan and the solver's bound.")
-    shown["Solve time"] = (f"{total_s:.2f} s", f"Build {result.build_s:.2f} s, HiGHS {result.solve_s:.2f} s, "
+    shown["MIP gap [%]"] = (gap, "Relative distance between the plan and the solver's bound.")
+    shown["Solve time [s]"] = (f"{total_s:.2f}", f"Build {result.build_s:.2f} s, HiGHS {result.solve_s:.2f} s, "
                                                f"tables {result.extract_s:.2f} s.")
     return shown
 

@@ -10,7 +10,7 @@ from rvpp.outputs.plots import bands_figure, trades_figure
 state.through_app("pages/home.py")
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
-HEADLINE = ("Net result of the day", "DAM revenue", "Reserve revenue", "Robust protection")
+HEADLINE = ("Net result [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Robust protection [kEUR]")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
     ("pages/markets.py", "Markets & tariffs", "DAM and reserve price bands, market switches, the HPA tariff"),

@@ -45,7 +45,7 @@ st.markdown(f"**How it works.** Each method makes one plan for **{run.delivery_d
             "price, and heat not served at the unserved-heat price.")
 st.caption(f"The defaults ({TEST_DAYS} test days, N = {', '.join(map(str, SCENARIOS))}, {TIME_LIMIT_S:.0f} s per "
            "stochastic program) take about two minutes; the paper's 30 days and N up to 25 take half an hour or "
-           "more (`python -m rvpp study reproduce`).")
+           "more (the command line: python -m rvpp study reproduce).")
 
 penalties = Penalties()
 with st.form("out_of_sample_form"):

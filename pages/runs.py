@@ -17,14 +17,14 @@ state.through_app("pages/runs.py")
 COMPARE_MAX = 4
 TABLE_KEY = "runs_table"
 COLUMNS = {
-    "label": st.column_config.TextColumn("Label", width="large", pinned=True),
-    "saved": st.column_config.TextColumn("Saved (UTC)", width="small"),
-    "case": st.column_config.TextColumn("Case", width="small"),
-    "day": st.column_config.TextColumn("Delivery day", width="small"),
-    "strategy": st.column_config.TextColumn("Strategy", width="small"),
-    "markets": st.column_config.TextColumn("Markets", width="small"),
-    "status": st.column_config.TextColumn("Status", width="small"),
-    "net_keur": st.column_config.NumberColumn("Net result [kEUR]", format="%.1f", width="small",
+    "label": st.column_config.TextColumn("Label", width="medium", pinned=True),
+    "saved": st.column_config.TextColumn("Saved (UTC)"),
+    "case": st.column_config.TextColumn("Case"),
+    "day": st.column_config.TextColumn("Delivery day"),
+    "strategy": st.column_config.TextColumn("Strategy"),
+    "markets": st.column_config.TextColumn("Markets"),
+    "status": st.column_config.TextColumn("Status"),
+    "net_keur": st.column_config.NumberColumn("Net result [kEUR]", format="%.1f",
                                               help="The objective; negative is a net cost"),
     "link": st.column_config.LinkColumn("Link", display_text="open", width="small",
                                         help="Opens the run in a new tab; copy it to share the run"),

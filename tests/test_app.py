@@ -28,8 +28,9 @@ from rvpp.store import RunLibrary
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
 TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
-KPI_MONEY = ("Net result of the day", "DAM revenue", "Reserve revenue", "HPA cost", "Operating cost",
-             "Robust protection")
+NET = "Net result [kEUR]"
+KPI_MONEY = (NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "HPA cost [kEUR]", "Operating cost [kEUR]",
+             "Robust protection [kEUR]")
 
 
 @pytest.fixture(autouse=True)
@@ -68,10 +69,8 @@ def shown_kpis(at: AppTest) -> dict[str, tuple[str, str]]:
 def expected_kpis(result: rvpp.Result) -> dict[str, float]:
     """The library's numbers [EUR] under the app's card labels."""
     parts = result.parts
-    return {"Net result of the day": result.objective_eur,
-            "DAM revenue": parts["revenue_dam_eur"], "Reserve revenue": parts["revenue_sr_eur"],
-            "HPA cost": parts["cost_hpa_eur"], "Operating cost": parts["cost_opex_eur"],
-            "Robust protection": sum(result.protection_eur.values())}
+    return dict(zip(KPI_MONEY, (result.objective_eur, parts["revenue_dam_eur"], parts["revenue_sr_eur"],
+                                parts["cost_hpa_eur"], parts["cost_opex_eur"], sum(result.protection_eur.values()))))
 
 
 def assert_kpis_match(at: AppTest, result: rvpp.Result, labels=KPI_MONEY) -> None:
@@ -127,9 +126,9 @@ def test_home_balanced_solve_shows_the_library_numbers(paper_solve):
     at = click(open_app(), "home_solve")
     expected = paper_solve(strategy="balanced")
     assert expected.status == "optimal"
-    assert_kpis_match(at, expected, labels=("Net result of the day", "DAM revenue", "Reserve revenue",
-                                            "Robust protection"))
-    net = [m for m in at.metric if m.label == "Net result of the day"][0]
+    assert_kpis_match(at, expected, labels=(NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]",
+                                            "Robust protection [kEUR]"))
+    net = [m for m in at.metric if m.label == NET][0]
     assert net.proto.delta == "net cost"  # the sign in words: the default day costs money
     spec = figures(at)["Day-ahead energy and secondary-reserve bands"]
     np.testing.assert_allclose(values(trace(spec, "DAM energy (+ sell, − buy)")["y"]), expected.market["p_da_mw"])
@@ -203,7 +202,7 @@ def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_ca
     expected = rvpp.solve(edited)
     assert expected.status == "optimal"
     assert_kpis_match(at, expected)
-    assert number(shown_kpis(at)["Net result of the day"][0]) != pytest.approx(
+    assert number(shown_kpis(at)[NET][0]) != pytest.approx(
         rvpp.solve(paper_case).objective_eur / 1000, abs=0.05)
 
 
@@ -439,7 +438,7 @@ def test_saved_runs_keep_distinct_labels_and_reopen_without_a_solve(run_library,
     fresh.run()
     assert not fresh.exception, fresh.exception
     assert case_of(fresh).wind[0].p_max_mw == 80.0
-    assert number(shown_kpis(fresh)["Net result of the day"][0]) == pytest.approx(
+    assert number(shown_kpis(fresh)[NET][0]) == pytest.approx(
         edited.result.objective_eur / 1000, abs=0.051)
     assert "WF1 80 MW" in "\n".join(m.value for m in fresh.sidebar.markdown)
 

@@ -23,7 +23,8 @@ from ..solving.results import Result
 from .style import FIGURE_HEIGHT, GAIN_COLOR, GRID_COLOR, LOSS_COLOR, NET_COLOR, TRANSPARENT
 
 KILO = 1000.0
-STEPS = ("DAM revenue", "SR revenue", "HPA cost", "Operating cost", "Robust protection", "Net")
+SHORT = {"DAM revenue": "DAM", "SR revenue": "SR", "HPA cost": "HPA", "Operating cost": "O&M",
+         "Robust protection": "Protection", "Net": "Net"}  # step names in narrow panels
 
 
 @dataclass(frozen=True)
@@ -120,8 +121,9 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
     for col, label in enumerate(labels, start=1):
         steps = economics(results[label]).steps()
         values = [v / KILO for v in steps.values()]
+        names = list(steps) if len(labels) == 1 else [SHORT[k] for k in steps]
         fig.add_trace(go.Waterfall(
-            x=list(steps), y=values, measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
+            x=names, y=values, measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
             text=[f"{v:+,.1f}".replace("-", "−") for v in values], textposition="outside", cliponaxis=False,
             increasing={"marker": {"color": GAIN_COLOR}}, decreasing={"marker": {"color": LOSS_COLOR}},
             totals={"marker": {"color": NET_COLOR}}, connector={"line": {"color": GRID_COLOR}},
