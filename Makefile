@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cksum requirements.txt | cut -d' ' -f1)
 PORT ?= 8501
 
-.PHONY: install run test bench data reproduce clean
+.PHONY: install axe run test bench data reproduce clean
 
 $(STAMP): requirements.txt
 	$(PYTHON) -m venv $(VENV)
@@ -16,15 +16,24 @@ $(STAMP): requirements.txt
 
 install: $(STAMP)
 
+# axe-core for the browser tests' accessibility checks (skipped without npm).
+AXE := tests/node/node_modules/axe-core/axe.min.js
+$(AXE): tests/node/package.json tests/node/package-lock.json
+	@if command -v npm >/dev/null 2>&1; then npm ci --no-audit --no-fund --prefix tests/node; \
+	else echo "npm not found: the accessibility test will be skipped"; fi
+
+axe: $(AXE)
+
 run: install
 	$(BIN)/streamlit run app.py --server.port $(PORT) --server.headless true
 
-test: install
+test: install axe
 	$(BIN)/python -m pytest -n 2
 
 bench: install
 	$(BIN)/python benchmarks/solve_times.py
 	$(BIN)/python benchmarks/studies.py
+	$(BIN)/python benchmarks/dashboard.py
 
 reproduce: install
 	$(BIN)/python -m rvpp study reproduce --out out/reproduce
@@ -33,4 +42,4 @@ data: install
 	$(BIN)/python -m rvpp data build
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis out
+	rm -rf $(VENV) .pytest_cache .hypothesis out tests/node/node_modules
