@@ -54,8 +54,9 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
                                                          "upper-percentile prices."),
         "HPA cost [kEUR]": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
         "Operating cost [kEUR]": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
-        "Robust protection [kEUR]": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
-                                          "price (DAM, SR up, SR down), charged in the objective."),
+        "Protection [kEUR]": (protection, "Robust protection: worst-case loss from price deviations in the Γ "
+                                          "worst periods of each price (DAM, SR up, SR down), charged in the "
+                                          "objective."),
     }
     shown = {label: (keur(v), f"{text} Exact: {eur(v)}.")
              for label, (v, text) in money.items()}

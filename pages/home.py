@@ -10,7 +10,7 @@ from rvpp.outputs.plots import bands_figure, trades_figure
 state.through_app("pages/home.py")
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
-HEADLINE = ("Net result [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Robust protection [kEUR]")
+HEADLINE = ("Net result [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection [kEUR]")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
     ("pages/markets.py", "Markets & tariffs", "DAM and reserve price bands, market switches, the HPA tariff"),
@@ -102,7 +102,7 @@ else:
 st.subheader("Load another case")
 shipped, folder_tab, upload_tab, download_tab = st.tabs(["Shipped cases", "Folder", "Upload", "Download"])
 with shipped:
-    choice = st.selectbox("Case", state.known_case_folders(), key="home_shipped")
+    choice = st.radio("Case", state.known_case_folders(), key="home_shipped")
     st.button("Load", key="home_load_shipped", on_click=load_folder, args=(choice,))
 with folder_tab:
     folder = st.text_input("Case folder on this machine (holding case.yaml)", key="home_folder")

@@ -44,7 +44,7 @@ st.markdown(
 @st.fragment
 def budget_demo() -> None:
     left, right = st.columns([1, 3])
-    source = left.selectbox("Source", units, key="learn_source")
+    source = left.pills("Source", units, default=units[0], key="learn_source", required=True)
     src = problem.sources[source]
     gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
                         key="learn_gamma")
@@ -76,7 +76,8 @@ if plan is None or not plan.has_plan:
 @st.fragment
 def protection_demo() -> None:
     left, right = st.columns([1, 3])
-    price = left.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price")
+    price = left.pills("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, default="price_da",
+                       key="learn_price", required=True)
     gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
                         value=problem.sources[price].gamma, key="learn_price_gamma")
     exposure = price_exposures(plan.problem, plan.market)[price]
@@ -108,7 +109,7 @@ if all(state.is_requested(c) for c in variants.values()) or st.button(
         widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
         st.stop()
     if paper.has_plan and chosen.has_plan:
-        source = st.selectbox("Source", units, key="learn_mode_source")
+        source = st.pills("Source", units, default=units[0], key="learn_mode_source", required=True)
         c1, c2 = st.columns(2)
         c1.metric("Profit, paper mode", widgets.eur(paper.objective_eur))
         c2.metric("Profit, planner-chosen", widgets.eur(chosen.objective_eur),

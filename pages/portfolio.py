@@ -77,7 +77,8 @@ if case.csp:
     st.subheader("Power-block conversion curve")
     st.caption("Electrical output = thermal input × efficiency at each breakpoint, linear in between "
                "(paper Figure 5). Inputs must increase and the output must not fall.")
-    name = st.selectbox("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp") \
+    name = st.segmented_control("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp",
+                                default=case.csp[0].name, required=True) \
         if len(case.csp) > 1 else case.csp[0].name
     left, right = st.columns([2, 3])
     with left:

@@ -30,7 +30,7 @@ APP = str(ROOT / "app.py")
 TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
 NET = "Net result [kEUR]"
 KPI_MONEY = (NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "HPA cost [kEUR]", "Operating cost [kEUR]",
-             "Robust protection [kEUR]")
+             "Protection [kEUR]")
 
 
 @pytest.fixture(autouse=True)
@@ -127,7 +127,7 @@ def test_home_balanced_solve_shows_the_library_numbers(paper_solve):
     expected = paper_solve(strategy="balanced")
     assert expected.status == "optimal"
     assert_kpis_match(at, expected, labels=(NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]",
-                                            "Robust protection [kEUR]"))
+                                            "Protection [kEUR]"))
     net = [m for m in at.metric if m.label == NET][0]
     assert net.proto.delta == "net cost"  # the sign in words: the default day costs money
     spec = figures(at)["Day-ahead energy and secondary-reserve bands"]
