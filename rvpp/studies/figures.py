@@ -15,7 +15,7 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from ..outputs.style import (BLUE, DASHES, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_GROUP_LABELS,
+from ..outputs.style import (BLUE, DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, KIND_COLORS, KIND_GROUP_LABELS,
                              MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, run_style)
 from ..solving.results import FLEX_KINDS
 
