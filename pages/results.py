@@ -31,7 +31,7 @@ def save(result) -> None:
         st.session_state["results_save_problem"] = str(err)
         return
     st.session_state["results_save_problem"] = None
-    st.session_state["results_saved"] = (info.id, info.label)
+    st.session_state["results_saved"] = (info.id, info.label, state.case_key(state.run_case()))
 
 
 st.title("Results")
@@ -70,8 +70,8 @@ with st.expander("Save this run to the library", icon=":material/bookmark_add:",
     right.button("Save run", key="results_save", on_click=save, args=(result,), icon=":material/save:")
     if st.session_state.get("results_save_problem"):
         widgets.problems([st.session_state["results_save_problem"]], "Not saved", note="Nothing was changed.")
-    elif st.session_state.get("results_saved"):
-        run_id, label = st.session_state["results_saved"]
+    elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case
+        run_id, label, _ = st.session_state["results_saved"]
         st.success(f"Saved as **{label}**. It stays in the library across reloads and restarts; "
                    f"[open it by link]({library.link(run_id)}) or see it on Saved runs.", icon=":material/check:")
     st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")

@@ -27,6 +27,11 @@ import pytest
 import rvpp
 from rvpp.store import RunLibrary
 
+try:
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+except ImportError:  # the tests skip without Playwright (require_browser)
+    PlaywrightTimeout = TimeoutError
+
 pytestmark = pytest.mark.browser
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -41,6 +46,7 @@ AXE_DIR = ROOT / "tests" / "node"
 GRID_HEADER_PX, GRID_ROW_PX = 35, 35   # Streamlit's data editor: header and row height
 P_MAX_X_PX = 168                       # the middle of the "P max [MW]" column of the wind table
 GRID_READY_MS = 1000                   # a data editor takes a moment to accept input once drawn
+EDIT_TRIES, EDIT_WAIT_MS = 3, 20_000
 QUIET_POLLS, POLL_MS = 3, 1000         # a page counts as drawn after 3 s without Streamlit running
 PAGES = {"Home": "home", "Portfolio": "portfolio", "Markets & tariffs": "markets", "Uncertainty": "uncertainty",
          "Results": "results", "Compare strategies": "compare", "Saved runs": "runs",
@@ -229,9 +235,10 @@ def chart_data(page, title: str) -> list[dict]:
 
 def saved_labels(page) -> list[str]:
     open_page(page, "Saved runs")
+    settle(page)
     table = page.get_by_test_id("stDataFrame").first
-    table.locator("#glide-cell-1-0").wait_for(state="attached")
-    page.wait_for_timeout(GRID_READY_MS)
+    page.wait_for_function("""() => [...document.querySelectorAll('[data-testid=stDataFrame] [id^=glide-cell-1-]')]
+        .some(cell => cell.innerText.trim())""")
     return table.locator("[id^=glide-cell-1-]").all_inner_texts()
 
 
@@ -255,10 +262,15 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
         band = "WF1 (wind): forecast band"
         page.get_by_text(band).first.wait_for()
         before = max(chart_data(page, band)[0]["y"])
-        edit_grid_cell(page, 0, 0, P_MAX_X_PX, "80")
-        page.screenshot(path=ARTIFACTS / "portfolio-typed.png")
-        sidebar = page.get_by_test_id("stSidebar")
-        sidebar.get_by_text("balanced · DAM+SRM+HPA · WF1 80 MW").wait_for()  # the sidebar follows at once
+        edited_label = page.get_by_test_id("stSidebar").get_by_text("balanced · DAM+SRM+HPA · WF1 80 MW")
+        for _ in range(EDIT_TRIES):  # the canvas grid sometimes drops keys typed while it redraws: type again
+            edit_grid_cell(page, 0, 0, P_MAX_X_PX, "80")
+            try:
+                edited_label.wait_for(timeout=EDIT_WAIT_MS)  # the sidebar follows the edit in the same run
+                break
+            except PlaywrightTimeout:
+                page.screenshot(path=ARTIFACTS / "portfolio-typed.png")
+        edited_label.wait_for()
         page.wait_for_function("""([title, before]) => {
             const p = [...document.querySelectorAll('.js-plotly-plot')]
                 .find(p => p.layout && p.layout.title && p.layout.title.text.replace(/<[/]?b>/g, "") === title);
@@ -269,7 +281,7 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
 
         open_page(page, "Results")
         page.get_by_role("button", name="Solve", exact=True).click()
-        page.get_by_text("Saved as").or_(page.get_by_role("button", name="Save run")).first.wait_for()
+        page.get_by_role("button", name="Save run").wait_for()
         with page.expect_download() as download:
             page.get_by_role("button", name="Full plan (Excel)").click()
         units = pd.read_excel(Path(download.value.path()), sheet_name="units")
@@ -280,7 +292,7 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
         dispatch = {t["name"]: t["y"] for t in chart_data(page, "Electrical dispatch by unit (consumption negative)")}
         np.testing.assert_allclose(dispatch["WF1"], expected.units.query("unit == 'WF1'")["p_mw"], atol=1e-6)
         page.get_by_role("button", name="Save run").click()
-        page.get_by_text("Saved as").wait_for()
+        page.get_by_test_id("stAlert").filter(has_text="Saved as").filter(has_text="WF1 80 MW").wait_for()
         labels = ["balanced · DAM+SRM+HPA · WF1 80 MW", "balanced · DAM+SRM+HPA"]
         assert saved_labels(page) == labels
 
