@@ -11,7 +11,7 @@ FOLDERS ?= 1
 
 BENCH ?= full
 
-.PHONY: install run test bench bench-studies data reproduce clean
+.PHONY: install axe run test bench bench-studies data reproduce clean
 
 $(STAMP): requirements.txt
 	$(PYTHON) -m venv $(VENV)
@@ -22,11 +22,19 @@ $(STAMP): requirements.txt
 
 install: $(STAMP)
 
+# axe-core for the browser tests' accessibility checks (skipped without npm).
+AXE := tests/node/node_modules/axe-core/axe.min.js
+$(AXE): tests/node/package.json tests/node/package-lock.json
+	@if command -v npm >/dev/null 2>&1; then npm ci --no-audit --no-fund --prefix tests/node; \
+	else echo "npm not found: the accessibility test will be skipped"; fi
+
+axe: $(AXE)
+
 run: install
 	RVPP_ALLOW_SERVER_FOLDERS=$(FOLDERS) $(BIN)/streamlit run app.py --server.port $(PORT) \
 		--server.address $(ADDRESS) --server.headless true
 
-test: install
+test: install axe
 	$(BIN)/python -m pytest -n 2
 
 # Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes a few minutes.
@@ -34,6 +42,7 @@ bench: install
 	$(BIN)/python benchmarks/run.py --mode $(BENCH)
 	$(BIN)/python benchmarks/history.py
 	$(BIN)/python benchmarks/backtest.py
+	$(BIN)/python benchmarks/dashboard.py
 
 bench-studies: install
 	$(BIN)/python benchmarks/studies.py
@@ -47,4 +56,4 @@ data: install
 	$(BIN)/python -m rvpp data build
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis out
+	rm -rf $(VENV) .pytest_cache .hypothesis out tests/node/node_modules

@@ -1,8 +1,10 @@
 """rvpp dashboard: ``streamlit run app.py`` (or ``make run``).
 
-Sets the shared session state once, then hands over to the page the user chose.
-New pages are one ``st.Page`` line in :func:`main`. The ``__main__`` guard matters: the
-solver worker processes import this file and must not run the app.
+Sets the shared session state once, then hands over to the page the user chose; the
+sidebar's summary of the current case is drawn again after the page ran, so it shows the
+case with the page's edits. New pages are one ``st.Page`` line in :func:`main`. The
+``__main__`` guard matters: processes started by the dashboard may import this file and
+must not run the app.
 """
 
 import streamlit as st
@@ -14,7 +16,7 @@ def main() -> None:
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
                        layout="wide")
     state.init()
-    solving.worker_pool()
+    solving.solver()
     pages = {
         "Plan": [
             st.Page("pages/home.py", title="Home", icon=":material/home:", default=True),
@@ -25,6 +27,7 @@ def main() -> None:
         ],
         "Analyse": [
             st.Page("pages/compare.py", title="Compare strategies", icon=":material/compare_arrows:"),
+            st.Page("pages/runs.py", title="Saved runs", icon=":material/bookmarks:"),
         ],
         "Studies": [
             st.Page("pages/sensitivity.py", title="Sensitivity to Γ", icon=":material/tune:"),
@@ -37,8 +40,13 @@ def main() -> None:
     }
     page = st.navigation(pages)
     state.resume_deep_link()
-    widgets.sidebar(state.case())
+    widgets.open_linked_run(page)
+    summary = st.sidebar.empty()
+    with summary.container():  # stays if the page stops early (st.stop() ends the run)
+        widgets.sidebar(state.case())
     page.run()
+    with summary.container():  # drawn again after the page: the case as the page's edits left it
+        widgets.sidebar(state.case())
 
 
 if __name__ == "__main__":

@@ -1,71 +1,125 @@
-"""Dashboard timings, printed as JSON.
+"""Dashboard timings, printed as JSON and written to ``benchmarks/results/dashboard.json``.
 
-* ``first_load_*_s``: from opening Home until it can be used (its case table and its
-  Solve button drawn), in a new browser session; ``cold`` is the first session of a fresh server (it pays the Python imports),
-  ``warm`` a later one.
-* ``solve_to_charts_*``: from clicking Solve on Results until all five charts are drawn;
+* ``solve_s_by_case``: wall time of ``rvpp.solve`` on the default case per period length
+  and strategy (in this process, after a warm-up); Home reads it to say how long a
+  solve of the current case takes before this server has solved it.
+* ``draw_*``: after the solve returns, what the Results page still does: build every
+  figure of the plan (``first``; ``cached``: the figures are kept per plan) and turn
+  them into the JSON the browser receives.
+* ``first_chart_*_s``: from opening Home in a new browser session until its first chart
+  is drawn; ``cold`` is the first session of a fresh server, ``warm`` a later one.
+* ``solve_to_charts_*``: from clicking Solve on Results until all six charts are drawn;
   ``solve_*_s`` is the solve's own time as the page reports it (build + HiGHS + tables)
-  and ``overhead_*_s`` the difference. ``first``: the default balanced case a few
-  seconds after the first page load (the worker processes may still be starting);
-  ``warm``: the pessimistic strategy afterwards.
-* ``revisit_s``: back to Results after another page (the solve comes from the cache).
-* ``compare_*``: the four strategies solved serially in one process, and through a
-  pool of two worker processes (cold: the pool starts with the batch; warm: it was
-  already running); ``compare_page_s`` is the Compare page's button to its chart
-  (the pessimistic and balanced plans are cached by then, two are solved).
+  and ``overhead_*_s`` the difference (process start, transfer, drawing).
+* ``revisit_s``: back to Results after another page (the plan is kept).
+* ``library_*``: a run library of ``LIBRARY_RUNS`` saved runs: listing it in this
+  process, and opening the Saved runs page in the browser until its table is drawn.
 * ``load_average``: the host's one-minute load average before and after (the numbers
   are only comparable on a quiet machine).
 
-Needs Chromium at ``/usr/bin/chromium`` for the browser timings:
-``python benchmarks/dashboard.py``.
+Every browser timing is measured ``REPEAT`` times on the same server; the JSON keeps
+each measurement and the median. Needs Chromium at ``/usr/bin/chromium`` for the
+browser timings: ``python benchmarks/dashboard.py``.
 """
 
 from __future__ import annotations
 
 import json
-import multiprocessing
 import os
 import re
 import socket
+import statistics
 import subprocess
 import sys
+import tempfile
 import time
 import urllib.request
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import rvpp  # noqa: E402
-from rvpp.solving.batch import solve_many  # noqa: E402
 from rvpp.data.case import STRATEGIES  # noqa: E402
 
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-WORKERS = 2
+RESULTS = ROOT / "benchmarks" / "results" / "dashboard.json"
 WAIT_MS = 180_000
-CHARTS_ON_RESULTS = 5
+CHARTS_ON_RESULTS = 6
+LIBRARY_RUNS = 200
+REPEAT = 3
 FIRST_CLICK_DELAY_MS = 3000  # a user reading Home before the first click
+PERIODS = {60: 1.0, 15: 0.25}
 
 
-def compare_timings() -> dict:
-    case = rvpp.load_case(ROOT / "data" / "cases" / "paper")
-    cases = [rvpp.with_options(case, strategy=s) for s in STRATEGIES]
-    rvpp.solve(cases[0])  # imports and first-solve effects out of the way
+def median(values: list[float]) -> float:
+    return round(statistics.median(values), 3)
+
+
+def solve_times(case: rvpp.Case) -> dict:
+    """Wall time of one solve per period length and strategy [s] (median of two)."""
+    rvpp.solve(case)  # imports and first-solve effects out of the way
+    measured = {}
+    for minutes, dt_h in PERIODS.items():
+        for strategy in STRATEGIES:
+            variant = rvpp.with_options(case, strategy=strategy, dt_h=dt_h)
+            runs = []
+            for _ in range(2):
+                started = time.perf_counter()
+                rvpp.solve(variant)
+                runs.append(time.perf_counter() - started)
+            measured[f"{case.name}/{minutes} min/{strategy}"] = median(runs)
+            print(f"solve {minutes} min {strategy}: {measured[f'{case.name}/{minutes} min/{strategy}']} s",
+                  file=sys.stderr, flush=True)
+    return measured
+
+
+def draw_times(case: rvpp.Case) -> dict:
+    """Building and serializing the Results page's figures after the solve returned [s]."""
+    import plotly.io as pio
+
+    from rvpp.outputs import plots
+    from rvpp.outputs.economics import waterfall_figure
+
+    result = rvpp.solve(case)
+
+    def build() -> list:
+        figures = [waterfall_figure({"balanced": result}), plots.trades_figure(result), plots.heat_figure(result),
+                   plots.dispatch_figure(result), plots.reserve_share_figure(result)]
+        return figures + [plots.storage_figure(result, c.name) for c in case.csp]
+
+    builds, serial = [], []
+    for _ in range(REPEAT):
+        started = time.perf_counter()
+        figures = build()
+        builds.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        for figure in figures:
+            pio.to_json(figure, validate=False)
+        serial.append(time.perf_counter() - started)
+    return {"draw_build_figures_s": median(builds), "draw_serialize_s": median(serial),
+            "draw_first_s": median([b + s for b, s in zip(builds, serial)]),
+            "draw_cached_s": median(serial)}
+
+
+def fill_library(folder: Path, case: rvpp.Case) -> dict:
+    """A run library of LIBRARY_RUNS saved runs; the time to list it in this process."""
+    from rvpp.store import RunLibrary
+
+    result = rvpp.solve(case)
+    library = RunLibrary(f"sqlite:///{folder / 'rvpp.sqlite3'}")
     started = time.perf_counter()
-    solve_many(cases)
-    serial = time.perf_counter() - started
-    with ProcessPoolExecutor(WORKERS, mp_context=multiprocessing.get_context("spawn")) as pool:
+    for i in range(LIBRARY_RUNS):
+        library.save(f"balanced · DAM+SRM+HPA · variant {i}", case, result, settings={"csp": True})
+    save_s = (time.perf_counter() - started) / LIBRARY_RUNS
+    listed = []
+    for _ in range(REPEAT):
         started = time.perf_counter()
-        solve_many(cases, executor=pool)
-        cold = time.perf_counter() - started
-        started = time.perf_counter()
-        solve_many(cases, executor=pool)
-        warm = time.perf_counter() - started
-    return {"compare_serial_s": round(serial, 2), "compare_pool_cold_s": round(cold, 2),
-            "compare_pool_warm_s": round(warm, 2)}
+        assert len(library.list()) == LIBRARY_RUNS
+        listed.append(time.perf_counter() - started)
+    return {"library_save_each_s": round(save_s, 4), "library_list_s": median(listed)}
 
 
 def free_port() -> int:
@@ -81,19 +135,25 @@ def solve_to_charts(page, label: str) -> dict:
     page.get_by_test_id("stPlotlyChart").nth(CHARTS_ON_RESULTS - 1).locator(".main-svg").first.wait_for()
     total = time.perf_counter() - started
     card = page.get_by_test_id("stMetric").filter(has_text="Solve time")
-    solve_s = float(re.search(r"(\d+\.\d+)", card.inner_text()).group(1))
+    solve_s = float(re.findall(r"\d+\.\d+", card.inner_text())[-1])
     return {f"solve_to_charts_{label}_s": round(total, 2), f"solve_{label}_s": solve_s,
             f"overhead_{label}_s": round(total - solve_s, 2)}
 
 
-def browser_timings() -> dict:
+def nav(page, name: str) -> None:
+    page.get_by_test_id("stSidebarNav").get_by_role("link", name=name, exact=True).click()
+
+
+def browser_timings(data_dir: Path) -> dict:
     from playwright.sync_api import sync_playwright
 
     port = free_port()
     url = f"http://127.0.0.1:{port}"
+    env = {**os.environ, "RVPP_DATA_DIR": str(data_dir)}
+    env.pop("RVPP_STORE_URL", None)
     server = subprocess.Popen([sys.executable, "-m", "streamlit", "run", "app.py", "--server.headless", "true",
                                "--server.address", "127.0.0.1", "--server.port", str(port)],
-                              cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                              cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     try:
         while True:
             try:
@@ -101,39 +161,51 @@ def browser_timings() -> dict:
                 break
             except OSError:
                 time.sleep(0.1)
-        timings = {}
+        timings: dict = {}
+        first_chart, library_open, revisit = [], [], []
         with sync_playwright() as playwright:
             browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-            for label in ("cold", "warm"):
-                page = browser.new_context(viewport={"width": 1400, "height": 1000}).new_page()
+            for i in range(REPEAT + 1):
+                page = browser.new_context(viewport={"width": 1280, "height": 2400}).new_page()
                 page.set_default_timeout(WAIT_MS)
                 started = time.perf_counter()
                 page.goto(url)
-                page.get_by_role("button", name="Solve the balanced strategy").wait_for()
-                page.get_by_role("table").first.wait_for()
-                timings[f"first_load_{label}_s"] = round(time.perf_counter() - started, 2)
-            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()
+                page.get_by_test_id("stPlotlyChart").first.locator(".main-svg").first.wait_for()
+                first_chart.append(time.perf_counter() - started)
+                if i < REPEAT:
+                    page.close()
+            timings["first_chart_cold_s"] = round(first_chart[0], 2)
+            timings["first_chart_warm_s"] = first_chart[1:]
+            timings["first_chart_warm_median_s"] = median(first_chart[1:])
+            nav(page, "Results")
             page.get_by_role("button", name="Solve", exact=True).wait_for()
             page.wait_for_timeout(FIRST_CLICK_DELAY_MS)
             timings.update(solve_to_charts(page, "first"))
-            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Uncertainty").click()
+            nav(page, "Uncertainty")
             page.get_by_text("Pessimistic", exact=True).first.click()
-            page.get_by_test_id("stSidebar").get_by_text("pessimistic, DAM+SRM+HPA").wait_for()
-            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()
+            page.get_by_test_id("stSidebar").get_by_text("pessimistic · DAM+SRM+HPA").wait_for()
+            nav(page, "Results")
             page.get_by_role("button", name="Solve", exact=True).wait_for()
             timings.update(solve_to_charts(page, "warm"))
-            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Markets & tariffs").click()
-            page.get_by_role("heading", name="Markets & tariffs").wait_for()
-            started = time.perf_counter()
-            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()
-            page.get_by_test_id("stPlotlyChart").nth(CHARTS_ON_RESULTS - 1).locator(".main-svg").first.wait_for()
-            timings["revisit_s"] = round(time.perf_counter() - started, 2)
-            page.get_by_test_id("stSidebarNav").get_by_role("link", name="Compare strategies").click()
-            started = time.perf_counter()
-            page.get_by_role("button", name="Solve 4 plans").click()
-            page.get_by_role("heading", name="Trades per strategy").wait_for()
-            page.get_by_test_id("stPlotlyChart").first.locator(".main-svg").first.wait_for()
-            timings["compare_page_s"] = round(time.perf_counter() - started, 2)
+            for _ in range(REPEAT):
+                nav(page, "Markets & tariffs")
+                page.get_by_role("heading", name="Markets & tariffs").wait_for()
+                page.wait_for_timeout(1000)
+                started = time.perf_counter()
+                nav(page, "Results")
+                page.get_by_test_id("stPlotlyChart").nth(CHARTS_ON_RESULTS - 1).locator(".main-svg").first.wait_for()
+                revisit.append(time.perf_counter() - started)
+                nav(page, "Home")
+                page.locator("h1").first.wait_for()
+                page.wait_for_timeout(1000)
+                started = time.perf_counter()
+                nav(page, "Saved runs")
+                page.get_by_test_id("stDataFrame").first.locator("#glide-cell-1-0").wait_for(state="attached")
+                library_open.append(time.perf_counter() - started)
+            timings["revisit_s"] = [round(v, 2) for v in revisit]
+            timings["revisit_median_s"] = median(revisit)
+            timings[f"library_{LIBRARY_RUNS}_open_s"] = [round(v, 2) for v in library_open]
+            timings[f"library_{LIBRARY_RUNS}_open_median_s"] = median(library_open)
             browser.close()
         return timings
     finally:
@@ -142,13 +214,21 @@ def browser_timings() -> dict:
 
 
 def main() -> None:
-    report = {"load_average_before": os.getloadavg()[0]}
-    report.update(compare_timings())
-    if CHROMIUM.exists():
-        report.update(browser_timings())
-    else:
-        report["browser"] = f"skipped: no Chromium at {CHROMIUM}"
+    case = rvpp.load_case(ROOT / "data" / "cases" / "paper")
+    report = {"case": case.name, "load_average_before": os.getloadavg()[0]}
+    report["solve_s_by_case"] = solve_times(case)
+    report.update(draw_times(case))
+    with tempfile.TemporaryDirectory(prefix="rvpp-bench-") as folder:
+        report.update(fill_library(Path(folder), case))
+        if CHROMIUM.exists():
+            report.update(browser_timings(Path(folder)))
+        else:
+            report["browser"] = f"skipped: no Chromium at {CHROMIUM}"
     report["load_average_after"] = os.getloadavg()[0]
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    partial = RESULTS.with_suffix(".json.tmp")
+    partial.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    partial.replace(RESULTS)
     print(json.dumps(report, indent=2))
 
 

@@ -1,128 +1,295 @@
-"""Solves for the dashboard: cached by their full input, run in worker processes.
+"""Solves for the dashboard: one solver process per solve, kept by their full input, cancellable.
 
-A solve is a pure function of its frozen :class:`~rvpp.data.case.Case`, so results are cached
-with ``st.cache_data`` keyed by the case's content (:func:`dashboard.state.case_key`):
-going back to a page is instant and any changed input is a new key.
+A solve is a pure function of its frozen :class:`~rvpp.data.case.Case`, so its result is
+kept by the case's content (:func:`dashboard.state.case_key`) in a server-wide table
+shared by every session: going back to a page is instant and any changed input is a new
+key. Saved runs reopened from the library go into the same table, so they show without
+a solve.
 
-Solves run in a small pool of worker processes shared by every session. Two solves in
-threads of one process are not safe (the solver interface redirects the process's
-output streams), and a process keeps the server responsive: a session waiting for its
-solve only polls, so other sessions never freeze, and pressing Stop (or changing an
-input) ends the wait at once while the worker finishes and caches the result.
+Each solve runs in a **process of its own**, forked from a fork server that imported
+Pyomo and HiGHS once (``multiprocessing``'s ``forkserver`` start method with a preload),
+so starting one takes milliseconds. Two reasons for processes:
+
+* two solves in threads of one process are not safe (the solver interface redirects the
+  process's output streams), and Streamlit runs every session in a thread of one
+  process;
+* a process can be stopped: **Cancel** kills the solve's process at once, wherever HiGHS
+  is. (HiGHS's interrupt callback would need the solver module to poll a flag; killing
+  a process needs nothing from it and frees the core immediately.)
+
+At most :data:`WORKERS` solves run at once (the others wait for a free slot, shown on
+the page). A page waiting for its solve only polls (every :data:`POLL_S`) and draws
+the elapsed time, the solver's stage and an estimate from the last solve of the same
+case, or of a case of the same shape; leaving the page or changing an input only stops
+waiting, and the solve finishes and is kept for when the page is shown again.
 """
 
 from __future__ import annotations
 
-import importlib
+import json
 import multiprocessing
 import os
 import threading
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import streamlit as st
-from streamlit.runtime.scriptrunner import add_script_run_ctx, get_script_run_ctx
 
 import rvpp
-from rvpp import Case, CaseError, ModelError, Problem, Result, RvppError
+from rvpp import Case, CaseError, Problem, Result
 
-from . import widgets
-from .state import case_key
+from . import widgets, worker
+from .state import REQUESTED, ROOT, case_key
 
-MAX_WORKERS = 2        # solver processes shared by all sessions; more would compete for a small server's cores
+MAX_WORKERS = 2        # solves at once; more would compete for a small server's cores
 WORKERS = max(1, min(MAX_WORKERS, os.cpu_count() or 1))
-CACHE_ENTRIES = 64     # solved cases kept in memory (about 1.3 MB each)
+KEPT = 64              # solved cases kept in memory (about 1.3 MB each)
 POLL_S = 0.1           # how often a waiting page refreshes its progress [s]
+JOIN_S = 5.0           # how long to wait for a finished solver process to exit [s]
+PRELOAD = ["dashboard.worker", "rvpp.solving.plan"]
+BENCHMARKS = ROOT / "benchmarks" / "results"
+CONTEXT = multiprocessing.get_context("forkserver")
+CANCELLED = "solve_cancelled"  # session key: the last solve of this session was cancelled
+
+
+class SolveCancelled(rvpp.RvppError):
+    """The solve was cancelled before it ended."""
+
+
+@dataclass(eq=False)
+class Job:
+    """One solve in its own process: its stage, its outcome and its cancel switch."""
+
+    key: str
+    case: Case
+    started: float = field(default_factory=time.perf_counter)
+    stage: str = "waiting for a free solver"
+    finished: float | None = None
+    result: Result | None = None
+    problems: list[str] | None = None
+    cancelled: bool = False
+    process: multiprocessing.process.BaseProcess | None = None
+    done: threading.Event = field(default_factory=threading.Event)
+
+    @property
+    def elapsed_s(self) -> float:
+        return (self.finished or time.perf_counter()) - self.started
+
+    def run(self, solver: "Solver") -> None:
+        """In a thread of the server: wait for a slot, solve in a new process, keep the outcome."""
+        with solver.slots:
+            if not self.cancelled:
+                self._solve()
+        solver.finish(self)
+
+    def _solve(self) -> None:
+        receive, send = CONTEXT.Pipe(duplex=False)
+        self.process = CONTEXT.Process(target=worker.solve_into, args=(send, self.case), daemon=True,
+                                       name="rvpp-solve")
+        self.stage = "starting the solver"
+        self.process.start()
+        send.close()
+        try:
+            while True:
+                kind, payload = receive.recv()
+                if kind == "stage":
+                    self.stage = payload
+                    continue
+                if kind == "result":
+                    self.result = payload
+                else:
+                    self.problems = payload if kind == "refused" else [f"the solver failed: {payload}"]
+                break
+        except EOFError:  # the process ended without an answer: killed by Cancel, or out of memory
+            if not self.cancelled:
+                self.problems = ["the solver process stopped unexpectedly (out of memory?); solve again"]
+        finally:
+            receive.close()
+            self.process.join(JOIN_S)
+
+
+class Solver:
+    """The server's solves: running jobs, kept results and measured times."""
+
+    def __init__(self, workers: int):
+        self.slots = threading.BoundedSemaphore(workers)
+        self.lock = threading.Lock()
+        self.jobs: dict[str, Job] = {}
+        self.results: OrderedDict[str, Result] = OrderedDict()
+        self.seconds: dict[str, float] = {}        # case key -> wall time of its last solve [s]
+        self.shape_seconds: dict[tuple, float] = {}  # case shape -> wall time of its last solve [s]
+
+    def result(self, key: str) -> Result | None:
+        with self.lock:
+            if key in self.results:
+                self.results.move_to_end(key)
+            return self.results.get(key)
+
+    def remember(self, result: Result) -> None:
+        """Keep a result (e.g. of a reopened saved run) as if it had been solved here."""
+        with self.lock:
+            self._keep(case_key(result.case), result)
+
+    def start(self, case: Case) -> Job:
+        """The job solving ``case``: the one under way, or a new one."""
+        key = case_key(case)
+        with self.lock:
+            job = self.jobs.get(key)
+            if job is not None and not job.cancelled:
+                return job
+            job = self.jobs[key] = Job(key, case)
+        threading.Thread(target=job.run, args=(self,), name="rvpp-solve", daemon=True).start()
+        return job
+
+    def cancel(self, keys: Sequence[str]) -> None:
+        """Stop the solves of ``keys``: a waiting one never starts, a running one is killed."""
+        with self.lock:
+            jobs = [self.jobs[k] for k in keys if k in self.jobs]
+        for job in jobs:
+            job.cancelled = True
+            if job.process is not None and job.process.is_alive():
+                job.process.kill()
+
+    def finish(self, job: Job) -> None:
+        job.finished = time.perf_counter()
+        with self.lock:
+            if self.jobs.get(job.key) is job:
+                del self.jobs[job.key]
+            if job.result is not None:
+                self._keep(job.key, job.result)
+                self.seconds[job.key] = job.elapsed_s
+                self.shape_seconds[shape(job.case)] = job.elapsed_s
+        job.done.set()
+
+    def expected_s(self, case: Case) -> tuple[float, str] | None:
+        """How long a solve of ``case`` should take and where that number comes from."""
+        key = case_key(case)
+        if key in self.seconds:
+            return self.seconds[key], "the last solve of this case"
+        if shape(case) in self.shape_seconds:
+            return self.shape_seconds[shape(case)], "the last solve of a case like this one on this server"
+        return benchmark_s(case)
+
+    def _keep(self, key: str, result: Result) -> None:
+        self.results[key] = result
+        self.results.move_to_end(key)
+        while len(self.results) > KEPT:
+            self.results.popitem(last=False)
+
+
+def shape(case: Case) -> tuple:
+    """What a solve's time depends on most: periods, strategy, budget mode, units, markets."""
+    return (case.dt_h, case.budgets.strategy, case.budgets.mode, len(case.unit_names()), case.markets.label)
+
+
+def benchmark_s(case: Case) -> tuple[float, str] | None:
+    """The solve time of ``case``'s shape measured by ``benchmarks/dashboard.py``, if recorded."""
+    wanted = f"{case.name}/{case.dt_h * 60:g} min/{case.budgets.strategy}"
+    for path in sorted(BENCHMARKS.glob("*.json")):
+        try:
+            measured = json.loads(path.read_text(encoding="utf-8")).get("solve_s_by_case", {})
+        except (OSError, ValueError, AttributeError):
+            continue
+        if wanted in measured:
+            return float(measured[wanted]), f"benchmarks/results/{path.name}"
+    return None
 
 
 @st.cache_resource(show_spinner=False)
-def worker_pool() -> ProcessPoolExecutor:
-    """The shared solver processes, started once and warmed up (imports done)."""
-    pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=multiprocessing.get_context("spawn"))
-    for _ in range(WORKERS):
-        pool.submit(_import_solver)
-    return pool
+def solver() -> Solver:
+    """The server's solver, its fork server started in the background (imports done there)."""
+    CONTEXT.set_forkserver_preload(PRELOAD)
+    threading.Thread(target=_start_fork_server, name="rvpp-fork-server", daemon=True).start()
+    return Solver(WORKERS)
 
 
-def _import_solver() -> None:
-    """Runs in a worker: import Pyomo and the model once (returns nothing to send back)."""
-    importlib.import_module("rvpp.solving.plan")
+def _start_fork_server() -> None:
+    from multiprocessing import forkserver
 
-
-@st.cache_data(max_entries=CACHE_ENTRIES, show_spinner=False, hash_funcs={Case: case_key})
-def solve_cached(case: Case) -> Result:
-    """``rvpp.solve(case)`` in a worker process, cached by the case's content."""
-    try:
-        return worker_pool().submit(rvpp.solve, case).result()
-    except BrokenProcessPool:
-        worker_pool.clear()
-        raise ModelError("the solver process stopped unexpectedly (out of memory?); solve again to restart it") \
-            from None
+    forkserver.ensure_running()
 
 
 def solve(case: Case, label: str) -> Result | None:
-    """Solve ``case`` showing a status line with the elapsed time.
+    """The plan of ``case``, solving it if needed while the page shows progress and Cancel.
 
-    Returns the result, or ``None`` when the case cannot be solved at all (e.g. its
-    history does not cover the delivery date); the reason is shown in place.
+    Returns ``None`` when the case cannot be solved at all (the reason is shown in
+    place) or when the solve was cancelled.
     """
-    started = time.perf_counter()
-    with st.status(f"{label}…", expanded=False) as status:
-        future = _in_background(solve_cached, case)
-        while not future.done():
-            status.update(label=f"{label}… {time.perf_counter() - started:.1f} s")
-            wait([future], timeout=POLL_S)
-        try:
-            result = future.result()
-        except RvppError as err:
-            status.update(label=f"{label}: the case cannot be solved", state="error")
-            widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
-            return None
-        state = "complete" if result.has_plan else "error"
-        status.update(label=f"{label}: {result.status} in {time.perf_counter() - started:.1f} s", state=state)
-    return result
+    results = solve_all([case], label)
+    return results[0] if results else None
 
 
-def solve_all(cases: Sequence[Case], label: str) -> list[Result]:
-    """Solve several cases side by side in the worker processes, with a progress bar.
+def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
+    """The plans of several cases, solved side by side, with one progress bar and Cancel.
 
-    Each case is cached on its own, so a plan solved here is instant on the Results
-    page and the other way round. Raises :class:`~rvpp.errors.RvppError` if a case
-    cannot be solved at all.
+    Each case is kept on its own, so a plan solved here is instant on another page and
+    the other way round. Returns ``None`` (with the reason shown) when a case cannot be
+    solved at all or the solves were cancelled.
     """
-    started = time.perf_counter()
-    bar = st.progress(0.0, text=f"{label}: 0 of {len(cases)} solved")
-    futures = [_in_background(solve_cached, case) for case in cases]
-    pending = set(futures)
-    while pending:
-        _, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
-        done = len(cases) - len(pending)
-        bar.progress(done / len(cases), text=f"{label}: {done} of {len(cases)} solved, "
-                                             f"{time.perf_counter() - started:.1f} s")
-    bar.empty()
-    return [f.result() for f in futures]
+    server = solver()
+    found = {case_key(c): server.result(case_key(c)) for c in cases}
+    jobs = [server.start(c) for c in cases if found[case_key(c)] is None]
+    if jobs:
+        _wait(jobs, label, len(cases))
+        for job in jobs:
+            if job.cancelled:
+                st.info(f"{label}: cancelled after {job.elapsed_s:.1f} s. Press the solve button to start again.",
+                        icon=":material/cancel:")
+                return None
+            if job.problems:
+                widgets.problems(job.problems, "Cannot solve", note="Fix the case on the other pages and solve again.")
+                return None
+            found[job.key] = job.result
+        if len(cases) == 1:
+            result = jobs[0].result
+            state = "complete" if result.has_plan else "error"
+            st.status(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", state=state, expanded=False)
+    return [found[case_key(c)] for c in cases]
 
 
-def _in_background(fn: Callable, *args) -> Future:
-    """Run ``fn(*args)`` in a thread of this session, so the page can keep drawing progress."""
-    future: Future = Future()
+def _wait(jobs: list[Job], label: str, total: int) -> None:
+    """Poll the jobs, drawing elapsed time, stage and an estimate, with a Cancel button."""
+    slot = st.empty()
+    keys = [job.key for job in jobs]
+    with slot.container():
+        bar_column, cancel_column = st.columns([6, 1], vertical_alignment="bottom")
+        bar = bar_column.progress(0.0, text=f"{label}…")
+        cancel_column.button("Cancel", key=f"cancel_{keys[0][:16]}", icon=":material/stop_circle:",
+                             on_click=_cancel, args=(keys,),
+                             help="Stops the solve at once (for every tab waiting on the same input).")
+    expected = solver().expected_s(jobs[0].case) if len(jobs) == 1 else None
+    while True:
+        running = [job for job in jobs if not job.done.is_set()]
+        elapsed = max(job.elapsed_s for job in jobs)
+        done = total - len(running)
+        if expected:
+            fraction = min(0.95, elapsed / max(expected[0], 1e-3))
+            hint = f" · about {expected[0]:.0f} s expected ({expected[1]})" if expected[0] >= 1 else ""
+        else:
+            fraction = done / total if total > 1 else elapsed / (elapsed + 5.0)
+            hint = ""
+        stage = running[0].stage if len(jobs) == 1 and running else f"{done} of {total} solved"
+        bar.progress(fraction if running else 1.0, text=f"{label}… {elapsed:.1f} s · {stage}{hint}")
+        if not running:
+            break
+        running[0].done.wait(POLL_S)
+    slot.empty()
 
-    def run() -> None:
-        if future.set_running_or_notify_cancel():
-            try:
-                future.set_result(fn(*args))
-            except BaseException as exc:  # handed to the page, which shows it
-                future.set_exception(exc)
 
-    thread = threading.Thread(target=run, name="rvpp-solve", daemon=True)
-    add_script_run_ctx(thread, get_script_run_ctx())
-    thread.start()
-    return future
+def _cancel(keys: list[str]) -> None:
+    solver().cancel(keys)
+    st.session_state[REQUESTED].difference_update(keys)
+    st.session_state[CANCELLED] = True
 
 
-@st.cache_data(max_entries=CACHE_ENTRIES, show_spinner=False, hash_funcs={Case: case_key})
+def cancelled() -> bool:
+    """Whether this session's last solve was cancelled (asked once: the answer is then forgotten)."""
+    return bool(st.session_state.pop(CANCELLED, False))
+
+
+@st.cache_data(max_entries=KEPT, show_spinner=False, hash_funcs={Case: case_key})
 def prepare_cached(case: Case) -> Problem:
     """``rvpp.prepare(case)``: the delivery day's periods, forecast bands and budgets."""
     return rvpp.prepare(case)

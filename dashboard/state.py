@@ -3,7 +3,8 @@
 ``app.py`` calls :func:`init` once per run; pages read and change the shared state only
 through the functions here. Page-local widget keys are prefixed with the page name
 (``portfolio_``, ``markets_``, ...). Each browser tab is its own session, so two tabs
-never share or clobber each other's case or saved runs.
+never share or clobber each other's case. Saved runs live in the store
+(:mod:`dashboard.library`), shared by every session.
 """
 
 from __future__ import annotations
@@ -16,13 +17,15 @@ from pathlib import Path
 import streamlit as st
 
 import rvpp
-from rvpp import Case, Result
+from rvpp import Case, CaseError
+from rvpp.data.case import parse_case
+from rvpp.data.edits import run_label
 from rvpp.errors import CasePathError
+from rvpp.store import SavedRun
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_CASE = ROOT / "data" / "cases" / "paper"
 CASES_DIR = ROOT / "data" / "cases"
-MAX_SAVED_RUNS = 12
 MAX_CACHED_FOLDERS = 16
 SERVER_FOLDERS = "RVPP_ALLOW_SERVER_FOLDERS"  # "1": the Home page may load any case folder on the server
 
@@ -31,7 +34,7 @@ ORIGIN = "case_origin"     # the case as loaded: what "reset" and the tariff pre
 SOURCE = "case_source"     # where the case came from, for display
 CSP_ON = "csp_on"          # False: solve without the CSP plants (paper Table 11)
 REQUESTED = "requested"    # keys of the run cases this session asked to solve (done or under way)
-SAVED_RUNS = "saved_runs"  # label -> Result, kept for side-by-side comparison
+OPENED_RUN = "opened_run"  # id of the saved run this session opened from a link (?run=ID)
 DEEP_LINK = "deep_link"    # the page asked for before app.py had set the session up
 APP = "app.py"
 
@@ -52,7 +55,6 @@ def init() -> None:
     """Set every shared key once per session (the default case on first load)."""
     if CASE not in st.session_state:
         load(_load(str(DEFAULT_CASE)), source=f"data/cases/{DEFAULT_CASE.name}")
-    st.session_state.setdefault(SAVED_RUNS, {})
 
 
 def through_app(page: str) -> None:
@@ -164,21 +166,24 @@ def is_requested(case: Case) -> bool:
     return case_key(case) in st.session_state[REQUESTED]
 
 
-def saved_runs() -> dict[str, Result]:
-    return st.session_state[SAVED_RUNS]
+def default_label(edited: Case | None = None) -> str:
+    """The label a run of the current case (or of ``edited``, a variant of it) is saved under
+    unless the user types another: strategy, market set and what was edited since the
+    case was loaded."""
+    return run_label(origin(), edited or case(), csp_on())
 
 
-def save_run(label: str, result: Result) -> None:
-    """Keep ``result`` under ``label`` (the oldest run goes when the list is full)."""
-    runs = saved_runs()
-    runs.pop(label, None)
-    runs[label] = result
-    while len(runs) > MAX_SAVED_RUNS:
-        runs.pop(next(iter(runs)))
-
-
-def drop_run(label: str) -> None:
-    saved_runs().pop(label, None)
+def open_saved(saved: SavedRun) -> None:
+    """Make a saved run's case the current case, with its run switches and the case it was
+    edited from (so its label's edits stay described)."""
+    load(saved.case, source=f'saved run "{saved.info.label}"')
+    try:
+        st.session_state[ORIGIN] = parse_case(saved.settings["origin"], saved.case.history)
+    except (KeyError, TypeError, CaseError):
+        pass  # saved without its origin: edits are counted from the run's own case
+    set_csp_on(saved.settings.get("csp", True) is not False and bool(saved.case.csp))
+    if saved.result is not None:
+        mark_requested(run_case())
 
 
 def known_case_folders() -> list[str]:

@@ -10,17 +10,19 @@ import pandas as pd
 import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
-from rvpp.data.variants import describe
+from rvpp.data.edits import plain_message
 from rvpp.outputs.bundle import case_zip_bytes
+from rvpp.outputs.economics import economics, explanation
 from rvpp.outputs.export import plan_workbook_bytes
 from rvpp.solving.outcome import Outcome
 from rvpp.outputs.workbook import case_workbook_bytes
 
-from . import state
+from . import library, state
 
 KIND_TITLES = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP plants", "ed": "Electrical demands",
                "td": "Thermal demands"}
-KPI_COLUMNS = 5
+KPI_COLUMNS = 4
+NET = "Net result [kEUR]"
 PERCENT = 100.0
 KILO = 1000.0
 UNIT_FORMATS = {"[EUR]": "%.0f", "[kEUR]": "%.1f", "[%]": "%.1f", "[s]": "%.2f", "[MWh]": "%.1f", "[h]": "%.2f",
@@ -38,20 +40,23 @@ def keur(value_eur: float | None) -> str:
 
 
 def kpis(result: Result) -> dict[str, tuple[str, str]]:
-    """Headline numbers of a plan: label → (shown value, explanation with the exact value)."""
+    """Headline numbers of a plan: label → (shown value, explanation with the exact value).
+
+    One card carries the objective, with its sign in words; the others are its parts.
+    """
     parts = result.parts
     protection = sum(result.protection_eur.values()) if result.protection_eur else None
     money = {
-        "Profit": (result.objective_eur, "Objective: revenues minus costs minus the price protection."),
-        "Cost": (None if result.objective_eur is None else -result.objective_eur,
-                 "The paper's cost: −profit (paper Tables 10-12)."),
-        "DAM revenue": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
-        "Reserve revenue": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
+        NET: (result.objective_eur, "The objective: revenues minus costs minus the robust protection. Negative is a "
+                                    "net cost (the paper's cost), positive a net profit."),
+        "DAM revenue [kEUR]": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
+        "Reserve revenue [kEUR]": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
                                                          "upper-percentile prices."),
-        "HPA cost": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
-        "Operating cost": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
-        "Protection cost": (protection, "Worst-case loss from price deviations in the Γ worst periods of each "
-                                        "price (DAM, SR up, SR down)."),
+        "HPA cost [kEUR]": (parts.get("cost_hpa_eur"), "Heat bought through the heat purchase agreement."),
+        "Operating cost [kEUR]": (parts.get("cost_opex_eur"), "O&M of wind, PV and CSP output."),
+        "Protection [kEUR]": (protection, "Robust protection: worst-case loss from price deviations in the Γ "
+                                          "worst periods of each price (DAM, SR up, SR down), charged in the "
+                                          "objective."),
     }
     shown = {label: (keur(v), f"{text} Exact: {eur(v)}.")
              for label, (v, text) in money.items()}
@@ -59,21 +64,27 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
     total_s = result.build_s + result.solve_s + result.extract_s
     shown["MIP gap [%]"] = (gap, "Relative distance between the plan and the solver's bound.")
     shown["Solve time [s]"] = (f"{total_s:.2f}", f"Build {result.build_s:.2f} s, HiGHS {result.solve_s:.2f} s, "
-                                                 f"tables {result.extract_s:.2f} s.")
+                                               f"tables {result.extract_s:.2f} s.")
     return shown
 
 
 def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
-    """KPI cards; money in kEUR with the exact amount in each card's help."""
-    st.caption("Money in kEUR (one decimal, as in the paper's tables); hover the question mark of a card for "
-               "the exact amount in EUR.")
+    """KPI cards; money in kEUR with the exact amount in each card's help; the net
+    result's card says in words whether the day is a cost or a profit."""
     values = kpis(result)
     names = list(only or values)
     for start in range(0, len(names), KPI_COLUMNS):
         columns = st.columns(KPI_COLUMNS)
         for column, name in zip(columns, names[start:start + KPI_COLUMNS]):
             value, help_text = values[name]
-            column.metric(name, value, help=help_text, border=True)
+            sign = {}
+            if name == NET and result.objective_eur is not None:
+                sign = dict(delta="net cost" if result.objective_eur < 0 else "net profit", delta_color="off",
+                            delta_arrow="off")
+            column.metric(name, value, help=help_text, border=True, **sign)
+    if result.has_plan:
+        st.caption(":material/info: " + explanation(economics(result)) + " Hover a card's question mark for the "
+                   "exact amount in EUR.")
 
 
 def number_formats(frame: pd.DataFrame) -> dict:
@@ -100,7 +111,7 @@ def status_line(result: Result) -> None:
 
 def problems(messages: list[str], title: str = "Edit refused", note: str = "The last valid case is kept.") -> None:
     """Show the case model's messages, one per line, where the edit was made."""
-    lines = "\n".join(f"- {m}" for m in messages)
+    lines = "\n".join(f"- {plain_message(m)}" for m in messages)
     st.error(f"**{title}.** {note}\n\n{lines}", icon=":material/block:")
 
 
@@ -116,7 +127,9 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
     ``build`` lays the current case out as a table; ``apply`` reads an edited table
     back into a case (raising :class:`~rvpp.errors.CaseError` when a value breaks a
     rule). A valid edit becomes the current case at once; an invalid one is refused
-    with the model's message under the table, and the last valid case is kept.
+    with the model's message, in the form's words, under the table, and the last valid
+    case is kept. When the case holds other values than the table shows after an edit
+    (e.g. a forecast scale that followed a capacity), the table is drawn again from it.
     """
     generation = st.session_state.setdefault(f"{key}_generation", 0)
     widget, base = f"{key}_{generation}", f"{key}_base"
@@ -132,6 +145,17 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
         return
     if new != state.case():
         state.set_case(new)
+        if not _same_cells(build(), edited):
+            reset_editor(key)
+            st.rerun()
+
+
+def _same_cells(left: pd.DataFrame, right: pd.DataFrame) -> bool:
+    """Whether two tables hold the same values cell by cell (empty cells equal)."""
+    if list(left.columns) != list(right.columns) or len(left) != len(right):
+        return False
+    plain = [frame.astype(object).where(frame.notna(), None).to_numpy().tolist() for frame in (left, right)]
+    return plain[0] == plain[1]
 
 
 def reset_editor(key: str) -> None:
@@ -160,19 +184,39 @@ def case_summary(case: Case) -> None:
     st.table(pd.DataFrame(rows).set_index("Kind"))
 
 
-def run_label(case: Case) -> str:
-    """Short description of a run (:func:`rvpp.data.variants.describe`), e.g.
-    ``balanced · DAM+SRM+HPA · Γ WF1=12``."""
-    return describe(case)
-
-
 def sidebar(case: Case) -> None:
-    """Where am I: the case, its day and strategy, on every page."""
-    with st.sidebar:
-        st.caption("Current case")
-        st.markdown(f"**{case.name}** · {case.delivery_date:%d %b %Y}  \n{run_label(state.run_case())}")
-        if state.is_requested(state.run_case()):
-            st.caption(":material/check: solved — see Results")
+    """Where am I: the case, its day and what was edited, on every page (drawn after the
+    page ran, so it shows the page's own edits)."""
+    st.caption("Current case")
+    st.markdown(f"**{case.name}** · {case.delivery_date:%d %b %Y}  \n{state.default_label()}")
+    if state.is_requested(state.run_case()):
+        st.caption(":material/check: solved — see Results")
+
+
+def open_linked_run(page) -> None:
+    """Open the saved run a link names (``?run=ID``) once per session, then show its plan."""
+    run_id = st.query_params.get("run")
+    if not run_id or st.session_state.get(state.OPENED_RUN) == run_id:
+        return
+    st.session_state[state.OPENED_RUN] = run_id
+    try:
+        saved = library.load(run_id)
+    except RvppError as err:
+        refusal(err, "The linked run cannot be opened", note="The current case is unchanged.")
+        return
+    open_run(saved)
+    if page.url_path != "results":
+        st.switch_page("pages/results.py", query_params={"run": run_id})
+
+
+def open_run(saved) -> None:
+    """Make a saved run the session's current case, its plan shown without a solve."""
+    from . import solving  # solving imports this module
+
+    state.open_saved(saved)
+    if saved.result is not None:
+        solving.solver().remember(saved.result)
+    st.toast(f"Opened the saved run \"{saved.info.label}\".", icon=":material/bookmark:")
 
 
 def plan_downloads(result: Result, case: Case, key: str) -> None:

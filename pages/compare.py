@@ -1,45 +1,112 @@
-"""Compare strategies: the four strategies in one click, the paper's cost and flexibility
-tables, and the runs saved in this session side by side."""
+"""Compare: the four strategies of the current case in one click (the paper's cost and
+flexibility tables), or any two to four runs of the library side by side."""
 
 import streamlit as st
 
-from dashboard import solving, state, widgets
+from dashboard import library, solving, state, widgets
 from rvpp import RvppError
 from rvpp.data.case import STRATEGIES
-from rvpp.data.variants import Variant, describe
+from rvpp.data.variants import Variant
 from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
-from rvpp.outputs.plots import compare_trades_figure
+from rvpp.outputs.economics import waterfall_figure
+from rvpp.outputs.plots import TRADE_NAMES, compare_trades_figure, idle_trades
 
 state.through_app("pages/compare.py")
 
 KEUR = st.column_config.NumberColumn(format="%.1f")
+MODES = ("Strategies of the current case", "Saved runs")
+RUNS_MAX = 4
 
 
-def save_all(results: dict) -> None:
-    for result in results.values():
-        state.save_run(describe(result.case), result)
+def save_all(cases: dict, results: dict) -> None:
+    saved = []
+    try:
+        for strategy, result in results.items():
+            saved.append(library.save(state.default_label(cases[strategy]), cases[strategy], result).label)
+    except RvppError as err:
+        st.session_state["compare_notice"] = ("error", str(err))
+        return
+    st.session_state["compare_notice"] = ("saved", "Saved " + ", ".join(f'"{s}"' for s in saved) + ".")
+
+
+def side_by_side(results: dict, baseline: str | None) -> None:
+    """Economics, KPI table, trades and flexibility of labelled plans."""
+    st.subheader("The day's economics")
+    st.plotly_chart(waterfall_figure(results), key=f"compare_economics_{len(results)}")
+    st.subheader("Net result and its parts")
+    if baseline:
+        st.caption(f"What being safer costs: each plan's extra cost over the {baseline} plan. A percentage is "
+                   "given only when the base is at least 5 % of the day's money flows; otherwise the absolute "
+                   "difference says more.")
+    kpis = kpi_table(results, baseline=baseline)
+    st.dataframe(kpis, column_config=widgets.number_formats(kpis))
+    st.subheader("Trades")
+    idle = idle_trades(results)
+    if idle:
+        st.caption("Not drawn, zero all day in every plan: " + ", ".join(TRADE_NAMES[c] for c in idle)
+                   + (" (no heat bought)" if "h_hpa_mw" in idle else "") + ".")
+    st.plotly_chart(compare_trades_figure(results), key=f"compare_trades_{len(results)}")
+    st.subheader("Flexibility")
+    st.caption("Paper Table 9 layout: reserve energy over the day and the same divided by installed capacity [h].")
+    flexibility = flexibility_table(results)
+    st.dataframe(flexibility, column_config=widgets.number_formats(flexibility))
 
 
 st.title("Compare strategies")
+if "compare_mode" not in st.session_state:
+    st.session_state["compare_mode"] = MODES[0]
+mode = st.segmented_control("Compare", MODES, key="compare_mode", required=True)
+
+if mode == MODES[1]:
+    runs = library.runs()
+    if len(runs) < 2:
+        st.info("Save at least two runs (on **Results**, or below with the strategies) to compare them here.",
+                icon=":material/bookmarks:")
+        st.stop()
+    labels = {r.id: r.label for r in runs}
+    wanted = [i for i in st.session_state.get("compare_runs", []) if i in labels] or [r.id for r in runs[:2]]
+    st.session_state["compare_runs"] = wanted
+    chosen = st.multiselect(f"Saved runs (two to {RUNS_MAX})", list(labels), format_func=labels.get,
+                            key="compare_runs", max_selections=RUNS_MAX,
+                            help="Any runs of the library, of any case, strategy or market set.")
+    if len(chosen) < 2:
+        st.info("Choose at least two runs.", icon=":material/info:")
+        st.stop()
+    try:
+        opened = {labels[i]: library.load(i) for i in chosen}
+    except RvppError as err:
+        widgets.refusal(err, "A run cannot be opened", note="Choose other runs.")
+        st.stop()
+    with_plan = {label: saved.result for label, saved in opened.items()
+                 if saved.result is not None and saved.result.has_plan}
+    missing = [label for label in opened if label not in with_plan]
+    if missing:
+        st.warning("Without a plan, left out: " + ", ".join(missing), icon=":material/warning:")
+    if len(with_plan) >= 2:
+        side_by_side(with_plan, baseline=next(iter(with_plan)))
+    st.stop()
+
 run = state.run_case()
 st.markdown("Solve the deterministic, optimistic, balanced and pessimistic strategies of the current case "
             "(budgets of the paper's Table 7; individual Γ edits are set aside) and see what being safer costs.")
-market_sets = st.multiselect(
-    "Market sets (columns of the cost table)", MARKET_SETS, default=[run.markets.label], key="compare_sets",
+market_sets = st.segmented_control(
+    "Market sets (columns of the cost table)", MARKET_SETS, selection_mode="multi", default=[run.markets.label],
+    key="compare_sets",
     help="Each market set adds four solves. The paper's Table 10 has all four; Table 11 is the same without "
          "the CSP (switch it off on Portfolio).")
+market_sets = [m for m in MARKET_SETS if m in (market_sets or [])]
 cases = {(s, m): Variant(strategy=s, markets=m).apply(run) for m in market_sets for s in STRATEGIES}
 ready = bool(cases) and all(state.is_requested(c) for c in cases.values())
 clicked = st.button(f"Solve {len(cases)} plans", type="primary", key="compare_solve", disabled=not cases,
                     icon=":material/play_arrow:")
+if solving.cancelled():
+    st.info("The solves were cancelled. Press the button to start again.", icon=":material/cancel:")
 
 if cases and (clicked or ready):
     for case in cases.values():
         state.mark_requested(case)
-    try:
-        solved = solving.solve_all(list(cases.values()), "Solving the strategies")
-    except RvppError as err:
-        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
+    solved = solving.solve_all(list(cases.values()), "Solving the strategies")
+    if solved is None:
         st.stop()
     results = dict(zip(cases, solved))
     failed = [f"{s} / {m}: {r.status} {r.message}" for (s, m), r in results.items() if not r.has_plan]
@@ -47,37 +114,19 @@ if cases and (clicked or ready):
         st.warning("Some plans could not be made:\n\n" + "\n".join(f"- {f}" for f in failed))
 
     st.subheader("Cost [kEUR]")
-    st.caption("Cost = −profit, as in the paper's Tables 10 and 11; lower is better.")
+    st.caption("Cost = −net result, as in the paper's Tables 10 and 11; lower is better.")
     st.dataframe(cost_table(results), column_config={m: KEUR for m in market_sets})
 
     shown = market_sets[0] if len(market_sets) == 1 else st.segmented_control(
         "Market set shown below", market_sets, default=market_sets[0], required=True, key="compare_shown")
     by_strategy = {s: results[(s, shown)] for s in STRATEGIES if results[(s, shown)].has_plan}
     if by_strategy:
-        st.subheader(f"Trades per strategy ({shown})")
-        st.plotly_chart(compare_trades_figure(by_strategy), key="compare_trades")
-        st.subheader("Profit and its parts")
-        st.caption("What being safer costs: the extra cost of each strategy over the deterministic plan.")
-        kpis = kpi_table(by_strategy, baseline="deterministic" if "deterministic" in by_strategy else None)
-        st.dataframe(kpis, column_config=widgets.number_formats(kpis))
-        st.subheader("Flexibility per strategy")
-        st.caption("Paper Table 9 layout: reserve energy over the day and the same divided by installed "
-                   "capacity [h].")
-        flexibility = flexibility_table(by_strategy)
-        st.dataframe(flexibility, column_config=widgets.number_formats(flexibility))
-        st.button("Save these plans to the session", key="compare_save", on_click=save_all,
-                  args=(by_strategy,))
-
-st.subheader("Saved runs")
-runs = state.saved_runs()
-if not runs:
-    st.caption("Runs saved on Results (or with the button above) appear here side by side.")
-else:
-    saved = kpi_table(runs)
-    st.dataframe(saved, column_config=widgets.number_formats(saved))
-    chosen = st.multiselect("Overlay the trades of", list(runs), default=list(runs)[-4:], key="compare_saved")
-    with_plan = {label: runs[label] for label in chosen if runs[label].has_plan}
-    if with_plan:
-        st.plotly_chart(compare_trades_figure(with_plan), key="compare_saved_trades")
-    remove = st.selectbox("Remove a saved run", list(runs), index=None, key="compare_remove")
-    st.button("Remove", key="compare_remove_button", on_click=state.drop_run, args=(remove,), disabled=remove is None)
+        side_by_side(by_strategy, baseline="deterministic" if "deterministic" in by_strategy else None)
+        edited = {s: Variant(strategy=s, markets=shown).apply(state.case()) for s in by_strategy}
+        st.button("Save these plans to the library", key="compare_save", on_click=save_all,
+                  args=(edited, by_strategy), icon=":material/bookmark_add:")
+        notice = st.session_state.pop("compare_notice", None)
+        if notice and notice[0] == "saved":
+            st.success(notice[1], icon=":material/check:")
+        elif notice:
+            widgets.problems([notice[1]], "Not saved", note="Nothing was changed.")

@@ -6,12 +6,12 @@ import rvpp
 from dashboard import solving, state, widgets
 from rvpp.data.variants import Variant
 from rvpp.outputs.bundle import read_case_files
-from rvpp.outputs.plots import trades_figure
+from rvpp.outputs.plots import bands_figure, trades_figure
 
 state.through_app("pages/home.py")
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
-HEADLINE = ("Profit", "Cost", "DAM revenue", "Reserve revenue", "Protection cost")
+HEADLINE = ("Net result [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection [kEUR]")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
     ("pages/markets.py", "Markets & tariffs", "DAM and reserve price bands, market switches, the HPA tariff"),
@@ -50,7 +50,7 @@ st.markdown(
     "day-ahead market, up and down secondary reserve, and heat bought through a heat purchase agreement. "
     "Prices, production and consumption are uncertain; a budget Γ per source sets in how many periods each "
     "may go against you, so a plan can be optimistic, balanced or pessimistic. "
-    "The plan is the solution of a robust mixed-integer program, solved in about a second."
+    "The plan is the solution of a robust mixed-integer program."
 )
 
 case = state.case()
@@ -71,6 +71,14 @@ with right:
 
 st.subheader("What should I bid tomorrow?")
 balanced = Variant(strategy="balanced").apply(state.run_case())
+expected = solving.solver().expected_s(balanced)
+if expected:
+    st.caption(f":material/timer: Solving this case took {expected[0]:.1f} s ({expected[1]}); with "
+               f"{balanced.dt_h * 60:g}-minute periods. Longer solves show their progress and can be cancelled.")
+else:
+    st.caption(f":material/timer: This case has not been solved on this server yet ({balanced.dt_h * 60:g}-minute "
+               "periods; 15-minute periods take several times longer than hourly ones). The solve shows its "
+               "progress and can be cancelled.")
 clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
 if clicked or state.is_requested(balanced):
     state.mark_requested(balanced)
@@ -87,14 +95,18 @@ if clicked or state.is_requested(balanced):
             st.page_link("pages/results.py", label="Every chart and download of the current case",
                          icon=":material/insights:")
 else:
-    st.caption("One click solves the current case with the balanced budgets of the paper's Table 7.")
+    st.caption("One click solves the current case with the balanced budgets of the paper's Table 7. The prices it "
+               "bids against:")
+    problem = solving.prepare(state.run_case())
+    if problem is not None:
+        st.plotly_chart(bands_figure(problem, "price_da"), key="home_price_band")
 
 st.subheader("Load another case")
 folders = state.server_folders_allowed()  # off unless the server was started with RVPP_ALLOW_SERVER_FOLDERS=1
 shipped, upload_tab, download_tab, *folder_tab = st.tabs(["Shipped cases", "Upload", "Download",
                                                           *(["Folder"] if folders else [])])
 with shipped:
-    choice = st.selectbox("Case", state.known_case_folders(), key="home_shipped")
+    choice = st.radio("Case", state.known_case_folders(), key="home_shipped")
     st.button("Load", key="home_load_shipped", on_click=load_from, args=(state.load_shipped, choice))
 for tab in folder_tab:
     with tab:

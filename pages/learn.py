@@ -6,7 +6,6 @@ import streamlit as st
 
 import rvpp
 from dashboard import solving, state, widgets
-from rvpp import RvppError
 from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
                         thin_clock_ticks)
@@ -44,7 +43,7 @@ st.markdown(
 @st.fragment
 def budget_demo() -> None:
     left, right = st.columns([1, 3])
-    source = left.selectbox("Source", units, key="learn_source")
+    source = left.pills("Source", units, default=units[0], key="learn_source", required=True)
     src = problem.sources[source]
     gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
                         key="learn_gamma")
@@ -76,7 +75,8 @@ if plan is None or not plan.has_plan:
 @st.fragment
 def protection_demo() -> None:
     left, right = st.columns([1, 3])
-    price = left.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price")
+    price = left.pills("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, default="price_da",
+                       key="learn_price", required=True)
     gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
                         value=problem.sources[price].gamma, key="learn_price_gamma")
     exposure = price_exposures(plan.problem, plan.market)[price]
@@ -102,16 +102,15 @@ if all(state.is_requested(c) for c in variants.values()) or st.button(
         "Solve both variants", key="learn_modes", icon=":material/play_arrow:"):
     for case in variants.values():
         state.mark_requested(case)
-    try:
-        paper, chosen = solving.solve_all(list(variants.values()), "Solving both variants")
-    except RvppError as err:
-        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
+    solved = solving.solve_all(list(variants.values()), "Solving both variants")
+    if solved is None:  # refused (the reason is shown) or cancelled
         st.stop()
+    paper, chosen = solved
     if paper.has_plan and chosen.has_plan:
-        source = st.selectbox("Source", units, key="learn_mode_source")
+        source = st.pills("Source", units, default=units[0], key="learn_mode_source", required=True)
         c1, c2 = st.columns(2)
-        c1.metric("Profit, paper mode", widgets.eur(paper.objective_eur))
-        c2.metric("Profit, planner-chosen", widgets.eur(chosen.objective_eur),
+        c1.metric("Net result, paper mode", widgets.eur(paper.objective_eur))
+        c2.metric("Net result, planner-chosen", widgets.eur(chosen.objective_eur),
                   delta=widgets.eur(chosen.objective_eur - paper.objective_eur).replace(" EUR", ""),
                   help="Never lower than paper mode: the planner picks the periods that suit it.")
         for column, (label, result) in zip(st.columns(2), (("paper mode", paper), ("planner-chosen", chosen))):
@@ -131,10 +130,8 @@ if all(state.is_requested(c) for c in sweep) or st.button(f"Compute the curve ({
                                                         key="learn_curve", icon=":material/play_arrow:"):
     for case in sweep:
         state.mark_requested(case)
-    try:
-        results = solving.solve_all(sweep, "Solving the budgets")
-    except RvppError as err:
-        widgets.refusal(err, "Cannot solve", note="Fix the case on the other pages and solve again.")
+    results = solving.solve_all(sweep, "Solving the budgets")
+    if results is None:  # refused (the reason is shown) or cancelled
         st.stop()
     points = pd.DataFrame([{"gamma": g, "cost_keur": r.cost_keur,
                             "protection_keur": sum(r.protection_eur.values()) / KEUR}

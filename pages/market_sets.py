@@ -71,8 +71,8 @@ try:
 except RvppError as err:
     widgets.refusal(err, "Settings refused", note="Fix them and press Run.")
     st.stop()
-st.caption(f"{len(markets.configurations(settings))} configurations (identical ones are solved once), about a "
-           "second each, one after the other in a study process.")
+st.caption(f"{len(markets.configurations(settings))} configurations (identical ones are solved once), one after "
+           "the other in a study process; the progress shows below once you press Run.")
 
 outputs = studies.run({"markets": "Market sets and HPA prices"}, run, settings, "market_sets", submitted)
 if outputs is None:

@@ -44,7 +44,7 @@ case = state.case()
 markets = case.markets
 
 st.subheader("Markets")
-c1, c2, c3, c4 = st.columns(4)
+c1, c2, c3 = st.columns(3)
 c1.toggle("Day-ahead market (DAM)", value=True, disabled=True, key="markets_dam",
           help="The DAM is always on: it balances the plan.")
 c2.toggle("Secondary reserve (SRM)", value=markets.srm, key="markets_srm", on_change=from_widget,
@@ -53,14 +53,15 @@ c3.toggle("Heat purchase (HPA)", value=markets.hpa, key="markets_hpa", on_change
           args=("hpa", "markets_hpa", "markets"),
           help="Heat purchase agreement. Off: thermal demands are served by the CSP alone.")
 minutes = {v: k for k, v in PERIOD_MINUTES.items()}[case.dt_h]
-c4.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=minutes, key="markets_dt",
+c1, c2, c3 = st.columns(3)
+c3.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=minutes, key="markets_dt",
                      required=True, on_change=from_widget, args=("dt_h", "markets_dt", None, PERIOD_MINUTES.get),
                      help="Period length; 15 minutes is the EU day-ahead market time unit (96 periods).")
-c1, c2 = st.columns(2)
-c1.number_input("κ: reserve band cap [-]", min_value=0.0, max_value=1.0, step=0.05, value=markets.kappa,
+c1.number_input("κ: reserve band cap [-], from 0 to 1", min_value=0.0, max_value=1.0, step=0.05, value=markets.kappa,
                 key="markets_kappa", on_change=from_widget, args=("kappa", "markets_kappa", "markets"),
                 help="Each SR band is at most κ × (generation capacity − demand capacity); paper: 0.3.")
-c2.number_input("Reserve delivery time [min]", min_value=1.0, step=1.0, value=markets.reserve_duration_min,
+c2.number_input("Reserve delivery time [min], at least 1", min_value=1.0, step=1.0,
+                value=markets.reserve_duration_min,
                 key="markets_duration", on_change=from_widget,
                 args=("reserve_duration_min", "markets_duration", "markets"),
                 help="A reserve band must be deliverable for this long: ramp [MW/min] × time caps each band.")
@@ -71,12 +72,12 @@ st.subheader("Heat purchase agreement tariff")
 st.caption("One price per clock hour [EUR/MWh_th]; with 15-minute periods each quarter-hour takes its hour's "
            "price. Presets: the time-of-use tariff of the loaded case and the flat prices of the paper's "
            "Table 12.")
-presets = st.columns(len(FLAT_PRESETS) + 2)
-presets[0].button("Time of use (case file)", key="markets_tou", on_click=set_tariff,
-                  args=(list(state.origin().markets.hpa_tariff_eur_per_mwh),))
-for column, price in zip(presets[1:], FLAT_PRESETS):
-    column.button(f"Flat {price:g}", key=f"markets_flat_{price:g}", on_click=set_tariff, args=([price] * 24,))
-with presets[-1].popover("Flat price…"):
+presets = st.container(horizontal=True)
+presets.button("Time of use (case file)", key="markets_tou", on_click=set_tariff,
+               args=(list(state.origin().markets.hpa_tariff_eur_per_mwh),))
+for price in FLAT_PRESETS:
+    presets.button(f"Flat {price:g}", key=f"markets_flat_{price:g}", on_click=set_tariff, args=([price] * 24,))
+with presets.popover("Flat price…"):
     flat = st.number_input("Price [EUR/MWh_th]", min_value=0.0, value=70.0, step=5.0, key="markets_flat_price")
     st.button("Apply", key="markets_flat_apply", on_click=set_tariff, args=([flat] * 24,))
 left, right = st.columns([2, 3])
@@ -87,7 +88,8 @@ with left:
         apply=lambda table: state.case().replace(
             markets={"hpa_tariff_eur_per_mwh": [v for v in table["tariff_eur_per_mwh"]]}),
         column_config={"hour": st.column_config.TextColumn("Clock hour", disabled=True),
-                       "tariff_eur_per_mwh": st.column_config.NumberColumn("Tariff [EUR/MWh_th]")},
+                       "tariff_eur_per_mwh": st.column_config.NumberColumn(
+                           "Tariff [EUR/MWh_th]", format="%.2f", help="At least 0 EUR/MWh_th")},
         hide_index=True, height=400,
     )
 problem = solving.prepare(state.run_case())

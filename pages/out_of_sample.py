@@ -38,14 +38,16 @@ TABLE14 = ["n_scenarios", "status", "mip_gap", "avg_market_cost_keur", "avg_pena
 st.title("Out-of-sample: robust strategies against the stochastic benchmark")
 run = state.run_case()
 window = run.uncertainty.window_days
-st.markdown(f"Every method plans the delivery day **{run.delivery_date:%d %B %Y}** from the {window} days before it: "
-            "the robust strategies from their forecast bands, the stochastic program from N whole days sampled "
-            "from that window. Each plan is then settled by one recourse model against the realized values of the "
-            "test days from the delivery day on, the same days for every method, paying penalties for what it "
-            "could not deliver.")
+st.markdown(f"**How it works.** Each method makes one plan for **{run.delivery_date:%d %B %Y}** from the {window} "
+            "days before it: the robust strategies from their forecast bands, the stochastic program from N whole "
+            "days sampled from that window. That one plan is then settled against the realized prices, production "
+            "and demand of every test day from the delivery day on, the same days for every method. The settlement "
+            "prices each deviation from the plan: energy short of the DAM bid at **m_def** × the realized DAM "
+            "price, energy beyond it at **m_sur** × that price (a credit), reserve not delivered at **m_sr** × its "
+            "price, and heat not served at the unserved-heat price.")
 st.caption(f"The defaults ({TEST_DAYS} test days, N = {', '.join(map(str, SCENARIOS))}, {TIME_LIMIT_S:.0f} s per "
            "stochastic program) take about two minutes; the paper's 30 days and N up to 25 take half an hour or "
-           "more (`python -m rvpp study reproduce`).")
+           "more (the command line: python -m rvpp study reproduce).")
 
 penalties = Penalties()
 with st.form("out_of_sample_form"):
@@ -136,6 +138,11 @@ st.caption("Averages over the test days. Net cost = market cost + penalty; a neg
            "bought back at m_sur × the DAM price. Solve time: the plan's own solve (shared study process).")
 
 st.plotly_chart(figures.out_of_sample_figure(summaries), key="out_of_sample_cost")
+st.subheader("Where the penalties come from")
+st.caption("The average penalty per test day split by cause. A plan made for one day meets other days' wind, sun "
+           "and prices, so penalties can exceed the market cost: every MWh short of the bid costs m_def times the "
+           "DAM price, and reserve that cannot be delivered costs m_sr times its price.")
+st.plotly_chart(figures.penalty_causes_figure(evaluations), key="out_of_sample_penalties")
 st.plotly_chart(figures.net_cost_by_day_figure(evaluations), key="out_of_sample_days")
 st.plotly_chart(figures.solve_time_figure(summaries), key="out_of_sample_solve_time")
 st.caption(f"Computed in {robust.seconds:.1f} s (robust) and {stochastic.seconds:.1f} s (stochastic), side by side.")

@@ -3,6 +3,7 @@
 import streamlit as st
 
 from dashboard import fields, solving, state, widgets
+from rvpp.data.edits import follow_capacity
 from rvpp.outputs import workbook
 from rvpp.outputs.plots import bands_figure, curve_figure, thin_clock_ticks
 
@@ -10,6 +11,8 @@ state.through_app("pages/portfolio.py")
 
 KINDS = ("wind", "pv", "csp", "ed", "td")
 BAND_COLUMNS = 2
+SCALE = "scale_with_capacity"   # table column: the unit's forecast band follows its capacity
+FIXED = "portfolio_fixed_scale"  # session key: names of units whose band does not follow
 NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 
 
@@ -17,10 +20,34 @@ def set_csp(on_key: str) -> None:
     state.set_csp_on(st.session_state[on_key])
 
 
+def fixed() -> set[str]:
+    """Units whose forecast band keeps its scale when their capacity changes."""
+    return st.session_state.setdefault(FIXED, set())
+
+
+def unit_table(kind: str):
+    table = workbook.unit_table(state.case(), kind)
+    scale_at = table.columns.get_loc(workbook.SERIES_FIELDS[kind].replace("series", "series_scale"))
+    table.insert(scale_at + 1, SCALE, [name not in fixed() for name in table["name"]])
+    return table
+
+
+def with_unit_table(kind: str, table):
+    """The edited table as a case; capacities that changed scale their forecast band unless unticked."""
+    if SCALE in table:
+        follows = table[SCALE].fillna(True).astype(bool)
+        fixed().difference_update(set(table["name"].dropna()))
+        fixed().update(name for name, on in zip(table["name"], follows) if not on)
+    current = state.case()
+    edited = workbook.with_unit_table(current, kind, table.drop(columns=[SCALE], errors="ignore"))
+    return follow_capacity(current, edited, fixed=fixed())
+
+
 st.title("Portfolio")
 st.markdown("Edit any cell, add a row at the bottom of a table or select rows and delete them. Every edit is "
             "checked by the case model: a value that breaks a rule is refused with the reason under its table "
-            "and the last valid case is kept.")
+            "and the last valid case is kept. Wide tables scroll sideways; the name column stays in view. "
+            "Changing a capacity scales the unit's forecast band too while **Scale band with capacity** is ticked.")
 
 case = state.case()
 if case.csp:
@@ -36,9 +63,13 @@ for kind in KINDS:
                 icon=":material/power_off:")
     widgets.table_editor(
         f"portfolio_{kind}",
-        build=lambda kind=kind: workbook.unit_table(state.case(), kind),
-        apply=lambda table, kind=kind: workbook.with_unit_table(state.case(), kind, table),
-        column_config=fields.column_config(state.case(), kind), num_rows="dynamic", hide_index=True,
+        build=lambda kind=kind: unit_table(kind),
+        apply=lambda table, kind=kind: with_unit_table(kind, table),
+        column_config={**fields.column_config(state.case(), kind), SCALE: st.column_config.CheckboxColumn(
+            "Scale band with capacity", default=True, width="small",
+            help="Ticked: changing the capacity scales the unit's forecast band and history profile by the same "
+                 "ratio (Series scale follows). Unticked: the band stays as the history gives it.")},
+        num_rows="dynamic", hide_index=True,
     )
 
 case = state.case()
@@ -46,7 +77,8 @@ if case.csp:
     st.subheader("Power-block conversion curve")
     st.caption("Electrical output = thermal input × efficiency at each breakpoint, linear in between "
                "(paper Figure 5). Inputs must increase and the output must not fall.")
-    name = st.selectbox("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp") \
+    name = st.segmented_control("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp",
+                                default=case.csp[0].name, required=True) \
         if len(case.csp) > 1 else case.csp[0].name
     left, right = st.columns([2, 3])
     with left:

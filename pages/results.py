@@ -1,13 +1,17 @@
-"""Results: solve the current case; KPIs, the plan's charts, flexibility and downloads."""
+"""Results: solve the current case; the day's economics, the plan's charts, flexibility,
+downloads, and saving the run to the library."""
 
 import streamlit as st
 
-from dashboard import solving, state, widgets
-from rvpp.outputs.plots import (KIND_LABELS, dispatch_figure, heat_figure, reserve_share_figure, storage_figure,
-                        trades_figure)
+from dashboard import library, solving, state, widgets
+from dashboard.figures import heat_bought, plan_figures
+from rvpp import RvppError
+from rvpp.outputs.style import KIND_LABELS
 
 state.through_app("pages/results.py")
 
+LABEL_KEY = "results_run_label"
+LABEL_FOR = "results_label_for"  # the case key the label field was filled for
 FLEXIBILITY_COLUMNS = {
     "kind": st.column_config.TextColumn("Unit kind"),
     "r_up_mwh": st.column_config.NumberColumn("Up reserve [MWh]", format="%.1f"),
@@ -18,17 +22,28 @@ FLEXIBILITY_COLUMNS = {
 }
 
 
-def save(result, key: str) -> None:
-    state.save_run(st.session_state[key] or widgets.run_label(result.case), result)
+def save(result) -> None:
+    label = (st.session_state.get(LABEL_KEY) or "").strip() or state.default_label()
+    try:
+        info = library.save(label, state.case(), result)
+    except RvppError as err:
+        st.session_state["results_saved"] = None
+        st.session_state["results_save_problem"] = str(err)
+        return
+    st.session_state["results_save_problem"] = None
+    st.session_state["results_saved"] = (info.id, info.label, state.case_key(state.run_case()))
 
 
 st.title("Results")
 run = state.run_case()
-st.markdown(f"Plan for **{run.delivery_date:%A %d %B %Y}** · {widgets.run_label(run)}")
+st.markdown(f"Plan for **{run.delivery_date:%A %d %B %Y}** · {state.default_label()}")
 clicked = st.button("Solve", type="primary", key="results_solve", icon=":material/play_arrow:")
 if not (clicked or state.is_requested(run)):
-    waiting = "The inputs changed since the last solve." if st.session_state[state.REQUESTED] else ""
-    st.info(f"{waiting} Press **Solve** to compute the plan of the current case (about a second).",
+    cancelled = "The last solve was cancelled." if solving.cancelled() else ""
+    changed = "The inputs changed since the last solve." if st.session_state[state.REQUESTED] else ""
+    expected = solving.solver().expected_s(run)
+    timing = f" (about {expected[0]:.0f} s, from {expected[1]})" if expected and expected[0] >= 1 else ""
+    st.info(f"{cancelled} {changed} Press **Solve** to compute the plan of the current case{timing}.",
             icon=":material/info:")
     st.stop()
 
@@ -41,26 +56,45 @@ if not result.has_plan:
     st.stop()
 
 widgets.kpi_cards(result)
-with st.expander("Save this run to compare it later", icon=":material/bookmark_add:"):
-    st.text_input("Label", value=widgets.run_label(run), key="results_run_label")
-    st.button("Save run", key="results_save", on_click=save, args=(result, "results_run_label"))
-    if state.saved_runs():
-        st.caption("Saved: " + "; ".join(state.saved_runs()) + ". See them on Compare strategies.")
+figures = plan_figures(result)
+st.plotly_chart(figures["economics"], key="results_economics")
+
+with st.expander("Save this run to the library", icon=":material/bookmark_add:", expanded=True):
+    key = state.case_key(run)
+    if st.session_state.get(LABEL_FOR) != key:
+        st.session_state[LABEL_FOR] = key
+        st.session_state[LABEL_KEY] = state.default_label()
+    left, right = st.columns([4, 1], vertical_alignment="bottom")
+    left.text_input("Label (unique; a taken label gets a number)", key=LABEL_KEY, max_chars=190,
+                    help="By default: strategy, market set and what you edited since the case was loaded.")
+    right.button("Save run", key="results_save", on_click=save, args=(result,), icon=":material/save:")
+    if st.session_state.get("results_save_problem"):
+        widgets.problems([st.session_state["results_save_problem"]], "Not saved", note="Nothing was changed.")
+    elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case
+        run_id, label, _ = st.session_state["results_saved"]
+        st.success(f"Saved as **{label}**. It stays in the library across reloads and restarts; "
+                   f"[open it by link]({library.link(run_id)}) or see it on Saved runs.", icon=":material/check:")
+    st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
 
 st.subheader("Bids")
-st.plotly_chart(trades_figure(result), key="results_trades")
+st.plotly_chart(figures["trades"], key="results_trades")
 st.subheader("Heat")
-st.plotly_chart(heat_figure(result), key="results_heat")
+if figures.get("heat") is None:
+    st.caption("No thermal demand in this case: no heat to show.")
+else:
+    if not heat_bought(result):
+        st.caption("No heat bought through the HPA: the CSP covers the thermal demands all day.")
+    st.plotly_chart(figures["heat"], key="results_heat")
 st.subheader("Electrical dispatch")
-st.plotly_chart(dispatch_figure(result), key="results_dispatch")
+st.plotly_chart(figures["dispatch"], key="results_dispatch")
 if result.case.csp:
     st.subheader("Thermal storage")
     st.caption("The margins above the minimum and below the maximum (σ) are kept free so the CSP can deliver "
                "the up and down reserve it offers (paper constraints TS9-TS11).")
     for csp in result.case.csp:
-        st.plotly_chart(storage_figure(result, csp.name), key=f"results_storage_{csp.name}")
+        st.plotly_chart(figures[f"storage {csp.name}"], key=f"results_storage_{csp.name}")
 st.subheader("Reserve by unit kind")
-st.plotly_chart(reserve_share_figure(result), key="results_reserve")
+st.plotly_chart(figures["reserve"], key="results_reserve")
 
 st.subheader("Flexibility")
 st.caption("Reserve energy over the day per unit kind, and the same divided by installed capacity "

@@ -3,7 +3,7 @@
 
 import streamlit as st
 
-from dashboard import state, studies, widgets
+from dashboard import solving, state, studies, widgets
 from rvpp import RvppError
 from rvpp.solving.outcome import Outcome
 from rvpp.studies import StudySettings, figures, sensitivity
@@ -36,7 +36,7 @@ COLUMNS = {
 st.title("Sensitivity to the uncertainty budget Γ")
 run = state.run_case()
 grid = sensitivity.gamma_grid(run, StudySettings())
-st.markdown(f"How the plan of **{run.delivery_date:%d %B %Y}** ({widgets.run_label(run)}) changes as the "
+st.markdown(f"How the plan of **{run.delivery_date:%d %B %Y}** ({state.default_label()}) changes as the "
             "uncertainty budget Γ grows: one deterministic plan with the same Γ for the swept sources, per value "
             "of the grid (paper Case 2, Figures 15 and 16). Γ is the number of periods in which a source may "
             f"deviate from its forecast; the day has {grid[-1]} periods.")
@@ -66,7 +66,9 @@ try:
 except RvppError as err:
     widgets.refusal(err, "Settings refused", note="Fix them and press Run.")
     st.stop()
-st.caption(f"{solves} plans to solve (about a second each, one after the other in a study process).")
+expected = solving.solver().expected_s(run)
+each = f"about {expected[0]:.1f} s each ({expected[1]})" if expected else "each as long as one plan of this case"
+st.caption(f"{solves} plans to solve, {each}, one after the other in a study process.")
 
 outputs = studies.run({"sensitivity": "Sensitivity"}, run, settings, "sensitivity", submitted)
 if outputs is None:

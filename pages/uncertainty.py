@@ -71,8 +71,21 @@ def budget_table(case: Case) -> pd.DataFrame:
 
 
 def with_budgets(case: Case, table: pd.DataFrame) -> Case:
-    """Γ that differ from the strategy preset become overrides; an empty cell means the preset."""
-    preset = strategy_budgets(case.replace(budgets={"overrides": {}}), period_count(case))
+    """Γ that differ from the strategy preset become overrides; an empty cell means the preset.
+
+    A Γ outside 0 to the day's number of periods, or not a whole number, is refused by
+    name, value and range (never clipped).
+    """
+    nt = period_count(case)
+    name = f"Γ [{PERIOD_NAMES[case.dt_h]}]"
+    wrong = [f"{name} of {row.source}: {row.gamma:g} is outside the allowed range 0 to {nt} (the day's {nt} "
+             f"{PERIOD_NAMES[case.dt_h]})" if not 0 <= row.gamma <= nt else
+             f"{name} of {row.source}: {row.gamma:g} must be a whole number of {PERIOD_NAMES[case.dt_h]} (0 to {nt})"
+             for row in table.itertuples() if pd.notna(row.gamma) and not (0 <= row.gamma <= nt
+                                                                           and float(row.gamma).is_integer())]
+    if wrong:
+        raise CaseError(wrong)
+    preset = strategy_budgets(case.replace(budgets={"overrides": {}}), nt)
     overrides = {row.source: int(row.gamma) for row in table.itertuples()
                  if pd.notna(row.gamma) and int(row.gamma) != preset[row.source]}
     edited = case.replace(budgets={"overrides": overrides})
@@ -148,8 +161,9 @@ with left:
             "source": st.column_config.TextColumn("Source", disabled=True),
             "kind": st.column_config.TextColumn("Kind", disabled=True),
             "preset": st.column_config.NumberColumn(f"Preset Γ [{PERIOD_NAMES[case.dt_h]}]", disabled=True),
-            "gamma": st.column_config.NumberColumn(f"Γ [{PERIOD_NAMES[case.dt_h]}]", min_value=0, max_value=nt,
-                                                   step=1, help="Edit to override the preset; empty: the preset"),
+            "gamma": st.column_config.NumberColumn(f"Γ [{PERIOD_NAMES[case.dt_h]}]", step=1,
+                                                   help=f"Whole number from 0 to {nt} (the day's periods). Edit to "
+                                                        "override the preset; empty: the preset"),
             "hours": st.column_config.NumberColumn("Γ [h]", disabled=True, format="%.2f"),
         },
         column_order=["source", "kind", "preset", "gamma"] + (["hours"] if case.dt_h < 1 else []),

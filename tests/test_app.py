@@ -10,6 +10,7 @@ import base64
 import io
 import json
 import re
+import time
 import zipfile
 from pathlib import Path
 
@@ -22,11 +23,22 @@ from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
+from rvpp.store import RunLibrary
 
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
 TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
-KPI_MONEY = ("Profit", "Cost", "DAM revenue", "Reserve revenue", "HPA cost", "Operating cost", "Protection cost")
+NET = "Net result [kEUR]"
+KPI_MONEY = (NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "HPA cost [kEUR]", "Operating cost [kEUR]",
+             "Protection [kEUR]")
+
+
+@pytest.fixture(autouse=True)
+def run_library(tmp_path, monkeypatch):
+    """Every test saves into a store of its own (the dashboard reads the environment at each call)."""
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
+    return f"sqlite:///{tmp_path / 'rvpp-data' / 'rvpp.sqlite3'}"
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -57,10 +69,8 @@ def shown_kpis(at: AppTest) -> dict[str, tuple[str, str]]:
 def expected_kpis(result: rvpp.Result) -> dict[str, float]:
     """The library's numbers [EUR] under the app's card labels."""
     parts = result.parts
-    return {"Profit": result.objective_eur, "Cost": -result.objective_eur,
-            "DAM revenue": parts["revenue_dam_eur"], "Reserve revenue": parts["revenue_sr_eur"],
-            "HPA cost": parts["cost_hpa_eur"], "Operating cost": parts["cost_opex_eur"],
-            "Protection cost": sum(result.protection_eur.values())}
+    return dict(zip(KPI_MONEY, (result.objective_eur, parts["revenue_dam_eur"], parts["revenue_sr_eur"],
+                                parts["cost_hpa_eur"], parts["cost_opex_eur"], sum(result.protection_eur.values()))))
 
 
 def assert_kpis_match(at: AppTest, result: rvpp.Result, labels=KPI_MONEY) -> None:
@@ -116,7 +126,10 @@ def test_home_balanced_solve_shows_the_library_numbers(paper_solve):
     at = click(open_app(), "home_solve")
     expected = paper_solve(strategy="balanced")
     assert expected.status == "optimal"
-    assert_kpis_match(at, expected, labels=("Profit", "Cost", "DAM revenue", "Reserve revenue", "Protection cost"))
+    assert_kpis_match(at, expected, labels=(NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]",
+                                            "Protection [kEUR]"))
+    net = [m for m in at.metric if m.label == NET][0]
+    assert net.proto.delta == "net cost"  # the sign in words: the default day costs money
     spec = figures(at)["Day-ahead energy and secondary-reserve bands"]
     np.testing.assert_allclose(values(trace(spec, "DAM energy (+ sell, − buy)")["y"]), expected.market["p_da_mw"])
 
@@ -131,7 +144,7 @@ def test_home_upload_of_a_broken_case_is_explained_and_a_good_one_loads(paper_ca
     at.file_uploader(key="home_upload").set_value([("case.yaml", broken.encode(), "text/yaml"),
                                                    ("history.csv", history, "text/csv")]).run()
     click(at, "home_load_upload")
-    assert 'csp "CSP1": storage.e_min_mwh_th=110 must be < storage.e_max_mwh_th=100' in errors(at)
+    assert "CSP1: TS E min [MWh_th] = 110 must be < TS E max [MWh_th] = 100" in errors(at)
     assert case_of(at) == paper_case
     renamed = text.replace("name: paper", "name: uploaded", 1)
     at.file_uploader(key="home_upload").set_value([("case.yaml", renamed.encode(), "text/yaml"),
@@ -181,7 +194,7 @@ def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_ca
                                            "added_rows": [], "deleted_rows": []}
     at.run()
     assert not at.exception
-    assert 'csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100' in errors(at)
+    assert "CSP1: TS E min [MWh_th] = 1200 must be < TS E max [MWh_th] = 1100" in errors(at)
     assert case_of(at) == paper_case
     click(at, "portfolio_csp_discard")
     assert not errors(at) and "portfolio_csp_1" in {e.key for e in at.data_editor}
@@ -196,7 +209,7 @@ def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_ca
     expected = rvpp.solve(edited)
     assert expected.status == "optimal"
     assert_kpis_match(at, expected)
-    assert number(shown_kpis(at)["Profit"][0]) != pytest.approx(
+    assert number(shown_kpis(at)[NET][0]) != pytest.approx(
         rvpp.solve(paper_case).objective_eur / 1000, abs=0.05)
 
 
@@ -232,7 +245,7 @@ def test_markets_flat_tariff_preset_and_an_invalid_tariff(paper_case, paper_solv
     at.session_state["markets_tariff_1"] = {"edited_rows": {3: {"tariff_eur_per_mwh": -5.0}}, "added_rows": [],
                                             "deleted_rows": []}
     at.run()
-    assert "markets: hpa_tariff_eur_per_mwh hour 03:00 = -5 must be >= 0" in errors(at)
+    assert "HPA tariff at 03:00 [EUR/MWh_th] = −5 must be ≥ 0" in errors(at)
     assert case_of(at).markets.hpa_tariff_eur_per_mwh == (70.0,) * 24
     at.switch_page("pages/results.py").run()
     click(at, "results_solve")
@@ -260,7 +273,7 @@ def test_uncertainty_presets_budgets_and_deviating_periods(paper_case, paper_sol
     at.session_state["uncertainty_budgets_1"] = {"edited_rows": {wf1: {"gamma": 30}}, "added_rows": [],
                                                  "deleted_rows": []}
     at.run()
-    assert "exceeds the 24 periods" in errors(at)
+    assert "Γ [hours] of WF1: 30 is outside the allowed range 0 to 24 (the day's 24 hours)" in errors(at)
     assert case_of(at).budgets.overrides == ()
     at.session_state["uncertainty_budgets_1"] = {"edited_rows": {wf1: {"gamma": 2}}, "added_rows": [],
                                                  "deleted_rows": []}
@@ -286,9 +299,12 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     expected = paper_solve()
     assert_kpis_match(at, expected)
     specs = figures(at)
-    assert set(specs) == {"Day-ahead energy and secondary-reserve bands", "Heat supply against thermal demand",
+    assert set(specs) == {"The day's economics: from revenues to the net result (balanced)",
+                          "Day-ahead energy and secondary-reserve bands", "Heat supply against thermal demand",
                           "Electrical dispatch by unit (consumption negative)", "CSP1: thermal storage",
                           "Reserve by unit kind"}
+    waterfall = specs["The day's economics: from revenues to the net result (balanced)"]["data"][0]
+    np.testing.assert_allclose(values(waterfall["y"])[-1], expected.objective_eur / 1000)
     market = expected.market
     trades = specs["Day-ahead energy and secondary-reserve bands"]
     np.testing.assert_allclose(values(trace(trades, "SR up band")["y"]), market["r_sr_up_mw"])
@@ -302,22 +318,20 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
     assert [b.label for b in at.get("download_button")] == ["Bids (CSV)", "Full plan (Excel)",
                                                            "Case as edited (zip)", "Case as edited (Excel)"]
-    at.text_input(key="results_run_label").input("my balanced plan").run()
-    click(at, "results_save")
-    assert list(at.session_state["saved_runs"]) == ["my balanced plan"]
+
 
 
 def test_results_come_back_from_the_cache_without_a_click():
     at = click(open_app("results"), "results_solve")
     at.switch_page("pages/markets.py").run()
     at.switch_page("pages/results.py").run()
-    assert len(at.get("plotly_chart")) == 5
+    assert len(at.get("plotly_chart")) == 6
 
 
 # ----------------------------------------------------------------------------- Compare
 
 
-def test_compare_costs_and_flexibility_match_the_library(paper_case, paper_solve):
+def test_compare_costs_and_flexibility_match_the_library(paper_case, paper_solve, run_library):
     at = click(open_app("compare"), "compare_solve")
     cost = at.dataframe[0].value
     assert all(Variant(strategy=s, markets="DAM+SRM+HPA").apply(paper_case) == rvpp.with_options(paper_case, strategy=s)
@@ -327,13 +341,16 @@ def test_compare_costs_and_flexibility_match_the_library(paper_case, paper_solve
         assert result.status == "optimal"
         assert cost.loc[strategy.capitalize(), "DAM+SRM+HPA"] == pytest.approx(result.cost_keur)
     spec = figures(at)["Trades of each plan"]
+    assert len([k for k in spec["layout"] if k.startswith("yaxis")]) == 3  # no heat bought: no HPA panel
+    assert "no heat bought" in "\n".join(c.value for c in at.caption)
     for strategy, result in expected.items():
         lines = [t for t in spec["data"] if t["name"] == strategy]
         np.testing.assert_allclose(values(lines[0]["y"]), result.market["p_da_mw"])
     flexibility = at.dataframe[2].value
     assert len(flexibility) == 4 * len(STRATEGIES)
     click(at, "compare_save")
-    assert len(at.session_state["saved_runs"]) == len(STRATEGIES)
+    saved = RunLibrary(run_library).list()
+    assert sorted(r.label for r in saved) == sorted(f"{s} · DAM+SRM+HPA" for s in STRATEGIES)
     assert "Trades of each plan" in figures(at)
 
 
@@ -363,3 +380,120 @@ def test_two_sessions_keep_their_own_case():
     second.run()
     assert case_of(first).budgets.strategy == "optimistic"
     assert case_of(second).budgets.strategy == "balanced"
+
+
+# ----------------------------------------------------------------------------- saved runs
+
+
+def edit_capacity(at: AppTest, row: int, p_max_mw: float, follow: bool = True) -> AppTest:
+    """Type a wind farm's capacity into the Portfolio table (and the scale tick box)."""
+    key = next(e.key for e in at.data_editor if e.key.startswith("portfolio_wind_"))
+    edit = {"p_max_mw": p_max_mw} | ({} if follow else {"scale_with_capacity": False})
+    at.session_state[key] = {"edited_rows": {row: edit}, "added_rows": [], "deleted_rows": []}
+    at.run()
+    assert not at.exception, at.exception
+    return at
+
+
+def test_a_capacity_edit_scales_the_band_and_moves_the_plans_bound(paper_case, paper_solve):
+    at = edit_capacity(open_app("portfolio"), 0, 80.0)
+    wf1 = case_of(at).wind[0]
+    assert wf1.p_max_mw == 80.0 and wf1.series_scale == pytest.approx(80.0 / 50.0)
+    # The table is drawn again from the case: it shows the scale that followed the capacity.
+    table = next(e for e in at.data_editor if e.key.startswith("portfolio_wind_")).value
+    assert table.loc[0, "series_scale"] == pytest.approx(1.6)
+    # (AppTest runs a switched-to page without app.py, so the sidebar is checked in tests/test_browser.py.)
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    before = paper_solve().units.query("unit == 'WF1'")["bound_mw"].to_numpy()
+    after = rvpp.solve(case_of(at)).units.query("unit == 'WF1'")["bound_mw"].to_numpy()
+    # Independent of the band code: the history's WF1 profile times 1.6, as the case says.
+    assert after.max() > before.max() and after.max() <= 80.0 + 1e-9
+    assert_kpis_match(at, rvpp.solve(case_of(at)))
+    band = figures(at)["Day-ahead energy and secondary-reserve bands"]
+    assert values(trace(band, "DAM energy (+ sell, − buy)")["y"]).sum() > paper_solve().market["p_da_mw"].sum()
+
+
+def test_an_unticked_unit_keeps_its_band_when_its_capacity_changes(paper_case):
+    at = edit_capacity(open_app("portfolio"), 1, 80.0, follow=False)
+    assert case_of(at).wind[1].p_max_mw == 80.0 and case_of(at).wind[1].series_scale == 1.0
+    assert "WF2" in at.session_state["portfolio_fixed_scale"]
+
+
+def test_saved_runs_keep_distinct_labels_and_reopen_without_a_solve(run_library, paper_solve):
+    at = click(open_app("results"), "results_solve")
+    assert at.text_input(key="results_run_label").value == "balanced · DAM+SRM+HPA"
+    click(at, "results_save")
+    click(at, "results_save")  # the same label again: the library numbers it
+    at.switch_page("pages/portfolio.py").run()
+    edit_capacity(at, 0, 80.0)
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    assert at.text_input(key="results_run_label").value == "balanced · DAM+SRM+HPA · WF1 80 MW"
+    click(at, "results_save")
+    library = RunLibrary(run_library)
+    runs = library.list()
+    assert [r.label for r in runs] == ["balanced · DAM+SRM+HPA · WF1 80 MW", "balanced · DAM+SRM+HPA (2)",
+                                       "balanced · DAM+SRM+HPA"]
+    edited = library.load(runs[0].id)
+    assert edited.case.wind[0].p_max_mw == 80.0 and edited.settings["csp"] is True
+    assert edited.result.objective_eur == pytest.approx(rvpp.solve(edited.case).objective_eur, abs=1.0)
+
+    # A link opens the run in a new session: its case, its plan, no solve.
+    fresh = AppTest.from_file(APP, default_timeout=TIMEOUT_S)
+    fresh.query_params["run"] = runs[0].id
+    fresh.run()
+    assert not fresh.exception, fresh.exception
+    assert case_of(fresh).wind[0].p_max_mw == 80.0
+    assert number(shown_kpis(fresh)[NET][0]) == pytest.approx(
+        edited.result.objective_eur / 1000, abs=0.051)
+    assert "WF1 80 MW" in "\n".join(m.value for m in fresh.sidebar.markdown)
+
+
+def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_solve):
+    library = RunLibrary(run_library)
+    pessimistic, balanced = paper_solve(strategy="pessimistic"), paper_solve()
+    first = library.save("pessimistic · DAM+SRM+HPA", pessimistic.case, pessimistic, settings={"csp": True})
+    second = library.save("balanced · DAM+SRM+HPA", balanced.case, balanced, settings={"csp": True})
+    at = open_app("runs")
+    table = at.dataframe[0].value
+    assert list(table["label"]) == [second.label, first.label]
+    assert list(table["link"]) == [f"/?run={second.id}", f"/?run={first.id}"]
+    np.testing.assert_allclose(table["net_keur"], [balanced.objective_eur / 1000, pessimistic.objective_eur / 1000])
+    with pytest.raises(Exception):
+        library.rename(first.id, second.label)  # the page relies on the library refusing a taken label
+
+    at.switch_page("pages/compare.py").run()
+    at.button_group(key="compare_mode").set_value("Saved runs").run()
+    at.multiselect(key="compare_runs").set_value([first.id, second.id]).run()
+    assert not at.exception, at.exception
+    kpis = at.dataframe[0].value
+    assert list(kpis.index) == [first.label, second.label]
+    extra = kpis.loc[second.label, f"Extra cost vs {first.label} [kEUR]"]
+    assert extra == pytest.approx((pessimistic.objective_eur - balanced.objective_eur) / 1000)
+    economics = figures(at)["The day's economics: from revenues to the net result"]
+    assert [values(t["y"])[-1] for t in economics["data"]] == pytest.approx(
+        [pessimistic.objective_eur / 1000, balanced.objective_eur / 1000])
+    library.delete(first.id)
+    assert [r.label for r in RunLibrary(run_library).list()] == [second.label]
+
+
+def test_a_cancelled_solve_stops_its_process_at_once(paper_case):
+    from dashboard.solving import Solver
+
+    solver = Solver(workers=1)
+    slow = rvpp.with_options(paper_case, dt_h=0.25, strategy="pessimistic")
+    job = solver.start(slow)
+    deadline = time.monotonic() + TIMEOUT_S
+    while job.stage != "solving with HiGHS" and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert job.stage == "solving with HiGHS" and job.process.is_alive()
+    started = time.monotonic()
+    solver.cancel([job.key])
+    assert job.done.wait(10)
+    assert time.monotonic() - started < 5
+    assert job.cancelled and job.result is None and not job.process.is_alive()
+    assert solver.result(job.key) is None
+    quick = solver.start(paper_case)  # the solver keeps working after a cancel
+    assert quick.done.wait(TIMEOUT_S) and quick.result.status == "optimal"
+    assert solver.expected_s(paper_case)[1] == "the last solve of this case"

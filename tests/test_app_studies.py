@@ -128,11 +128,11 @@ def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list()
     at = open_app("market_sets")
     at.text_input(key="market_sets_prices").input("70, -5")
     click(at, "market_sets_run")
-    assert "hpa_flat_prices: -5.0 must be a finite number >= 0" in errors(at)
+    assert "Flat HPA tariffs [EUR/MWh_th]: −5.0 must be a finite number ≥ 0" in errors(at)
     at.text_input(key="market_sets_prices").input("70")
     at.multiselect(key="market_sets_strategies").set_value([])
     click(at, "market_sets_run")
-    assert "strategies is empty" in errors(at)
+    assert "Strategies is empty" in errors(at)
     assert not at.exception
 
 
@@ -162,7 +162,16 @@ def test_out_of_sample_page_matches_the_studies_on_the_same_days(paper_case):
     assert list(table13["method"]) == ["deterministic", "balanced"]
     assert list(table14["n_scenarios"]) == [1, 2]
     assert {"Out-of-sample: average cost per test day", "Net cost on each test day",
-            "Solve time of the first-stage plan"} <= set(figures(at))
+            "Solve time of the first-stage plan", "Penalty per test day by cause"} <= set(figures(at))
+    # The causes add up to each method's average penalty (Table 13), on linear axes.
+    causes = figures(at)["Penalty per test day by cause"]
+    assert [t["name"] for t in causes["data"]] == ["Energy short of the DAM bid", "Energy beyond the DAM bid",
+                                                   "Reserve not delivered", "Heat not served"]
+    total = sum(values(t["y"]) for t in causes["data"])
+    np.testing.assert_allclose(total[:2], table13["avg_penalty_keur"], rtol=1e-6, atol=1e-9)
+    assert figures(at)["Solve time of the first-stage plan"]["layout"]["yaxis"].get("type") != "log"
+    method = next(m.value for m in at.markdown if m.value.startswith("**How it works.**"))
+    assert all(word in method for word in ("m_def", "m_sur", "m_sr", "same days for every method"))
 
 
 def test_out_of_sample_page_refuses_empty_scenario_counts():
@@ -172,7 +181,7 @@ def test_out_of_sample_page_refuses_empty_scenario_counts():
     assert "give at least one" in errors(at)
     at.text_input(key="out_of_sample_scenarios").input("0")
     click(at, "out_of_sample_run")
-    assert "N=0 must be at least 1" in errors(at)
+    assert "Scenario counts N: N = 0 must be at least 1" in errors(at)
     assert not at.exception
 
 

@@ -7,7 +7,6 @@ q-quantile lies at position q·(n - 1).
 from __future__ import annotations
 
 import datetime as dt
-from pathlib import Path
 
 import numpy as np
 import pandas as pd

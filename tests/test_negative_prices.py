@@ -7,7 +7,6 @@ for λ < 0 they are ``(2 − m_def)·λ`` and ``(2 − m_sur)·λ``, worked out 
 from __future__ import annotations
 
 import datetime as dt
-from pathlib import Path
 
 import numpy as np
 import pandas as pd

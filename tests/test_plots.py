@@ -162,14 +162,25 @@ def test_quarter_hours_keep_hourly_ticks(case):
     assert list(plots.thin_clock_ticks(fig, 3).layout.xaxis.tickvals) == hourly[::3]
 
 
-def test_compare_overlays_every_plan(paper_solve, result):
+def test_compare_overlays_every_plan_and_leaves_out_idle_trades(paper_solve, result):
     other = paper_solve(strategy="deterministic")
-    fig = plots.compare_trades_figure({"balanced": result, "deterministic": other})
-    for label, plan in (("balanced", result), ("deterministic", other)):
+    plans = {"balanced": result, "deterministic": other}
+    # Neither plan buys heat on the default day: the HPA panel would be a flat line.
+    assert not any(r.market["h_hpa_mw"].any() for r in plans.values())
+    assert plots.idle_trades(plans) == ["h_hpa_mw"]
+    fig = plots.compare_trades_figure(plans)
+    for label, plan in plans.items():
         lines = [t for t in fig.data if t.name == label]
-        assert len(lines) == 4
+        assert len(lines) == 3
         np.testing.assert_allclose(lines[0].y, plan.market["p_da_mw"])
-        np.testing.assert_allclose(lines[3].y, plan.market["h_hpa_mw"])
+        np.testing.assert_allclose(lines[2].y, plan.market["r_sr_dn_mw"])
+    styles = {t.name: (t.line.dash, t.marker.symbol) for t in fig.data}
+    assert styles["balanced"] != styles["deterministic"]  # told apart without colour
+    buying = paper_solve(csp=False)  # without the CSP, the HPA serves all heat
+    assert buying.market["h_hpa_mw"].sum() > 0
+    fig = plots.compare_trades_figure({"no CSP": buying, **plans})
+    heat = [t for t in fig.data if t.name == "no CSP"][3]
+    np.testing.assert_allclose(heat.y, buying.market["h_hpa_mw"])
 
 
 def test_robustness_and_curve_figures_have_units(case):

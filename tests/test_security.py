@@ -13,7 +13,6 @@ import os
 import shutil
 import struct
 import zipfile
-import zlib
 from pathlib import Path
 
 import numpy as np

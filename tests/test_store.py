@@ -8,7 +8,6 @@ import subprocess
 import sys
 import zipfile
 from io import BytesIO
-from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -62,6 +61,20 @@ def test_a_saved_run_reopens_equal_to_what_was_saved(url, balanced):
         pd.testing.assert_frame_equal(getattr(result, name), getattr(balanced, name))
     assert audit_result(result) == []
     assert library.info(info.id).objective_eur == balanced.objective_eur
+
+
+def test_a_run_solved_without_the_csp_keeps_the_csp_parameters(url, paper_case, paper_solve):
+    without = paper_solve(csp=False)
+    assert without.status == "optimal" and not without.case.csp
+    library = RunLibrary(url)
+    with pytest.raises(StoreError, match="solved for another case"):
+        library.save("no CSP", paper_case, without)
+    info = library.save("no CSP", paper_case, without, settings={"csp": False})
+    saved = library.load(info.id)
+    assert saved.case == paper_case and saved.case.csp  # the parameters are kept
+    assert saved.result.case == without.case and not saved.result.case.csp
+    assert saved.result.objective_eur == without.objective_eur
+    assert audit_result(saved.result) == []
 
 
 def test_labels_stay_unique_and_renames_refuse_a_taken_label(url, balanced):

@@ -19,6 +19,8 @@ from ..solving.results import Result
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # the columns of the paper's Table 10
 KIND_NAMES = {"wind": "WFs", "pv": "PVs", "csp": "CSP", "ed": "EDs"}  # the rows of the paper's Table 9
 PERCENT = 100.0
+KILO = 1000.0
+PERCENT_BASE_SHARE = 0.05  # a percentage needs a base of at least 5 % of the gross money flows
 
 
 def cost_table(results: Mapping[tuple[str, str], Result]) -> pd.DataFrame:
@@ -57,30 +59,37 @@ def flexibility_table(results: Mapping[str, Result]) -> pd.DataFrame:
 
 
 def kpi_table(results: Mapping[str, Result], baseline: str | None = None) -> pd.DataFrame:
-    """One row per labelled plan: status, profit and its parts [EUR], cost [kEUR], solve time [s].
+    """One row per labelled plan: status, net result and its parts [kEUR], solve time [s].
 
-    With ``baseline`` (a label of ``results`` with a plan), two more columns give each
-    plan's extra cost over the baseline's [kEUR] and [%]: what being safer costs.
+    With ``baseline`` (a label of ``results`` with a plan), each plan's extra cost over
+    the baseline [kEUR]: what being safer costs. The same in [%] only when the
+    baseline's net result is at least :data:`PERCENT_BASE_SHARE` of its gross money
+    flows (revenues plus costs): a percentage of a near-zero base says nothing.
     """
     rows = []
     for label, result in results.items():
         parts = result.parts
-        rows.append({
-            "Run": label,
-            "Status": result.status,
-            "Profit [EUR]": result.objective_eur,
-            "Cost [kEUR]": result.cost_keur,
-            "DAM revenue [EUR]": parts.get("revenue_dam_eur"),
-            "Reserve revenue [EUR]": parts.get("revenue_sr_eur"),
-            "HPA cost [EUR]": parts.get("cost_hpa_eur"),
-            "Operating cost [EUR]": parts.get("cost_opex_eur"),
-            "Protection [EUR]": sum(result.protection_eur.values()) if result.protection_eur else None,
-            "Solve time [s]": result.build_s + result.solve_s + result.extract_s,
-        })
+        money = {
+            "Net result [kEUR]": result.objective_eur,
+            "DAM revenue [kEUR]": parts.get("revenue_dam_eur"),
+            "SR revenue [kEUR]": parts.get("revenue_sr_eur"),
+            "HPA cost [kEUR]": parts.get("cost_hpa_eur"),
+            "Operating cost [kEUR]": parts.get("cost_opex_eur"),
+            "Robust protection [kEUR]": sum(result.protection_eur.values()) if result.protection_eur else None,
+        }
+        rows.append({"Run": label, "Status": str(result.status),
+                     **{k: None if v is None else v / KILO for k, v in money.items()},
+                     "Solve time [s]": result.build_s + result.solve_s + result.extract_s})
     table = pd.DataFrame(rows).set_index("Run")
     if baseline is not None and results[baseline].has_plan:
-        base = results[baseline].cost_keur
-        extra = table["Cost [kEUR]"].astype(float) - base
-        table.insert(3, f"Extra cost vs {baseline} [kEUR]", extra)
-        table.insert(4, f"Extra cost vs {baseline} [%]", PERCENT * extra / abs(base) if base else float("nan"))
+        base = results[baseline]
+        extra = base.objective_eur / KILO - table["Net result [kEUR]"].astype(float)
+        table.insert(2, f"Extra cost vs {baseline} [kEUR]", extra)
+        if abs(base.objective_eur) >= PERCENT_BASE_SHARE * gross_eur(base):
+            table.insert(3, f"Extra cost vs {baseline} [%]", PERCENT * extra * KILO / abs(base.objective_eur))
     return table
+
+
+def gross_eur(result: Result) -> float:
+    """A plan's gross money flows [EUR]: every revenue and cost counted positive."""
+    return sum(abs(v) for v in result.parts.values()) + sum(abs(v) for v in result.protection_eur.values())

@@ -4,9 +4,9 @@ Every builder is a pure function of a :class:`~rvpp.solving.results.Result` or a
 :class:`~rvpp.solving.problem.Problem` and returns a :class:`plotly.graph_objects.Figure`:
 the x axis shows the clock time of each period's start on the delivery day (local
 time), every axis title carries its unit, every trace has a legend entry and a hover
-value. Backgrounds are transparent and the palette (after Okabe & Ito's colour-blind
-safe set) reads on light and dark themes alike, so the same figure serves the dashboard
-and static exports (``fig.write_image``).
+value. Backgrounds are transparent and the colours come from :mod:`rvpp.outputs.style`
+(Okabe & Ito's colour-blind safe set), which reads on light and dark themes alike, so
+the same figure serves the dashboard and static exports (``fig.write_image``).
 """
 
 from __future__ import annotations
@@ -21,23 +21,18 @@ from plotly.subplots import make_subplots
 from ..settle.audit import price_exposures, protection_exact
 from ..solving.problem import Problem
 from ..solving.results import FLEX_KINDS, Result
+from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS, MARKET_COLORS,
+                    ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
 
-# Okabe & Ito's (2008) colour-blind safe palette, its blue lightened to read on dark backgrounds too.
-BLUE, SKY, GREEN, YELLOW = "#2E86DE", "#56B4E9", "#009E73", "#F0E442"
-ORANGE, VERMILION, PURPLE, GREY = "#E69F00", "#D55E00", "#CC79A7", "#8C8C8C"
-KIND_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "hpa": GREY}
-KIND_LABELS = {"wind": "Wind", "pv": "PV", "csp": "CSP", "ed": "Electrical demand", "td": "Thermal demand"}
-SERIES_COLORS = (BLUE, VERMILION, GREEN, ORANGE, PURPLE, SKY, GREY, YELLOW)
-STRATEGY_COLORS = {"deterministic": GREY, "optimistic": GREEN, "balanced": BLUE, "pessimistic": VERMILION}
-GRID_COLOR = "rgba(128, 128, 128, 0.28)"
-CHI_SHADE = "rgba(213, 94, 0, 0.14)"
-TRANSPARENT = "rgba(0, 0, 0, 0)"
 CLOCK_TITLE = "Delivery day, period start (local time)"
 HOURS_PER_TICK = 1  # one x tick per clock hour
-FIGURE_HEIGHT = 420
 
 SOURCE_UNITS = {"price_da": "EUR/MWh", "price_sr_up": "EUR/MW per h", "price_sr_dn": "EUR/MW per h",
                 "wind": "MW", "pv": "MW", "csp": "MW_th", "ed": "MW", "td": "MW_th"}
+COMPARE_ROWS = (("p_da_mw", "DAM [MW]", "MW"), ("r_sr_up_mw", "SR up [MW]", "MW"),
+                ("r_sr_dn_mw", "SR down [MW]", "MW"), ("h_hpa_mw", "HPA heat [MW_th]", "MW_th"))
+TRADE_NAMES = {"p_da_mw": "day-ahead energy", "r_sr_up_mw": "up reserve", "r_sr_dn_mw": "down reserve",
+               "h_hpa_mw": "heat"}
 SOURCE_TITLES = {"price_da": "Day-ahead price", "price_sr_up": "Up-reserve price",
                  "price_sr_dn": "Down-reserve price"}
 
@@ -51,12 +46,12 @@ def trades_figure(result: Result) -> go.Figure:
     x = _labels(result)
     p, up, dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
     fig = go.Figure()
-    fig.add_bar(x=x, y=p, name="DAM energy (+ sell, − buy)", marker_color=BLUE,
+    fig.add_bar(x=x, y=p, name="DAM energy (+ sell, − buy)", marker_color=MARKET_COLORS["dam"],
                 hovertemplate="%{y:.2f} MW")
-    fig.add_bar(x=x, y=up, base=p, name="SR up band", marker_color=GREEN, opacity=0.75, width=0.35,
-                customdata=up, hovertemplate="%{customdata:.2f} MW")
-    fig.add_bar(x=x, y=dn, base=p - dn, name="SR down band", marker_color=ORANGE, opacity=0.75,
-                width=0.35, customdata=dn, hovertemplate="%{customdata:.2f} MW")
+    fig.add_bar(x=x, y=up, base=p, name="SR up band", marker_color=MARKET_COLORS["sr_up"], opacity=0.75,
+                width=0.35, customdata=up, hovertemplate="%{customdata:.2f} MW", marker_pattern_shape="/")
+    fig.add_bar(x=x, y=dn, base=p - dn, name="SR down band", marker_color=MARKET_COLORS["sr_dn"], opacity=0.75,
+                width=0.35, customdata=dn, hovertemplate="%{customdata:.2f} MW", marker_pattern_shape="\\")
     _style(fig, result, "Day-ahead energy and secondary-reserve bands", "Power [MW]")
     fig.update_layout(barmode="overlay")
     return fig
@@ -71,8 +66,8 @@ def heat_figure(result: Result) -> go.Figure:
         fig.add_bar(x=x, y=part["heat_to_td_mw"].to_numpy(float), name=f"{name} heat",
                     marker_color=_shade(VERMILION, i, result.csp["unit"].nunique()),
                     hovertemplate="%{y:.2f} MW_th")
-    fig.add_bar(x=x, y=result.market["h_hpa_mw"].to_numpy(float), name="HPA purchase", marker_color=GREY,
-                hovertemplate="%{y:.2f} MW_th")
+    fig.add_bar(x=x, y=result.market["h_hpa_mw"].to_numpy(float), name="HPA purchase",
+                marker_color=MARKET_COLORS["hpa"], hovertemplate="%{y:.2f} MW_th")
     demand = _kind_sum(result, "td", "p_mw")
     fig.add_scatter(x=x, y=demand, name="Thermal demand", mode="lines+markers",
                     line=dict(color=GREEN, width=3), hovertemplate="%{y:.2f} MW_th")
@@ -123,12 +118,12 @@ def storage_figure(result: Result, csp: str | None = None) -> go.Figure:
     fig.add_scatter(x=x, y=e_min, name="Minimum energy", mode="lines", line=dict(color=GREY, dash="dash"),
                     hovertemplate=energy, row=1, col=1)
     fig.add_scatter(x=x, y=floor, name="Margin kept for up reserve (σ↑)", mode="lines", fill="tonexty",
-                    fillcolor=_rgba(PURPLE, 0.25), line=dict(color=PURPLE, dash="dot"), hovertemplate=energy,
+                    fillcolor=rgba(PURPLE, 0.25), line=dict(color=PURPLE, dash="dot"), hovertemplate=energy,
                     row=1, col=1)
     fig.add_scatter(x=x, y=e_max, name="Maximum energy", mode="lines", line=dict(color=GREY, dash="dash"),
                     hovertemplate=energy, row=1, col=1)
     fig.add_scatter(x=x, y=ceiling, name="Margin kept for down reserve (σ↓)", mode="lines", fill="tonexty",
-                    fillcolor=_rgba(SKY, 0.25), line=dict(color=SKY, dash="dot"), hovertemplate=energy,
+                    fillcolor=rgba(SKY, 0.25), line=dict(color=SKY, dash="dot"), hovertemplate=energy,
                     row=1, col=1)
     fig.add_scatter(x=x, y=rows["ts_energy_mwh"].to_numpy(float), name="Stored energy (end of period)",
                     mode="lines+markers", line=dict(color=VERMILION, width=3), hovertemplate=energy, row=1, col=1)
@@ -213,7 +208,7 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
     fig.add_scatter(x=x, y=hi, name=f"{names[0]} ({_percent(q.q_hi)})", mode="lines",
                     line=dict(color=color, width=1), hovertemplate=f"%{{y:.2f}} {unit}")
     fig.add_scatter(x=x, y=lo, name=f"{names[1]} ({_percent(q.q_lo)})", mode="lines",
-                    line=dict(color=color, width=1), fill="tonexty", fillcolor=_rgba(color, 0.22),
+                    line=dict(color=color, width=1), fill="tonexty", fillcolor=rgba(color, 0.22),
                     hovertemplate=f"%{{y:.2f}} {unit}")
     fig.add_scatter(x=x, y=mid, name=names[2], mode="lines", line=dict(color=color, width=3, dash="dash"),
                     hovertemplate=f"%{{y:.2f}} {unit}")
@@ -326,25 +321,35 @@ def exposure_figure(result: Result, source: str, gamma: int) -> go.Figure:
 
 
 def compare_trades_figure(results: Mapping[str, Result]) -> go.Figure:
-    """DAM energy, SR bands and HPA heat of several plans overlaid, one colour per plan."""
+    """DAM energy, SR bands and HPA heat of several plans overlaid, one line style per plan.
+
+    A panel in which every plan is zero all day (e.g. no heat bought, no reserve offered)
+    carries no information and is left out; :func:`idle_trades` names what was left out.
+    """
     plans = {label: _plan(r) for label, r in results.items()}
     if not plans:
         raise ValueError("no plans to compare")
     first = next(iter(plans.values()))
-    rows = (("p_da_mw", "DAM [MW]", "MW"), ("r_sr_up_mw", "SR up [MW]", "MW"),
-            ("r_sr_dn_mw", "SR down [MW]", "MW"), ("h_hpa_mw", "HPA [MW_th]", "MW_th"))
-    fig = make_subplots(rows=len(rows), cols=1, shared_xaxes=True, vertical_spacing=0.04)
+    rows = [row for row in COMPARE_ROWS if row[0] not in idle_trades(plans)]
+    fig = make_subplots(rows=len(rows), cols=1, shared_xaxes=True, vertical_spacing=0.06)
     for i, (label, result) in enumerate(plans.items()):
-        color = STRATEGY_COLORS.get(label, SERIES_COLORS[i % len(SERIES_COLORS)])
+        look = run_style(label, i)
         for row, (column, axis, unit) in enumerate(rows, start=1):
             fig.add_scatter(x=_labels(result), y=result.market[column].to_numpy(float), name=label,
                             legendgroup=label, showlegend=row == 1, mode="lines+markers",
-                            line=dict(color=color, width=2, shape="hvh"), marker=dict(size=5),
+                            line=dict(color=look["color"], width=2, shape="hvh", dash=look["dash"]),
+                            marker=dict(size=6, symbol=look["symbol"]),
                             hovertemplate=f"{label}: %{{y:.2f}} {unit}<extra></extra>", row=row, col=1)
             fig.update_yaxes(title_text=axis, row=row, col=1)
-    _style(fig, first, "Trades of each plan", None, height=FIGURE_HEIGHT + 380, x_title=False)
+    _style(fig, first, "Trades of each plan", None, height=FIGURE_HEIGHT + 95 * len(rows), x_title=False)
     fig.update_xaxes(title_text=CLOCK_TITLE, row=len(rows), col=1)
     return fig
+
+
+def idle_trades(results: Mapping[str, Result]) -> list[str]:
+    """Columns of :data:`COMPARE_ROWS` that are zero in every period of every plan."""
+    return [column for column, _, _ in COMPARE_ROWS
+            if all(np.allclose(r.market[column].to_numpy(float), 0.0) for r in results.values() if r.has_plan)]
 
 
 def robustness_figure(points: pd.DataFrame) -> go.Figure:
@@ -508,8 +513,3 @@ def _shade(color: str, i: int, n: int) -> str:
     target = 255.0 if amount > 0 else 0.0
     mixed = rgb + (target - rgb) * abs(amount)
     return "#" + "".join(f"{int(round(v)):02X}" for v in mixed)
-
-
-def _rgba(color: str, alpha: float) -> str:
-    r, g, b = (int(color[k:k + 2], 16) for k in (1, 3, 5))
-    return f"rgba({r}, {g}, {b}, {alpha})"

@@ -7,6 +7,11 @@ returns a :class:`~rvpp.solving.results.Result` equal to the one saved, without 
 
 Labels are unique and editable: saving under a taken label adds `` (2)``, `` (3)``, ...;
 renaming onto a taken label is refused.
+
+Run switches are settings the case does not hold: ``settings["csp"] = False`` says the
+plan was solved without the CSP plants (``rvpp.with_options(case, csp=False)``) while
+the case keeps their parameters. The saved result belongs to the case with its run
+switches applied (:func:`solved_case`).
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ from typing import Any
 import pandas as pd
 import sqlalchemy as sa
 
-from ..data.case import Case, parse_case, save_case
+from ..data.case import Case, parse_case, save_case, with_options
 from ..solving.outcome import Outcome
 from ..solving.results import Result
 from .codec import case_data, history_bytes, history_from, jsonable
@@ -72,6 +77,9 @@ class RunLibrary:
              settings: Mapping[str, Any] | None = None) -> RunInfo:
         """Save one run in one transaction; the label gets a suffix if it is taken."""
         label = _clean_label(label)
+        if result is not None and result.case != solved_case(case, settings or {}):
+            raise StoreError(f'could not save "{label}": its plan was solved for another case than the one '
+                             "given (with the run switches of its settings applied)")
         history = history_bytes(case.history)
         tables = _tables_bytes(result) if result is not None and result.has_plan else None
         stamp = now()
@@ -121,7 +129,7 @@ class RunLibrary:
             tables = get_blob(connection, row.tables_digest) if row.tables_digest else None
         info = RunInfo(**{k: getattr(row, k) for k in LISTED})
         case = parse_case(row.case, history_from(history, row.settings.get("history_source", "history")))
-        result = _result_from(case, row.result, tables) if row.result else None
+        result = _result_from(solved_case(case, row.settings), row.result, tables) if row.result else None
         return SavedRun(info=info, case=case, settings=dict(row.settings), result=result)
 
     def rename(self, run_id: str, label: str) -> RunInfo:
@@ -161,6 +169,11 @@ class RunLibrary:
                 for path in sorted(p for p in folder.rglob("*") if p.is_file()):
                     archive.write(path, arcname=str(path.relative_to(folder)))
         return buffer.getvalue()
+
+
+def solved_case(case: Case, settings: Mapping[str, Any]) -> Case:
+    """The case a saved plan was solved for: ``case`` with the run switches of ``settings``."""
+    return with_options(case, csp=False) if settings.get("csp") is False and case.csp else case
 
 
 # ----------------------------------------------------------------------------- encoding

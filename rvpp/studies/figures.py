@@ -3,8 +3,8 @@
 Each function takes a study table and returns a ``plotly.graph_objects.Figure``; the
 same figure is drawn on a dashboard page, saved as interactive HTML and as PNG. As in
 :mod:`rvpp.outputs.plots`: every axis title carries its unit, every trace has a legend entry and
-a hover value with its unit, backgrounds are transparent and the palette reads on light
-and dark themes alike.
+a hover value with its unit, backgrounds are transparent and the colours, dashes and
+markers come from :mod:`rvpp.outputs.style`, so a strategy looks the same on every page.
 """
 
 from __future__ import annotations
@@ -15,14 +15,19 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from ..outputs.plots import (BLUE, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, ORANGE, PURPLE,
-                     SERIES_COLORS, STRATEGY_COLORS, TRANSPARENT, VERMILION)
+from ..outputs.style import (BLUE, DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, KIND_COLORS, KIND_GROUP_LABELS,
+                             MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, run_style)
 from ..solving.results import FLEX_KINDS
 
-KIND_LABELS = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP", "ed": "Electrical demands"}
+KIND_LABELS = {kind: KIND_GROUP_LABELS[kind] for kind in FLEX_KINDS}
 GAMMA_TITLE = "Uncertainty budget Γ [periods]"
-TRADES = (("sold_mwh", "Sold (DAM) [MWh]", "MWh", BLUE), ("bought_mwh", "Bought (DAM) [MWh]", "MWh", VERMILION),
-          ("heat_bought_mwh", "Heat bought (HPA) [MWh_th]", "MWh_th", GREEN))
+TRADES = (("sold_mwh", "Sold (DAM) [MWh]", "MWh", MARKET_COLORS["dam"]),
+          ("bought_mwh", "Bought (DAM) [MWh]", "MWh", VERMILION),
+          ("heat_bought_mwh", "Heat bought (HPA) [MWh_th]", "MWh_th", MARKET_COLORS["hpa"]))
+PENALTY_CAUSES = (("penalty_deficit_eur", "Energy short of the DAM bid", VERMILION, ""),
+                  ("penalty_surplus_eur", "Energy beyond the DAM bid", SKY, "/"),
+                  ("penalty_reserve_eur", "Reserve not delivered", ORANGE, "x"),
+                  ("penalty_heat_eur", "Heat not served", PURPLE, "."))
 NOT_AVAILABLE = "n/a"
 
 
@@ -119,30 +124,53 @@ def out_of_sample_figure(summary: pd.DataFrame) -> go.Figure:
     fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_market_cost_keur"], name="Market cost [kEUR]",
                          marker_color=BLUE, hovertemplate="%{x}: %{y:.1f} kEUR<extra>market cost</extra>"))
     fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_penalty_keur"], name="Penalty [kEUR]",
-                         marker_color=ORANGE, hovertemplate="%{x}: %{y:.1f} kEUR<extra>penalty</extra>"))
+                         marker_color=ORANGE, marker_pattern_shape="/",
+                         hovertemplate="%{x}: %{y:.1f} kEUR<extra>penalty</extra>"))
     fig.add_trace(go.Scatter(x=summary["method"], y=summary["avg_net_cost_keur"], mode="markers+text",
                              name="Net cost [kEUR]", marker={"symbol": "diamond", "size": 13, "color": VERMILION,
                                                              "line": {"width": 1, "color": GREY}},
                              text=[NOT_AVAILABLE if _missing(v) else f"{v:.1f}" for v in summary["avg_net_cost_keur"]],
-                             textposition="top center", hovertemplate="%{x}: %{y:.1f} kEUR<extra>net cost</extra>"))
+                             textposition="top center", cliponaxis=False,
+                             hovertemplate="%{x}: %{y:.1f} kEUR<extra>net cost</extra>"))
     _style(fig, "Out-of-sample: average cost per test day")
     fig.update_layout(barmode="relative")
     fig.update_xaxes(title_text="Method")
-    fig.update_yaxes(title_text="Average per test day [kEUR]")
+    fig.update_yaxes(title_text="Average per test day [kEUR]", range=_headroom(
+        [*summary["avg_market_cost_keur"], *summary["avg_net_cost_keur"],
+         *(summary["avg_market_cost_keur"] + summary["avg_penalty_keur"].clip(lower=0))]))
+    return fig
+
+
+def penalty_causes_figure(evaluations: pd.DataFrame) -> go.Figure:
+    """Average penalty per test day [kEUR] of each method, split by its cause.
+
+    The settlement prices each deviation from the plan: energy short of the DAM bid at
+    m_def × the realized DAM price, energy beyond it at m_sur × that price (a credit,
+    so negative), reserve not delivered at m_sr × its price, heat not served at the
+    unserved-heat price. The causes add up to the method's average penalty.
+    """
+    methods = list(dict.fromkeys(evaluations["method"]))
+    means = evaluations.groupby("method", sort=False)[[c for c, *_ in PENALTY_CAUSES]].mean() / 1000.0
+    fig = go.Figure()
+    for column, label, color, pattern in PENALTY_CAUSES:
+        fig.add_trace(go.Bar(x=methods, y=[float(means.loc[m, column]) for m in methods], name=label,
+                             marker_color=color, marker_pattern_shape=pattern,
+                             hovertemplate=f"%{{x}}: %{{y:.2f}} kEUR<extra>{label}</extra>"))
+    _style(fig, "Penalty per test day by cause")
+    fig.update_layout(barmode="relative")
+    fig.update_xaxes(title_text="Method")
+    fig.update_yaxes(title_text="Average penalty per test day [kEUR]")
     return fig
 
 
 def net_cost_by_day_figure(evaluations: pd.DataFrame) -> go.Figure:
-    """Net cost [kEUR] of every method on every test day (one line per method)."""
+    """Net cost [kEUR] of every method on every test day (one line style per method)."""
     fig = go.Figure()
-    others = [c for c in SERIES_COLORS if c not in STRATEGY_COLORS.values()]
-    methods = list(dict.fromkeys(evaluations["method"]))
-    colors = dict(STRATEGY_COLORS)
-    colors.update({m: others[i % len(others)] for i, m in enumerate(m for m in methods if m not in colors)})
-    for method, part in evaluations.groupby("method", sort=False):
-        color = colors[method]
+    for i, (method, part) in enumerate(evaluations.groupby("method", sort=False)):
+        look = run_style(str(method), i)
         fig.add_trace(go.Scatter(x=part["day"], y=part["net_cost_eur"] / 1000.0, mode="lines+markers", name=method,
-                                 line=dict(color=color, dash="solid" if method in STRATEGY_COLORS else "dot"),
+                                 line=dict(color=look["color"], dash=look["dash"]),
+                                 marker=dict(symbol=look["symbol"], size=8),
                                  hovertemplate=f"%{{x}}: %{{y:.1f}} kEUR<extra>{method}</extra>"))
     _style(fig, "Net cost on each test day")
     fig.update_xaxes(title_text="Test day (realization)", type="category")
@@ -151,14 +179,22 @@ def net_cost_by_day_figure(evaluations: pd.DataFrame) -> go.Figure:
 
 
 def solve_time_figure(summary: pd.DataFrame) -> go.Figure:
-    """First-stage solve time per method [s], log scale."""
+    """First-stage solve time per method [s]."""
     fig = go.Figure(go.Bar(x=summary["method"], y=summary["solve_s"], name="Solve time [s]", marker_color=GREY,
                            text=[f"{v:.1f} s" for v in summary["solve_s"]], textposition="outside", cliponaxis=False,
                            hovertemplate="%{x}: %{y:.2f} s<extra></extra>", showlegend=True))
     _style(fig, "Solve time of the first-stage plan")
     fig.update_xaxes(title_text="Method")
-    fig.update_yaxes(title_text="Solve time [s] (log scale)", type="log")
+    fig.update_yaxes(title_text="Solve time [s]", range=_headroom([0.0, *summary["solve_s"]]))
     return fig
+
+
+def _headroom(values, share: float = 0.15) -> list[float]:
+    """An axis range over ``values`` with room above (and below, for negatives) for text labels."""
+    finite = [float(v) for v in values if not _missing(v)] or [0.0]
+    low, high = min(0.0, *finite), max(0.0, *finite)
+    span = (high - low) or 1.0
+    return [low - (share * span if low < 0 else 0.0), high + share * span]
 
 
 def _style(fig: go.Figure, title: str) -> None:
@@ -171,7 +207,7 @@ def _style(fig: go.Figure, title: str) -> None:
 
 
 def _dash(i: int) -> str:
-    return ("solid", "dash", "dot", "dashdot", "longdash")[i % 5]
+    return DASHES[i % len(DASHES)]
 
 
 def _missing(value) -> bool:

@@ -1,0 +1,322 @@
+"""Edits of a case in the user's words.
+
+A person edits a case through forms whose fields read ``P max [MW]`` or ``κ: reserve
+band cap [-]``, not ``p_max_mw`` or ``markets.kappa``. This module keeps those words in
+one place and speaks them:
+
+* :data:`FIELDS` — label, unit and help of every unit field (paper Tables 3-6);
+* :func:`describe_edits` — what changed between the case as loaded and as edited, e.g.
+  ``["WF1 80 MW", "κ 0.2", "PV3 removed"]``, the words of a saved run's label;
+* :func:`follow_capacity` — a unit whose capacity changed gets its forecast band
+  scaled by the same ratio (its ``series_scale``), so an 80 MW wind farm is forecast
+  as 80 MW, not as the 50 MW farm whose history it follows;
+* :func:`plain_message` — a case-model message with the field names as the forms show
+  them: ``CSP1: TS E min [MWh_th] = 1200 must be < TS E max [MWh_th] = 1100``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Collection
+from typing import Any
+
+from .case import UNIT_KINDS, Case
+
+# field -> (name, unit, help); the form shows "name [unit]".
+FIELDS: dict[str, tuple[str, str, str]] = {
+    "name": ("Name", "", "Unique name of the unit"),
+    "p_max_mw": ("P max", "MW", "Installed (nameplate) power"),
+    "p_min_mw": ("P min", "MW", "Minimum power"),
+    "om_eur_per_mwh": ("O&M", "EUR/MWh", "Operating cost per MWh produced"),
+    "ramp_up_mw_per_min": ("Ramp up", "MW/min", "Reserve ramp; × the reserve delivery time caps the up reserve"),
+    "ramp_dn_mw_per_min": ("Ramp down", "MW/min", "Reserve ramp; × the reserve delivery time caps the down reserve"),
+    "ramp_mw_per_min": ("Ramp", "MW/min", "Reserve ramp; × the reserve delivery time caps each reserve band"),
+    "reserve_share": ("Reserve share", "-", "Largest reserve band as a fraction of P max (0-1)"),
+    "series": ("History series", "", "History column that gives the unit's forecast band"),
+    "series_scale": ("Series scale", "-", "Factor applied to the history series; follows the capacity while "
+                                          "'Scale band with capacity' is ticked"),
+    "forecast_series": ("Forecast series", "", "History column of the unit's day-ahead forecast, for forecast-error "
+                                               "bands (see Uncertainty); empty: none"),
+    "heat_efficiency": ("Heat efficiency", "-", "Fraction of solar-field heat delivered to thermal demands"),
+    "p_max_mw_th": ("SF max", "MW_th", "Solar-field thermal capacity"),
+    "e_min_mwh_th": ("TS E min", "MWh_th", "Minimum stored energy"),
+    "e_max_mwh_th": ("TS E max", "MWh_th", "Maximum stored energy"),
+    "p_ch_max_mw_th": ("TS charge max", "MW_th", "Largest charging power"),
+    "p_ch_min_mw_th": ("TS charge min", "MW_th", "Smallest charging power while charging"),
+    "p_dis_max_mw_th": ("TS discharge max", "MW_th", "Largest discharging power"),
+    "p_dis_min_mw_th": ("TS discharge min", "MW_th", "Smallest discharging power while discharging"),
+    "eta_ch": ("TS η charge", "-", "Charging efficiency (0-1]"),
+    "eta_dis": ("TS η discharge", "-", "Discharging efficiency (0-1]"),
+    "e_init_mwh_th": ("TS E start", "MWh_th", "Energy at the start of the day; empty: cyclic day"),
+    "p_in_max_mw_th": ("PB input max", "MW_th", "Largest power-block thermal input"),
+    "p_in_min_mw_th": ("PB input min", "MW_th", "Smallest thermal input while the turbine runs"),
+    "p_el_max_mw": ("Turbine max", "MW", "Turbine nameplate, caps the output in every scenario"),
+    "min_up_h": ("Min up", "h", "Minimum up time once started"),
+    "min_down_h": ("Min down", "h", "Minimum down time once stopped"),
+    "startup_fraction": ("Start-up heat", "-", "Thermal use at start-up as a fraction of PB input max"),
+    "startup_duration_h": ("Start-up time", "h", "Duration of the start-up heat use"),
+    "initially_on": ("On at midnight", "", "Turbine online at the start of the day"),
+    "breakpoints": ("Power-block curve", "", "Thermal input and efficiency at each breakpoint"),
+    "e_min_mwh": ("E min", "MWh", "Minimum energy over the day"),
+    "p_init_mw": ("P start", "MW", "Consumption before the day starts (informative)"),
+    "flex_up": ("Flex up", "-", "Up reserve (consumption decrease) as a fraction of consumption"),
+    "flex_dn": ("Flex down", "-", "Down reserve (consumption increase) as a fraction of consumption"),
+    "h_min_mw_th": ("H min", "MW_th", "Minimum heat"),
+    "h_max_mw_th": ("H max", "MW_th", "Maximum heat"),
+    "q_min_mwh_th": ("Q min", "MWh_th", "Minimum heat over the day"),
+    "h_init_mw_th": ("H start", "MW_th", "Heat before the day starts (informative)"),
+}
+
+# Settings as the Markets, Uncertainty and Home pages name them: dotted path -> (name, unit).
+SETTINGS: dict[str, tuple[str, str]] = {
+    "delivery_date": ("Delivery day", ""),
+    "dt_h": ("Market time unit", "h"),
+    "markets.srm": ("Secondary reserve (SRM)", ""),
+    "markets.hpa": ("Heat purchase (HPA)", ""),
+    "markets.kappa": ("κ: reserve band cap", "-"),
+    "markets.reserve_duration_min": ("Reserve delivery time", "min"),
+    "markets.hpa_tariff_eur_per_mwh": ("HPA tariff", "EUR/MWh_th"),
+    "uncertainty.window_days": ("History window", "days"),
+    "uncertainty.q_lo": ("Lower percentile", ""),
+    "uncertainty.q_hi": ("Upper percentile", ""),
+    "budgets.strategy": ("Strategy preset", ""),
+    "budgets.mode": ("Budget variant", ""),
+    "budgets.overrides": ("Γ", "periods"),
+    "solver.time_limit_s": ("Solver time limit", "s"),
+    "solver.rel_gap": ("Solver relative gap", "-"),
+    "solver.threads": ("Solver threads", ""),
+}
+# What a label says for a changed setting: dotted path -> format of the new value.
+SETTING_WORDS = {
+    "markets.kappa": "κ {:g}",
+    "markets.reserve_duration_min": "reserve time {:g} min",
+    "uncertainty.window_days": "{:d}-day window",
+    "uncertainty.q_lo": "lower percentile {:g}",
+    "uncertainty.q_hi": "upper percentile {:g}",
+    "solver.time_limit_s": "time limit {:g} s",
+    "solver.rel_gap": "gap {:g}",
+    "solver.threads": "{:d} threads",
+}
+# Study settings as the study pages name them.
+STUDY_FIELDS: dict[str, str] = {
+    "strategies": "Strategies",
+    "gammas": "Γ grid [periods]",
+    "market_sets": "Market sets",
+    "market_sets_without_csp": "Market sets without the CSP",
+    "hpa_flat_prices": "Flat HPA tariffs [EUR/MWh_th]",
+    "test_days": "Test days",
+    "scenario_counts": "Scenario counts N",
+    "sp_time_limit_s": "Time limit per stochastic program [s]",
+    "threads": "Threads",
+}
+CAPACITY_FIELDS = {"wind": "p_max_mw", "pv": "p_max_mw", "csp": "solar_field.p_max_mw_th", "ed": "p_max_mw",
+                   "td": "h_max_mw_th"}
+UNIT_WORDS = {"wind": "wind farm", "pv": "PV plant", "csp": "CSP plant", "ed": "electrical demand",
+              "td": "thermal demand"}
+LABEL_LIMIT = 120  # characters of a default run label
+
+
+def label(field: str) -> str:
+    """``"p_max_mw"`` or ``"storage.e_max_mwh_th"`` → ``"P max [MW]"`` / ``"TS E max [MWh_th]"``."""
+    leaf = field.split(".")[-1]
+    if field in SETTINGS:
+        name, unit = SETTINGS[field]
+    elif leaf in FIELDS:
+        name, unit, _ = FIELDS[leaf]
+    else:
+        return field
+    return f"{name} [{unit}]" if unit else name
+
+
+def capacity(kind: str, unit: Any) -> float:
+    """The capacity a unit's forecast band scales with [MW or MW_th]."""
+    return float(_get(unit, CAPACITY_FIELDS[kind]))
+
+
+def follow_capacity(before: Case, after: Case, fixed: Collection[str] = ()) -> Case:
+    """``after`` with the forecast band of every unit whose capacity changed scaled to match.
+
+    A unit of ``after`` that existed in ``before`` (same kind and name) with another
+    capacity gets ``series_scale × new capacity / old capacity``, unless its name is in
+    ``fixed`` or its series scale was edited too (the user's value stands).
+    """
+    old = {(kind, u.name): u for kind, u in before.units()}
+    changes: dict[str, list] = {}
+    for kind in UNIT_KINDS:
+        units, changed = [], False
+        for unit in getattr(after, kind):
+            prior = old.get((kind, unit.name))
+            scale_field = "solar_field.series_scale" if kind == "csp" else "series_scale"
+            if (prior is not None and unit.name not in fixed and capacity(kind, prior) > 0
+                    and not math.isclose(capacity(kind, unit), capacity(kind, prior))
+                    and _get(unit, scale_field) == _get(prior, scale_field)):
+                ratio = capacity(kind, unit) / capacity(kind, prior)
+                unit = _set(unit, scale_field, _get(prior, scale_field) * ratio)
+                changed = True
+            units.append(unit)
+        if changed:
+            changes[kind] = units
+    return after.replace(**changes) if changes else after
+
+
+def describe_edits(origin: Case, edited: Case) -> list[str]:
+    """What was edited from ``origin`` to ``edited``, in the words of the forms.
+
+    The strategy and the market switches are left out (every run label names them).
+    A capacity reads ``"WF1 80 MW"``; another unit field ``"WF1 O&M 20 EUR/MWh"``; a
+    series scale that only followed its capacity is not repeated.
+    """
+    words = _settings_edits(origin, edited)
+    words += _budget_edits(origin, edited)
+    words += _unit_edits(origin, edited)
+    return words
+
+
+def run_label(origin: Case, edited: Case, csp: bool = True, limit: int = LABEL_LIMIT) -> str:
+    """A run's default label: strategy, market set and what was edited, e.g.
+    ``"balanced · DAM+SRM+HPA · WF1 80 MW"``; ``csp=False`` adds ``"no CSP"``.
+
+    Past ``limit`` characters the last edits are summed up (``"… and 3 more edits"``).
+    """
+    edits = describe_edits(origin, edited) + (["no CSP"] if not csp and edited.csp else [])
+    head = [edited.budgets.label, edited.markets.label]
+    shown, hidden = list(edits), 0
+
+    def joined() -> str:
+        more = [f"… and {hidden} more edit{'s' if hidden > 1 else ''}"] if hidden else []
+        return " · ".join(head + shown + more)
+
+    while len(joined()) > limit and shown:
+        shown.pop()
+        hidden += 1
+    return joined()
+
+
+def plain_message(message: str) -> str:
+    """A case-model message with field names as the forms show them.
+
+    ``csp "CSP1": storage.e_min_mwh_th=1200 must be < storage.e_max_mwh_th=1100`` becomes
+    ``CSP1: TS E min [MWh_th] = 1200 must be < TS E max [MWh_th] = 1100``;
+    ``markets: hpa_tariff_eur_per_mwh hour 03:00 = -5 must be >= 0`` becomes
+    ``HPA tariff at 03:00 [EUR/MWh_th] = −5 must be ≥ 0``.
+    """
+    text = re.sub(r'^(?:wind|pv|csp|ed|td) "([^"]+)": ', r"\1: ", message)
+    if text.startswith("study settings: "):
+        text = re.sub(r"(?:(?<=^study settings: )|(?<=; ))([a-z_]+)(?=[=: ])",
+                      lambda m: STUDY_FIELDS.get(m.group(1), m.group(1)), text)
+        text = re.sub(r"(?<=\w)=(?=[-\d])", " = ", text)
+    section = re.match(r"^(markets|uncertainty|budgets|solver): ", text)
+    prefix = ""
+    if section:
+        prefix, text = section.group(1) + ".", text[section.end():]
+
+    def field(match: re.Match) -> str:
+        path, index = match.group(1), match.group(2)
+        full = prefix + path if prefix + path in SETTINGS else path
+        name = label(full)
+        if name == full and path not in SETTINGS:
+            return match.group(0)
+        if index is not None:
+            name = f"{name} (value {int(index) + 1})"
+        return f"{name} = "
+
+    text = re.sub(r"\bhpa_tariff_eur_per_mwh hour (\d\d:\d\d) = ", r"HPA tariff at \1 [EUR/MWh_th] = ", text)
+    text = re.sub(r"\b([a-z][a-z_]*(?:\.[a-z][a-z_]*)*)(?:\.(\d+))?=", field, text)
+    text = re.sub(r"(?<=[ =])-(?=\d)", "−", text)
+    return text.replace(">=", "≥").replace("<=", "≤")
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _settings_edits(origin: Case, edited: Case) -> list[str]:
+    words = []
+    if edited.delivery_date != origin.delivery_date:
+        words.append(f"{edited.delivery_date:%d %b %Y}")
+    if edited.dt_h != origin.dt_h:
+        words.append(f"{edited.dt_h * 60:g}-min periods")
+    tariff, before = edited.markets.hpa_tariff_eur_per_mwh, origin.markets.hpa_tariff_eur_per_mwh
+    if tariff != before:
+        words.append(f"HPA flat {tariff[0]:g}" if len(set(tariff)) == 1 else "HPA tariff edited")
+    for path, words_format in SETTING_WORDS.items():
+        section, name = path.split(".")
+        new, old = getattr(getattr(edited, section), name), getattr(getattr(origin, section), name)
+        if new != old:
+            words.append(words_format.format(new))
+    return words
+
+
+def _budget_edits(origin: Case, edited: Case) -> list[str]:
+    words = []
+    if edited.budgets.mode != origin.budgets.mode:
+        words.append("planner-chosen Γ" if edited.budgets.mode == "planner_chosen" else "paper-mode Γ")
+    new, old = edited.budgets.override_map, origin.budgets.override_map
+    for source in sorted(set(new) | set(old)):
+        if new.get(source) != old.get(source):
+            words.append(f"Γ {source} {new[source]}" if source in new else f"Γ {source} preset")
+    return words
+
+
+def _unit_edits(origin: Case, edited: Case) -> list[str]:
+    words = []
+    for kind in UNIT_KINDS:
+        before = {u.name: u for u in getattr(origin, kind)}
+        after = {u.name: u for u in getattr(edited, kind)}
+        for name in after:
+            if name not in before:
+                words.append(f"{name} added ({capacity(kind, after[name]):g} {_capacity_unit(kind)})")
+                continue
+            words += _field_edits(kind, before[name], after[name])
+        words += [f"{name} removed" for name in before if name not in after]
+    return words
+
+
+def _field_edits(kind: str, old: Any, new: Any) -> list[str]:
+    flat_old, flat_new = _flat(old.model_dump(mode="python")), _flat(new.model_dump(mode="python"))
+    cap_field = CAPACITY_FIELDS[kind]
+    ratio = capacity(kind, new) / capacity(kind, old) if capacity(kind, old) else 1.0
+    words = []
+    if flat_new[cap_field] != flat_old[cap_field]:
+        words.append(f"{new.name} {flat_new[cap_field]:g} {_capacity_unit(kind)}")
+    for path, value in flat_new.items():
+        before = flat_old.get(path)
+        if path in (cap_field, "kind") or value == before:
+            continue
+        leaf = path.split(".")[-1]
+        if leaf == "series_scale" and before is not None and math.isclose(value, before * ratio):
+            continue  # followed the capacity: already said
+        if leaf == "breakpoints":
+            words.append(f"{new.name} power-block curve edited")
+            continue
+        name, unit, _ = FIELDS.get(leaf, (leaf, "", ""))
+        shown = "empty" if value is None else (f"{value:g}" if isinstance(value, float) else str(value))
+        words.append(f"{new.name} {name} {shown}{f' {unit}' if unit and unit != '-' and value is not None else ''}")
+    return words
+
+
+def _capacity_unit(kind: str) -> str:
+    return "MW_th" if kind in ("csp", "td") else "MW"
+
+
+def _flat(data: dict, prefix: str = "") -> dict[str, Any]:
+    flat = {}
+    for key, value in data.items():
+        if isinstance(value, dict):
+            flat.update(_flat(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def _get(unit: Any, path: str) -> Any:
+    for part in path.split("."):
+        unit = getattr(unit, part)
+    return unit
+
+
+def _set(unit: Any, path: str, value: Any) -> Any:
+    head, _, rest = path.partition(".")
+    if not rest:
+        return unit.model_copy(update={head: value})
+    return unit.model_copy(update={head: _set(getattr(unit, head), rest, value)})

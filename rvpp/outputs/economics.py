@@ -1,0 +1,137 @@
+"""The day's economics of a plan: where the objective comes from, and why its sign.
+
+The objective (MODEL_SPEC §3) is
+
+    net = DAM revenue + SR revenue − HPA cost − operating cost − price protection  [EUR]
+
+and it is often negative: the VPP is not only a seller. It serves its own electrical
+demands and thermal demands first, pays the O&M of everything it runs and buys heat
+through the HPA, so a day can be a net cost even when the markets pay well. A plan's
+:class:`DayEconomics` holds the parts with the energy served, :func:`explanation`
+says it in one line, and :func:`waterfall_figure` draws it (one panel per plan).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import plotly.graph_objects as go
+from plotly.subplots import make_subplots
+
+from ..solving.results import Result
+from .style import FIGURE_HEIGHT, GAIN_COLOR, GRID_COLOR, LOSS_COLOR, NET_COLOR, TRANSPARENT
+
+KILO = 1000.0
+SHORT = {"DAM revenue": "DAM", "SR revenue": "SR", "HPA cost": "HPA", "Operating cost": "O&M",
+         "Robust protection": "Protection", "Net": "Net"}  # step names in narrow panels
+
+
+@dataclass(frozen=True)
+class DayEconomics:
+    """The parts of a plan's objective [EUR] and what the VPP serves and trades over the day."""
+
+    revenue_dam_eur: float
+    revenue_sr_eur: float
+    cost_hpa_eur: float
+    cost_opex_eur: float
+    protection_eur: float
+    demand_mwh: float        # electricity consumed by the VPP's own demands [MWh]
+    heat_mwh_th: float       # heat delivered to its thermal demands [MWh_th]
+    sold_mwh: float          # DAM energy sold [MWh]
+    bought_mwh: float        # DAM energy bought [MWh]
+    heat_bought_mwh_th: float  # heat bought through the HPA [MWh_th]
+
+    @property
+    def net_eur(self) -> float:
+        """The objective: revenues minus costs minus the price protection [EUR]."""
+        return (self.revenue_dam_eur + self.revenue_sr_eur - self.cost_hpa_eur - self.cost_opex_eur
+                - self.protection_eur)
+
+    @property
+    def served_mwh(self) -> float:
+        """Electricity and heat served to the VPP's own demands [MWh + MWh_th]."""
+        return self.demand_mwh + self.heat_mwh_th
+
+    @property
+    def net_cost_per_mwh(self) -> float | None:
+        """−net per MWh served [EUR/MWh]; ``None`` when nothing is served."""
+        return -self.net_eur / self.served_mwh if self.served_mwh > 0 else None
+
+    def steps(self) -> dict[str, float]:
+        """Signed contributions to the objective [EUR], in the order of the waterfall, then the net."""
+        return {"DAM revenue": self.revenue_dam_eur, "SR revenue": self.revenue_sr_eur,
+                "HPA cost": -self.cost_hpa_eur, "Operating cost": -self.cost_opex_eur,
+                "Robust protection": -self.protection_eur, "Net": self.net_eur}
+
+
+def economics(result: Result) -> DayEconomics:
+    """The day's economics of a solved plan."""
+    if not result.has_plan:
+        raise ValueError(f"the result has no plan (status {result.status}: {result.message})")
+    dt_h = result.problem.dt_h
+    units, market = result.units, result.market
+    p_da = market["p_da_mw"].to_numpy(float)
+    parts = result.parts
+    return DayEconomics(
+        revenue_dam_eur=parts.get("revenue_dam_eur", 0.0), revenue_sr_eur=parts.get("revenue_sr_eur", 0.0),
+        cost_hpa_eur=parts.get("cost_hpa_eur", 0.0), cost_opex_eur=parts.get("cost_opex_eur", 0.0),
+        protection_eur=sum(result.protection_eur.values()),
+        demand_mwh=float(units.loc[units["kind"] == "ed", "p_mw"].sum() * dt_h),
+        heat_mwh_th=float(units.loc[units["kind"] == "td", "p_mw"].sum() * dt_h),
+        sold_mwh=float(p_da.clip(min=0).sum() * dt_h), bought_mwh=float(-p_da.clip(max=0).sum() * dt_h),
+        heat_bought_mwh_th=float(market["h_hpa_mw"].sum() * dt_h))
+
+
+def explanation(day: DayEconomics) -> str:
+    """One line on the sign of the objective, e.g. ``"A net cost of 43.7 kEUR: the VPP serves
+    2,000 MWh of its own demand and 1,400 MWh_th of heat; the net cost per MWh served is
+    12.8 EUR."``"""
+    net = day.net_eur
+    served = (f"the VPP serves {day.demand_mwh:,.0f} MWh of its own demand and {day.heat_mwh_th:,.0f} MWh_th "
+              "of heat")
+    if day.heat_bought_mwh_th > 0:
+        served += f" ({day.heat_bought_mwh_th:,.0f} MWh_th of it bought through the HPA)"
+    earned = day.revenue_dam_eur + day.revenue_sr_eur
+    paid = day.cost_hpa_eur + day.cost_opex_eur + day.protection_eur
+    if net < 0:
+        head = (f"A net cost of {-net / KILO:,.1f} kEUR: market revenues of {earned / KILO:,.1f} kEUR do not cover "
+                f"{paid / KILO:,.1f} kEUR of operating cost, heat and protection, because {served}")
+    else:
+        head = (f"A net profit of {net / KILO:,.1f} kEUR: market revenues of {earned / KILO:,.1f} kEUR cover "
+                f"{paid / KILO:,.1f} kEUR of operating cost, heat and protection while {served}")
+    per = day.net_cost_per_mwh
+    if per is None:
+        return head + "."
+    word = "net cost" if per >= 0 else "net profit"
+    return f"{head}; the {word} per MWh served is {abs(per):,.1f} EUR.".replace("-", "−")
+
+
+def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
+    """The parts of each plan's objective as a waterfall [kEUR], one panel per plan.
+
+    Revenues go up, costs and the robust protection go down, the last bar is the net
+    result; every bar carries its signed value, so colour is not needed to read it.
+    """
+    if not results:
+        raise ValueError("no plans to draw")
+    labels = list(results)
+    fig = make_subplots(rows=1, cols=len(labels), shared_yaxes=True, horizontal_spacing=0.03,
+                        subplot_titles=labels if len(labels) > 1 else None)
+    for col, label in enumerate(labels, start=1):
+        steps = economics(results[label]).steps()
+        values = [v / KILO for v in steps.values()]
+        names = list(steps) if len(labels) == 1 else [SHORT[k] for k in steps]
+        fig.add_trace(go.Waterfall(
+            x=names, y=values, measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
+            text=[f"{v:+,.1f}".replace("-", "−") for v in values], textposition="outside", cliponaxis=False,
+            increasing={"marker": {"color": GAIN_COLOR}}, decreasing={"marker": {"color": LOSS_COLOR}},
+            totals={"marker": {"color": NET_COLOR}}, connector={"line": {"color": GRID_COLOR}},
+            hovertemplate="%{x}: %{y:+,.1f} kEUR<extra>" + label + "</extra>", showlegend=False), row=1, col=col)
+    title = "The day's economics: from revenues to the net result" + (f" ({labels[0]})" if len(labels) == 1 else "")
+    fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT + 40,
+                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, margin=dict(t=100, b=60, l=70, r=30))
+    fig.update_xaxes(title_text="Part of the objective", gridcolor=GRID_COLOR, tickangle=-30)
+    fig.update_yaxes(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
+    fig.update_yaxes(title_text="Amount [kEUR]", row=1, col=1)
+    return fig

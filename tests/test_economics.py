@@ -1,0 +1,58 @@
+"""The day's economics: parts that add up to the objective, energy served, and the waterfall."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rvpp.outputs.economics import economics, explanation, waterfall_figure
+
+
+@pytest.fixture(scope="module")
+def balanced(paper_solve):
+    result = paper_solve(strategy="balanced")
+    assert result.status == "optimal"
+    return result
+
+
+def test_the_parts_add_up_to_the_objective(balanced):
+    day = economics(balanced)
+    assert day.net_eur == pytest.approx(balanced.objective_eur, abs=1e-3)
+    steps = day.steps()
+    assert sum(v for k, v in steps.items() if k != "Net") == pytest.approx(balanced.objective_eur, abs=1e-3)
+    assert steps["Robust protection"] == pytest.approx(-sum(balanced.protection_eur.values()))
+
+
+def test_energy_served_is_the_demands_over_the_day(balanced, paper_case):
+    day = economics(balanced)
+    units = balanced.units
+    # Independent sums: every electrical demand's and thermal demand's power over 24 one-hour periods.
+    ed = sum(units[units["unit"] == d.name]["p_mw"].sum() for d in paper_case.ed)
+    td = sum(units[units["unit"] == d.name]["p_mw"].sum() for d in paper_case.td)
+    assert day.demand_mwh == pytest.approx(ed) and day.heat_mwh_th == pytest.approx(td)
+    assert day.demand_mwh >= sum(d.e_min_mwh for d in paper_case.ed) - 1e-6
+    p = balanced.market["p_da_mw"].to_numpy()
+    assert day.sold_mwh - day.bought_mwh == pytest.approx(p.sum())
+    assert day.net_cost_per_mwh == pytest.approx(-balanced.objective_eur / (ed + td))
+
+
+def test_the_explanation_states_the_sign_and_the_cost_per_mwh(balanced):
+    day = economics(balanced)
+    line = explanation(day)
+    assert balanced.objective_eur < 0
+    assert line.startswith(f"A net cost of {-balanced.objective_eur / 1000:,.1f} kEUR")
+    assert f"{day.demand_mwh:,.0f} MWh of its own demand" in line
+    assert f"net cost per MWh served is {-balanced.objective_eur / day.served_mwh:,.1f} EUR" in line
+
+
+def test_the_waterfall_ends_at_the_net_result(balanced, paper_solve):
+    fig = waterfall_figure({"balanced": balanced})
+    [trace] = fig.data
+    assert list(trace.x) == ["DAM revenue", "SR revenue", "HPA cost", "Operating cost", "Robust protection", "Net"]
+    assert list(trace.measure) == ["relative"] * 5 + ["total"]
+    values = np.asarray(trace.y, float)
+    assert values[:5].sum() == pytest.approx(values[5]) == pytest.approx(balanced.objective_eur / 1000)
+    assert fig.layout.title.text.startswith("The day's economics")
+    assert fig.layout.yaxis.title.text == "Amount [kEUR]" and fig.layout.xaxis.title.text
+    two = waterfall_figure({"balanced": balanced, "deterministic": paper_solve(strategy="deterministic")})
+    assert len(two.data) == 2 and [a.text for a in two.layout.annotations] == ["balanced", "deterministic"]
