@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from rvpp import load_case, solve, with_options
-from tests.factories import PAPER
+from tests.factories import PAPER, cyclic_storage
 
 
 @pytest.fixture(scope="session")
@@ -22,6 +22,22 @@ def paper_solve(paper_case):
         key = repr(sorted(options.items()))
         if key not in cache:
             cache[key] = solve(with_options(paper_case, **options))
+        return cache[key]
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def cyclic_solve(paper_case):
+    """Solve the paper case with a cyclic storage day (:func:`tests.factories.cyclic_storage`)
+    and options, once per distinct set of options."""
+    cyclic = cyclic_storage(paper_case)
+    cache = {}
+
+    def run(**options):
+        key = repr(sorted(options.items()))
+        if key not in cache:
+            cache[key] = solve(with_options(cyclic, **options))
         return cache[key]
 
     return run

@@ -80,3 +80,18 @@ def tiny_problem(case, **series):
     for price in ("price_da", "price_sr_up", "price_sr_dn"):
         series.setdefault(price, (0.0, 0.0, 0.0))
     return problem_from_bands(case, periods, bands(nt, **series))
+
+
+def with_storage(case, **changes):
+    """``case`` with its first CSP's storage fields changed."""
+    csp = case.csp[0]
+    return case.replace(csp=[csp.model_copy(update={"storage": csp.storage.model_copy(update=changes)})])
+
+
+def cyclic_storage(case):
+    """The storage day is cyclic (``e[0] = e[NT]``) instead of starting at the case's fixed level.
+
+    The paper case starts the day with an empty tank, so its night heat comes through the HPA;
+    with a cyclic day the tank carries the afternoon's heat into the night instead, no heat is
+    bought on the default day and every market set has a plan."""
+    return with_storage(case, e_init_mwh_th=None)

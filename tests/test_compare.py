@@ -38,8 +38,8 @@ def test_flexibility_and_kpi_tables(paper_solve):
     assert "Profit [EUR]" not in kpis and "Cost [kEUR]" not in kpis  # one number for the objective
 
 
-def test_kpi_table_prices_safety_against_a_baseline(paper_solve):
-    results = {s: paper_solve(strategy=s) for s in ("deterministic", "pessimistic")}
+def test_kpi_table_prices_safety_against_a_baseline(cyclic_solve):
+    results = {s: cyclic_solve(strategy=s) for s in ("deterministic", "pessimistic")}
     table = kpi_table(results, baseline="deterministic")
     base = results["deterministic"]
     extra = results["pessimistic"].cost_keur - base.cost_keur

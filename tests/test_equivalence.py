@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from rvpp import audit_result, solve, with_options
+from tests.factories import cyclic_storage
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_objectives.json").read_text())
 REL_GAP = REFERENCE["rel_gap"]
@@ -28,13 +29,8 @@ def _cases(dt_h: float) -> list[dict]:
     return [c for c in REFERENCE["cases"] if c["dt_h"] == dt_h]
 
 
-def _cyclic(case):
-    csp = case.csp[0]
-    return case.replace(csp=[csp.model_copy(update={"storage": csp.storage.model_copy(update={"e_init_mwh_th": None})})])
-
-
 def _check(paper_case, ref: dict) -> None:
-    case = with_options(_cyclic(paper_case), date=ref["date"], strategy=ref["strategy"], dt_h=ref["dt_h"], rel_gap=REL_GAP)
+    case = with_options(cyclic_storage(paper_case), date=ref["date"], strategy=ref["strategy"], dt_h=ref["dt_h"], rel_gap=REL_GAP)
     result = solve(case)
     assert result.status == "optimal", result.message
     tol = REL_GAP * abs(ref["objective_eur"]) + ABS_TOL

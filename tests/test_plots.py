@@ -162,10 +162,9 @@ def test_quarter_hours_keep_hourly_ticks(case):
     assert list(plots.thin_clock_ticks(fig, 3).layout.xaxis.tickvals) == hourly[::3]
 
 
-def test_compare_overlays_every_plan_and_leaves_out_idle_trades(paper_solve, result):
-    other = paper_solve(strategy="deterministic")
-    plans = {"balanced": result, "deterministic": other}
-    # Neither plan buys heat on the default day: the HPA panel would be a flat line.
+def test_compare_overlays_every_plan_and_leaves_out_idle_trades(paper_solve, cyclic_solve):
+    plans = {"balanced": cyclic_solve(strategy="balanced"), "deterministic": cyclic_solve(strategy="deterministic")}
+    # With a cyclic storage day neither plan buys heat: the HPA panel would be a flat line.
     assert not any(r.market["h_hpa_mw"].any() for r in plans.values())
     assert plots.idle_trades(plans) == ["h_hpa_mw"]
     fig = plots.compare_trades_figure(plans)

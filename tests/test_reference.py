@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from rvpp import solve, with_options
+from tests.factories import cyclic_storage, with_storage
 from tests.reference_model import ReferenceNotOptimal, day_data, reference_optimum
 
 GAP = 1e-7
@@ -40,16 +41,6 @@ CONFIGS = {
     "non-default parameters": {"strategy": "deterministic", "date": "2025-05-05"},
     "forecast bands": {"date": "2025-05-05"},
 }
-
-
-def with_storage(case, **changes):
-    csp = case.csp[0]
-    return case.replace(csp=[csp.model_copy(update={"storage": csp.storage.model_copy(update=changes)})])
-
-
-def cyclic_storage(case):
-    """The storage day is cyclic (``e[0] = e[NT]``) instead of starting at the case's fixed level."""
-    return with_storage(case, e_init_mwh_th=None)
 
 
 def non_default_parameters(case):

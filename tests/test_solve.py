@@ -52,29 +52,9 @@ def test_raising_one_budget_never_raises_profit(paper_solve):
         assert safer.objective_eur <= base.objective_eur + 1e-4 * abs(base.objective_eur), source
 
 
-@pytest.fixture(scope="module")
-def cyclic_solve(paper_case):
-    """Deterministic plans of the paper case with a cyclic storage day, by market set.
-
-    The case starts the day with an empty tank, so without the HPA its night heat has no
-    source; with a cyclic day the tank carries the afternoon's heat into the night and every
-    market set has a plan."""
-    csp = paper_case.csp[0]
-    cyclic = paper_case.replace(csp=[csp.model_copy(update={
-        "storage": csp.storage.model_copy(update={"e_init_mwh_th": None})})])
-    cache = {}
-
-    def run(markets: str):
-        if markets not in cache:
-            cache[markets] = solve(with_options(cyclic, strategy="deterministic", markets=markets))
-        return cache[markets]
-
-    return run
-
-
 @pytest.mark.parametrize("markets", ["DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA"])
 def test_every_market_set_gives_an_audited_plan(cyclic_solve, markets):
-    result = cyclic_solve(markets)
+    result = cyclic_solve(strategy="deterministic", markets=markets)
     assert_good(result)
     if "SRM" not in markets:
         assert np.allclose(result.market[["r_sr_up_mw", "r_sr_dn_mw"]], 0.0)
@@ -83,7 +63,8 @@ def test_every_market_set_gives_an_audited_plan(cyclic_solve, markets):
 
 
 def test_more_markets_never_cost_more(cyclic_solve):
-    cost = {m: cyclic_solve(m).cost_keur for m in ("DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA")}
+    cost = {m: cyclic_solve(strategy="deterministic", markets=m).cost_keur
+            for m in ("DAM", "DAM,HPA", "DAM,SRM", "DAM,SRM,HPA")}
     tolerance = 1e-3
     assert cost["DAM,SRM,HPA"] <= min(cost["DAM,HPA"], cost["DAM,SRM"]) + tolerance
     assert max(cost["DAM,HPA"], cost["DAM,SRM"]) <= cost["DAM"] + tolerance
