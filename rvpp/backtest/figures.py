@@ -71,4 +71,4 @@ def distribution_figure(records: pd.DataFrame) -> go.Figure:
 def _layout() -> dict:
     return {"height": FIGURE_HEIGHT, "paper_bgcolor": TRANSPARENT, "plot_bgcolor": TRANSPARENT,
             "xaxis": {"gridcolor": GRID_COLOR}, "yaxis": {"gridcolor": GRID_COLOR, "zerolinecolor": GRID_COLOR},
-            "legend": {"orientation": "h", "y": -0.2}}
+            "legend": {"orientation": "h", "y": -0.3}, "margin": {"b": 120}}
