@@ -33,6 +33,7 @@ def main() -> None:
             st.Page("pages/sensitivity.py", title="Sensitivity to Γ", icon=":material/tune:"),
             st.Page("pages/market_sets.py", title="Market sets & HPA prices", icon=":material/storefront:"),
             st.Page("pages/out_of_sample.py", title="Out-of-sample vs stochastic", icon=":material/fact_check:"),
+            st.Page("pages/backtest.py", title="Backtest", icon=":material/history:"),
         ],
         "Learn": [
             st.Page("pages/learn.py", title="Robust bidding explained", icon=":material/school:"),

@@ -3,7 +3,7 @@ flexibility tables), or any two to four runs of the library side by side."""
 
 import streamlit as st
 
-from dashboard import library, solving, state, widgets
+from dashboard import backtests, library, solving, state, widgets
 from rvpp import RvppError
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
@@ -95,7 +95,15 @@ market_sets = st.segmented_control(
     help="Each market set adds four solves. The paper's Table 10 has all four; Table 11 is the same without "
          "the CSP (switch it off on Portfolio).")
 market_sets = [m for m in MARKET_SETS if m in (market_sets or [])]
-cases = {(s, m): Variant(strategy=s, markets=m).apply(run) for m in market_sets for s in STRATEGIES}
+recommendation = backtests.recommended()
+variants = {s: (lambda case, m, s=s: Variant(strategy=s, markets=m).apply(case)) for s in STRATEGIES}
+if recommendation is None:
+    st.caption(":material/lightbulb: " + backtests.HOW_TO_RECOMMEND)
+elif st.checkbox(f"Add the {backtests.recommended_label(recommendation)} as a fifth strategy", value=True,
+                 key="compare_recommended", help=backtests.recommendation_note(recommendation)):
+    variants[backtests.recommended_label(recommendation)] = \
+        lambda case, m: backtests.recommended_case(case, recommendation, markets=m)
+cases = {(s, m): make(run, m) for m in market_sets for s, make in variants.items()}
 ready = bool(cases) and all(state.is_requested(c) for c in cases.values())
 clicked = st.button(f"Solve {len(cases)} plans", type="primary", key="compare_solve", disabled=not cases,
                     icon=":material/play_arrow:")
@@ -119,10 +127,10 @@ if cases and (clicked or ready):
 
     shown = market_sets[0] if len(market_sets) == 1 else st.segmented_control(
         "Market set shown below", market_sets, default=market_sets[0], required=True, key="compare_shown")
-    by_strategy = {s: results[(s, shown)] for s in STRATEGIES if results[(s, shown)].has_plan}
+    by_strategy = {s: results[(s, shown)] for s in variants if results[(s, shown)].has_plan}
     if by_strategy:
         side_by_side(by_strategy, baseline="deterministic" if "deterministic" in by_strategy else None)
-        edited = {s: Variant(strategy=s, markets=shown).apply(state.case()) for s in by_strategy}
+        edited = {s: variants[s](state.case(), shown) for s in by_strategy}
         st.button("Save these plans to the library", key="compare_save", on_click=save_all,
                   args=(edited, by_strategy), icon=":material/bookmark_add:")
         notice = st.session_state.pop("compare_notice", None)

@@ -3,7 +3,7 @@ downloads, and saving the run to the library."""
 
 import streamlit as st
 
-from dashboard import library, solving, state, widgets
+from dashboard import backtests, library, solving, state, widgets
 from dashboard.figures import heat_bought, plan_figures
 from rvpp import RvppError
 from rvpp.outputs.style import KIND_LABELS
@@ -12,6 +12,7 @@ state.through_app("pages/results.py")
 
 LABEL_KEY = "results_run_label"
 LABEL_FOR = "results_label_for"  # the case key the label field was filled for
+BIDS = {"case": "the current case's budgets", "recommended": "the recommended Γ"}
 FLEXIBILITY_COLUMNS = {
     "kind": st.column_config.TextColumn("Unit kind"),
     "r_up_mwh": st.column_config.NumberColumn("Up reserve [MWh]", format="%.1f"),
@@ -22,21 +23,31 @@ FLEXIBILITY_COLUMNS = {
 }
 
 
-def save(result) -> None:
-    label = (st.session_state.get(LABEL_KEY) or "").strip() or state.default_label()
+def save(result, edited, run) -> None:
+    label = (st.session_state.get(LABEL_KEY) or "").strip() or state.default_label(edited)
     try:
-        info = library.save(label, state.case(), result)
+        info = library.save(label, edited, result)
     except RvppError as err:
         st.session_state["results_saved"] = None
         st.session_state["results_save_problem"] = str(err)
         return
     st.session_state["results_save_problem"] = None
-    st.session_state["results_saved"] = (info.id, info.label, state.case_key(state.run_case()))
+    st.session_state["results_saved"] = (info.id, info.label, state.case_key(run))
 
 
 st.title("Results")
-run = state.run_case()
-st.markdown(f"Plan for **{run.delivery_date:%A %d %B %Y}** · {state.default_label()}")
+edited, run = state.case(), state.run_case()
+recommendation = backtests.recommended()
+if recommendation is None:
+    st.caption(":material/lightbulb: " + backtests.HOW_TO_RECOMMEND)
+else:
+    labels = {**BIDS, "recommended": backtests.recommended_label(recommendation)}
+    bid = st.radio("Bid with", list(labels), format_func=labels.get, key="results_bid", horizontal=True,
+                   help="The recommended Γ replaces the case's strategy and Γ edits by one Γ for every source.")
+    if bid == "recommended":
+        st.caption(backtests.recommendation_note(recommendation))
+        edited, run = (backtests.recommended_case(c, recommendation) for c in (edited, run))
+st.markdown(f"Plan for **{run.delivery_date:%A %d %B %Y}** · {state.default_label(edited)}")
 clicked = st.button("Solve", type="primary", key="results_solve", icon=":material/play_arrow:")
 if not (clicked or state.is_requested(run)):
     cancelled = "The last solve was cancelled." if solving.cancelled() else ""
@@ -63,11 +74,11 @@ with st.expander("Save this run to the library", icon=":material/bookmark_add:",
     key = state.case_key(run)
     if st.session_state.get(LABEL_FOR) != key:
         st.session_state[LABEL_FOR] = key
-        st.session_state[LABEL_KEY] = state.default_label()
+        st.session_state[LABEL_KEY] = state.default_label(edited)
     left, right = st.columns([4, 1], vertical_alignment="bottom")
     left.text_input("Label (unique; a taken label gets a number)", key=LABEL_KEY, max_chars=190,
                     help="By default: strategy, market set and what you edited since the case was loaded.")
-    right.button("Save run", key="results_save", on_click=save, args=(result,), icon=":material/save:")
+    right.button("Save run", key="results_save", on_click=save, args=(result, edited, run), icon=":material/save:")
     if st.session_state.get("results_save_problem"):
         widgets.problems([st.session_state["results_save_problem"]], "Not saved", note="Nothing was changed.")
     elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case

@@ -51,7 +51,7 @@ QUIET_POLLS, POLL_MS = 3, 1000         # a page counts as drawn after 3 s withou
 PAGES = {"Home": "home", "Portfolio": "portfolio", "Markets & tariffs": "markets", "Uncertainty": "uncertainty",
          "Results": "results", "Compare strategies": "compare", "Saved runs": "runs",
          "Sensitivity to Γ": "sensitivity", "Market sets & HPA prices": "market-sets",
-         "Out-of-sample vs stochastic": "out-of-sample", "Robust bidding explained": "learn"}
+         "Out-of-sample vs stochastic": "out-of-sample", "Backtest": "backtest", "Robust bidding explained": "learn"}
 # Violations the project can fix: contrast, and every rule about a control's label or name.
 FIXABLE = {"color-contrast", "label", "button-name", "link-name", "input-button-name", "aria-input-field-name",
            "aria-toggle-field-name", "select-name", "image-alt", "label-title-only", "frame-title",

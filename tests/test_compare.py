@@ -22,6 +22,17 @@ def test_cost_table_has_the_layout_of_table_10(paper_solve):
     assert (table["DAM+SRM+HPA"] <= table["DAM+HPA"] + 1e-6).all()
 
 
+def test_cost_table_puts_a_strategy_other_than_the_presets_after_them(paper_solve):
+    results = {("recommended (Γ = 0.25 of the day)", "DAM+SRM+HPA"): paper_solve(gamma_fraction=0.25),
+               ("balanced", "DAM+SRM+HPA"): paper_solve(strategy="balanced")}
+    table = cost_table(results)
+    assert list(table.index) == ["Balanced", "recommended (Γ = 0.25 of the day)"]
+    for (strategy, _), result in results.items():
+        assert result.status == "optimal"
+        row = "Balanced" if strategy == "balanced" else strategy
+        assert table.loc[row, "DAM+SRM+HPA"] == pytest.approx(-result.objective_eur / 1000)
+
+
 def test_flexibility_and_kpi_tables(paper_solve):
     results = {"balanced": paper_solve(), "deterministic": paper_solve(strategy="deterministic")}
     flex = flexibility_table(results)

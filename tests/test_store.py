@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 import os
 import signal
 import subprocess
@@ -248,6 +249,25 @@ def test_a_backtest_reopens_with_its_case_and_keeps_its_progress(url, paper_case
         store.load("nope")
     store.delete(ident)
     assert store.progress(ident) is None
+
+
+def test_the_latest_remembered_recommendation_is_read_back_and_goes_with_its_backtest(url, paper_case):
+    store = BacktestStore(url)
+    assert store.recommendation() is None
+    ident = store.open(paper_case, {"from": "2025-05-01", "to": "2025-05-09"}, keys_total=9)
+    periods = (dt.date(2025, 5, 1), dt.date(2025, 5, 6)), (dt.date(2025, 5, 7), dt.date(2025, 5, 9))
+    first = store.remember_recommendation(ident, 0.125, "mean", *periods, "no preset does better.")
+    latest = store.remember_recommendation(ident, 0.25, "cvar95", *periods, "it LOSES to balanced.")
+    assert first.id != latest.id
+    again = BacktestStore(url).recommendation()  # another connection, as after a restart
+    assert again == latest
+    assert (again.fraction, again.criterion, again.case_name, again.backtest_id) == (0.25, "cvar95", paper_case.name,
+                                                                                    ident)
+    assert (again.train, again.test) == (("2025-05-01", "2025-05-06"), ("2025-05-07", "2025-05-09"))
+    with pytest.raises(StoreError, match="no backtest has the id"):
+        store.remember_recommendation("nope", 0.5, "mean", *periods, "")
+    store.delete(ident)
+    assert store.recommendation() is None
 
 
 def test_a_running_backtest_whose_process_is_gone_reads_stopped(tmp_path, paper_case):

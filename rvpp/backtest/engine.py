@@ -145,17 +145,25 @@ def run_day(task: DayTask) -> dict[str, Any]:
     return _finish(record, started)
 
 
-def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
-    """The plan of one recorded day, solved again from the day's recorded start state (with every
-    table of a :class:`~rvpp.solving.results.Result`, e.g. to show a worst day)."""
+def reopen_case(store: BacktestStore, ident: str, key: RecordKey) -> Case:
+    """The case one recorded day was planned with: its date, its variant's budgets and its recorded
+    start state, solved on one thread (``plan`` of it gives the recorded plan again)."""
     case, stored = store.load(ident)
     settings = BacktestSettings.from_stored(stored)
     record = store.record_map(ident).get(key)
     if record is None:
         raise RvppError(f"backtest {ident} has no record of {key.day}, {key.strategy}, {key.gamma}")
     variant, day = BacktestVariant(key.strategy, key.gamma), dt.date.fromisoformat(key.day)
-    day_of = day_case(one_thread(case), day, variant, record["start_state"], settings.storage_end)
-    return perfect_plan(day_of, realization(day_of, day)) if variant.is_perfect else plan(day_of)
+    return day_case(one_thread(case), day, variant, record["start_state"], settings.storage_end)
+
+
+def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
+    """The plan of one recorded day, solved again from the day's recorded start state (with every
+    table of a :class:`~rvpp.solving.results.Result`, e.g. to show a worst day)."""
+    day_of = reopen_case(store, ident, key)
+    if key.strategy == BacktestVariant.perfect().strategy:
+        return perfect_plan(day_of, realization(day_of, dt.date.fromisoformat(key.day)))
+    return plan(day_of)
 
 
 def plan_numbers(result: Result) -> dict[str, Any]:

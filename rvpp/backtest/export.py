@@ -20,11 +20,13 @@ sibling folder that replaces ``folder`` in one rename.
 from __future__ import annotations
 
 import datetime as dt
+import io
 import json
 import shutil
 import subprocess
 import tempfile
 import uuid
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -112,7 +114,8 @@ def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str
         tables = {"records": records_table(records), "bids": bids_table(records), "dispatch": dispatch_table(records),
                   "aggregates": metrics.aggregates(records), "monthly": metrics.monthly(records), **(extra or {})}
         for name, table in tables.items():
-            table.to_csv(staging / f"{name}.csv", index=False, float_format="%.6f")
+            # UTF-8 with a byte-order mark: Excel then reads labels such as "Γ 0.25 of the day" right
+            table.to_csv(staging / f"{name}.csv", index=False, float_format="%.6f", encoding="utf-8-sig")
             _plain_for_parquet(table).to_parquet(staging / f"{name}.parquet", index=False)
         save_case(case, staging / "case")
         _exact_history(case, staging / "case" / "history.csv")
@@ -128,6 +131,17 @@ def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str
         shutil.rmtree(staging, ignore_errors=True)
         raise
     return folder
+
+
+def export_zip(store: BacktestStore, ident: str) -> bytes:
+    """The files of :func:`export` as one zip archive (e.g. for a download), same layout."""
+    with tempfile.TemporaryDirectory(prefix="rvpp-backtest-") as tmp:
+        folder = export(store, ident, Path(tmp) / "backtest")
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+            for path in sorted(p for p in folder.rglob("*") if p.is_file()):
+                archive.write(path, arcname=str(path.relative_to(folder)))
+    return buffer.getvalue()
 
 
 def _exact_history(case, path: Path) -> None:

@@ -27,15 +27,21 @@ def cost_table(results: Mapping[tuple[str, str], Result]) -> pd.DataFrame:
     """Cost [kEUR] (−profit) with one row per strategy and one column per market set.
 
     ``results`` maps ``(strategy, market set)`` to a result; plans that were not solved
-    to a plan are NaN.
+    to a plan are NaN. A strategy other than the presets (e.g. a recommended Γ) is a row
+    of its own after them, named as given.
     """
-    strategies = [s for s in STRATEGIES if any(k[0] == s for k in results)]
+    presets = [s for s in STRATEGIES if any(k[0] == s for k in results)]
+    others = list(dict.fromkeys(k[0] for k in results if k[0] not in STRATEGIES))
     sets = [m for m in MARKET_SETS if any(k[1] == m for k in results)]
-    table = pd.DataFrame(index=pd.Index([s.capitalize() for s in strategies], name="Strategy"),
+    table = pd.DataFrame(index=pd.Index([_row(s) for s in presets + others], name="Strategy"),
                          columns=pd.Index(sets, name="Market (contract)"), dtype=float)
     for (strategy, market_set), result in results.items():
-        table.loc[strategy.capitalize(), market_set] = result.cost_keur if result.has_plan else float("nan")
+        table.loc[_row(strategy), market_set] = result.cost_keur if result.has_plan else float("nan")
     return table
+
+
+def _row(strategy: str) -> str:
+    return strategy.capitalize() if strategy in STRATEGIES else strategy
 
 
 def flexibility_table(results: Mapping[str, Result]) -> pd.DataFrame:

@@ -4,9 +4,9 @@ SQLite in WAL mode by default (``RVPP_DATA_DIR``, default ``./rvpp-data``), any
 SQLAlchemy URL (e.g. PostgreSQL) through ``RVPP_STORE_URL``; see :mod:`.engine`.
 """
 
-from .backtests import BacktestInfo, BacktestStore, RecordKey, backtest_id, pending
+from .backtests import BacktestInfo, BacktestStore, RecordKey, StoredRecommendation, backtest_id, pending
 from .engine import StoreError, connect, default_url
 from .runs import RunInfo, RunLibrary, SavedRun
 
 __all__ = ["BacktestInfo", "BacktestStore", "RecordKey", "RunInfo", "RunLibrary", "SavedRun", "StoreError",
-           "backtest_id", "connect", "default_url", "pending"]
+           "StoredRecommendation", "backtest_id", "connect", "default_url", "pending"]

@@ -23,7 +23,7 @@ import sqlalchemy as sa
 from ..data.case import Case, parse_case
 from .codec import case_data, history_bytes, history_from, jsonable
 from .engine import (StoreError, backtest_progress, backtest_records, backtests, connect, get_blob, now,
-                     put_blob)
+                     put_blob, recommendations)
 
 STALE_AFTER_S = 600.0  # a run on another machine silent this long is taken as stopped [s]
 
@@ -45,6 +45,7 @@ class BacktestInfo:
     keys_total: int
     keys_done: int
     settings: dict[str, Any]
+    case_name: str = ""
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,25 @@ class BacktestProgress:
     @property
     def running(self) -> bool:
         return self.state == "running"
+
+
+@dataclass(frozen=True)
+class StoredRecommendation:
+    """A recommended Γ fraction remembered for later solves, with where it was computed.
+
+    ``fraction``: Γ of every source as a fraction of the day [-]; ``criterion``: ``mean`` or
+    ``cvar95``; ``train`` and ``test``: the periods (ISO dates, both ends included).
+    """
+
+    id: int
+    backtest_id: str
+    created_at: str
+    case_name: str
+    fraction: float
+    criterion: str
+    train: tuple[str, str]
+    test: tuple[str, str]
+    verdict: str
 
 
 def backtest_id(case: Case, settings: Mapping[str, Any]) -> str:
@@ -174,13 +194,45 @@ class BacktestStore:
         done = sa.select(backtest_records.c.backtest_id, sa.func.count().label("n")).group_by(
             backtest_records.c.backtest_id).subquery()
         query = sa.select(backtests.c.id, backtests.c.label, backtests.c.created_at, backtests.c.keys_total,
-                          sa.func.coalesce(done.c.n, 0), backtests.c.settings).outerjoin(
+                          sa.func.coalesce(done.c.n, 0), backtests.c.settings, backtests.c.case).outerjoin(
             done, done.c.backtest_id == backtests.c.id).order_by(backtests.c.created_at.desc())
         with self.engine.connect() as connection:
-            return [BacktestInfo(*row) for row in connection.execute(query)]
+            return [BacktestInfo(*row[:-1], case_name=str((row[-1] or {}).get("name", "")))
+                    for row in connection.execute(query)]
+
+    def remember_recommendation(self, ident: str, fraction: float, criterion: str, train: tuple[dt.date, dt.date],
+                                test: tuple[dt.date, dt.date], verdict: str) -> StoredRecommendation:
+        """Keep the recommended Γ ``fraction`` computed from backtest ``ident`` (it becomes the latest)."""
+        with self.engine.begin() as connection:
+            case = connection.execute(sa.select(backtests.c.case).where(backtests.c.id == ident)).scalar_one_or_none()
+            if case is None:
+                raise StoreError(f"no backtest has the id {ident!r}; it may have been deleted")
+            inserted = connection.execute(recommendations.insert().values(
+                backtest_id=ident, created_at=now(), case_name=str(case.get("name", ""))[:200],
+                fraction=float(fraction), criterion=criterion, train_first=train[0].isoformat(),
+                train_last=train[1].isoformat(), test_first=test[0].isoformat(), test_last=test[1].isoformat(),
+                verdict=verdict))
+            key = inserted.inserted_primary_key[0]
+        return self._recommendation(recommendations.c.id == key)
+
+    def recommendation(self) -> StoredRecommendation | None:
+        """The latest remembered recommendation (``None`` before the first)."""
+        return self._recommendation(sa.true())
+
+    def _recommendation(self, where) -> StoredRecommendation | None:
+        query = sa.select(recommendations).where(where).order_by(recommendations.c.created_at.desc(),
+                                                                 recommendations.c.id.desc()).limit(1)
+        with self.engine.connect() as connection:
+            row = connection.execute(query).first()
+        if row is None:
+            return None
+        return StoredRecommendation(row.id, row.backtest_id, row.created_at, row.case_name, row.fraction,
+                                    row.criterion, (row.train_first, row.train_last),
+                                    (row.test_first, row.test_last), row.verdict)
 
     def delete(self, ident: str) -> None:
         with self.engine.begin() as connection:
+            connection.execute(recommendations.delete().where(recommendations.c.backtest_id == ident))
             connection.execute(backtest_records.delete().where(backtest_records.c.backtest_id == ident))
             connection.execute(backtest_progress.delete().where(backtest_progress.c.backtest_id == ident))
             if not connection.execute(backtests.delete().where(backtests.c.id == ident)).rowcount:

@@ -102,6 +102,22 @@ backtest_progress = sa.Table(
 )
 
 
+recommendations = sa.Table(
+    "recommendations", metadata,
+    sa.Column("id", sa.Integer, primary_key=True, autoincrement=True),
+    sa.Column("backtest_id", sa.String(64), sa.ForeignKey("backtests.id", ondelete="CASCADE"), nullable=False),
+    sa.Column("created_at", sa.String(32), nullable=False),
+    sa.Column("case_name", sa.String(200), nullable=False),
+    sa.Column("fraction", sa.Float, nullable=False),         # Γ as a fraction of the day, every source [-]
+    sa.Column("criterion", sa.String(16), nullable=False),   # mean, cvar95
+    sa.Column("train_first", sa.String(10), nullable=False),  # ISO dates of the training and test periods
+    sa.Column("train_last", sa.String(10), nullable=False),
+    sa.Column("test_first", sa.String(10), nullable=False),
+    sa.Column("test_last", sa.String(10), nullable=False),
+    sa.Column("verdict", sa.Text, nullable=False),
+)
+
+
 class StoreError(RvppError):
     """The store cannot be opened or refuses an operation (unknown run, label taken, ...)."""
 

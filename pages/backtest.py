@@ -1,0 +1,368 @@
+"""Backtest: every day of a period planned from what was known before it and settled against what
+happened that day, in a background process (``rvpp.backtest.launch``); the store's backtests with
+their cost, spread, worst days and export; the price of robustness and the recommended Γ."""
+
+import datetime as dt
+
+import sqlalchemy as sa
+import streamlit as st
+
+from dashboard import backtests as bt
+from dashboard import state, widgets
+from rvpp import RvppError
+from rvpp.backtest import launch, metrics
+from rvpp.backtest.engine import reopen_case
+from rvpp.backtest.export import export_zip
+from rvpp.backtest.figures import cumulative_figure, distribution_figure, robustness_figure
+from rvpp.backtest.recommend import CRITERION_NAMES, recommendation_from
+from rvpp.backtest.settings import (
+    CARRY,
+    PERFECT,
+    BacktestSettings,
+    BacktestVariant,
+    variants_of,
+)
+from rvpp.data.case import STRATEGIES
+from rvpp.store import RecordKey
+from rvpp.studies.settings import parse_numbers
+
+state.through_app("pages/backtest.py")
+
+DEFAULT_DAYS = 14     # a first backtest small enough to watch: 14 days × 5 variants, a minute or two
+POLL_S = 2.0          # how often the progress of a running backtest is read again [s]
+WORST_DAYS = 10
+PERCENT = 100.0
+CHOSEN = "backtest_chosen"
+EUR_DAY = "%.0f"
+AGGREGATE_COLUMNS = {
+    "label": st.column_config.TextColumn("Strategy", pinned=True),
+    "days_settled": st.column_config.NumberColumn("Days settled"),
+    "mean_net_cost_eur": st.column_config.NumberColumn("Mean net cost [EUR/day]", format=EUR_DAY),
+    "median_net_cost_eur": st.column_config.NumberColumn("Median net cost [EUR/day]", format=EUR_DAY),
+    "cvar95_net_cost_eur": st.column_config.NumberColumn(
+        "CVaR 95 % [EUR/day]", format=EUR_DAY, help="Mean of the worst 5 % of days (at least the worst day)"),
+    "total_net_cost_eur": st.column_config.NumberColumn("Total net cost [EUR]", format=EUR_DAY),
+    "mean_market_cost_eur": st.column_config.NumberColumn("Mean market cost [EUR/day]", format=EUR_DAY),
+    "mean_penalty_eur": st.column_config.NumberColumn("Mean penalty [EUR/day]", format=EUR_DAY),
+    "penalty_share_pct": st.column_config.NumberColumn(
+        "Penalty share [%]", format="%.1f", help="Total penalty / total net cost; empty when the total is not a cost"),
+    "mean_regret_eur": st.column_config.NumberColumn(
+        "Mean regret [EUR/day]", format=EUR_DAY, help="Net cost minus the perfect-information plan's, same day"),
+    "days_without_plan": st.column_config.NumberColumn("Days without plan"),
+    "audit_violations": st.column_config.NumberColumn("Audit violations"),
+}
+MONTHLY_COLUMNS = {
+    "label": st.column_config.TextColumn("Strategy", pinned=True),
+    "month": st.column_config.TextColumn("Month"),
+    "days": st.column_config.NumberColumn("Days settled"),
+    "market_cost_eur": st.column_config.NumberColumn("Market cost [EUR]", format=EUR_DAY),
+    "penalty_eur": st.column_config.NumberColumn("Penalty [EUR]", format=EUR_DAY),
+    "net_cost_eur": st.column_config.NumberColumn("Net cost [EUR]", format=EUR_DAY),
+    "mean_net_cost_eur": st.column_config.NumberColumn("Mean net cost [EUR/day]", format=EUR_DAY),
+    "regret_eur": st.column_config.NumberColumn("Regret [EUR]", format=EUR_DAY),
+}
+WORST_COLUMNS = {
+    "day": st.column_config.DateColumn("Delivery day"),
+    "net_cost_eur": st.column_config.NumberColumn("Net cost [EUR]", format=EUR_DAY),
+    "market_cost_eur": st.column_config.NumberColumn("Market cost [EUR]", format=EUR_DAY),
+    "penalty_eur": st.column_config.NumberColumn("Penalty [EUR]", format=EUR_DAY),
+    "regret_eur": st.column_config.NumberColumn("Regret [EUR]", format=EUR_DAY),
+    "deficit_mwh": st.column_config.NumberColumn("Energy short [MWh]", format="%.1f"),
+    "surplus_mwh": st.column_config.NumberColumn("Energy surplus [MWh]", format="%.1f"),
+    "unserved_heat_mwh": st.column_config.NumberColumn("Heat not served [MWh_th]", format="%.1f"),
+    "plan_status": st.column_config.TextColumn("Plan"),
+}
+COMPARISON_COLUMNS = {
+    "variant": st.column_config.TextColumn("Bidding rule", pinned=True),
+    "train_mean_net_cost_eur": st.column_config.NumberColumn("Training: mean net cost [EUR/day]", format=EUR_DAY),
+    "train_cvar95_net_cost_eur": st.column_config.NumberColumn("Training: CVaR 95 % [EUR/day]", format=EUR_DAY),
+    "test_mean_net_cost_eur": st.column_config.NumberColumn("Test: mean net cost [EUR/day]", format=EUR_DAY),
+    "test_cvar95_net_cost_eur": st.column_config.NumberColumn("Test: CVaR 95 % [EUR/day]", format=EUR_DAY),
+    "test_mean_regret_eur": st.column_config.NumberColumn("Test: mean regret [EUR/day]", format=EUR_DAY),
+}
+
+
+def refuse(err: RvppError, title: str, note: str) -> None:
+    widgets.problems([bt.in_form_words(str(err))], title, note=note)
+
+
+def launch_backtest(run, first, last, strategies, fractions_text, perfect, end_target, label) -> None:
+    """Start the backtest in its own process; remember its id so the page shows it."""
+    try:
+        fractions = parse_numbers(fractions_text or "")
+    except ValueError as err:
+        st.session_state["backtest_problem"] = f"--fractions: {err}"
+        return
+    try:
+        settings = BacktestSettings(first, last, variants_of(strategies, fractions, perfect),
+                                    storage_end=CARRY if end_target is None else float(end_target))
+        launched = launch.start(run, settings, bt.store(), label=label.strip())
+    except RvppError as err:
+        st.session_state["backtest_problem"] = str(err)
+        return
+    st.session_state["backtest_problem"] = None
+    st.session_state[CHOSEN] = launched.backtest_id
+    st.session_state["backtest_notice"] = (
+        f"Started in the background (process {launched.pid}). It shows below with its progress as soon as its "
+        "process has read the case, within a few seconds; you may leave this page meanwhile.")
+
+
+def stop(ident: str) -> None:
+    if not launch.stop(ident, bt.store()):
+        st.session_state["backtest_notice"] = "The backtest was not running on this server; nothing to stop."
+
+
+def resume(ident: str) -> None:
+    store = bt.store()
+    try:
+        case, stored = store.load(ident)
+        label = next((b.label for b in store.list() if b.id == ident), "")
+        launch.start(case, BacktestSettings.from_stored(stored), store, label=label)
+    except RvppError as err:
+        st.session_state["backtest_problem"] = str(err)
+
+
+def open_day(ident: str, key: RecordKey, source: str) -> None:
+    """The day's case (its date, budgets and recorded start state) becomes the current case, solved on
+    Results in the dashboard's solver processes: the same plan the backtest settled."""
+    try:
+        case = reopen_case(bt.store(), ident, key)
+    except RvppError as err:
+        st.session_state["backtest_problem"] = str(err)
+        return
+    state.load(case, source=source)
+    state.mark_requested(state.run_case())
+    st.session_state["backtest_open"] = True
+
+
+def remember(ident: str, rec) -> None:
+    stored = bt.store().remember_recommendation(ident, rec.fraction, rec.criterion, rec.train, rec.test, rec.verdict)
+    st.session_state["backtest_notice"] = (f"Remembered Γ = {stored.fraction:g} of the day: Results and Compare "
+                                           "strategies now offer it as the recommended strategy.")
+
+
+def progress_panel(ident: str) -> None:
+    """Where the backtest's process stands, read from the store again every POLL_S while it runs."""
+    first = bt.progress(ident)
+    was_running = first is not None and first.running
+
+    @st.fragment(run_every=POLL_S if was_running else None)
+    def panel() -> None:
+        info = bt.progress(ident)
+        if (info is not None and info.running) != was_running:
+            st.rerun()  # it ended (or started): draw the whole page again with its records
+        if info is None:
+            st.caption("Not started yet: its process has not written any progress.")
+            return
+        share = info.done / info.total if info.total else 0.0
+        text = f"{info.done} of {info.total} days × strategies settled · {info.state}"
+        if info.running:
+            text += f" · {bt.eta(info.eta_s)}"
+        left, right = st.columns([6, 1], vertical_alignment="bottom")
+        left.progress(min(1.0, share), text=text)
+        if info.running:
+            right.button("Stop", key="backtest_stop", on_click=stop, args=(ident,), icon=":material/stop_circle:",
+                         help="Ends the process; the days already settled stay, and Resume goes on from there.")
+        elif info.done < info.total:
+            right.button("Resume", key="backtest_resume", on_click=resume, args=(ident,),
+                         icon=":material/play_arrow:", help="Starts the process again; settled days are skipped.")
+        if info.message:
+            st.caption(info.message)
+
+    panel()
+
+
+st.title("Backtest: what each strategy would have cost, day after day")
+if st.session_state.pop("backtest_open", False):
+    st.switch_page("pages/results.py")
+st.markdown(
+    "A **rolling backtest** bids every day of a period as the operator would have: the plan of day *D* uses only "
+    "the history before *D*, and is then **settled against what really happened on D** (realized prices, "
+    "production and demand) by the recourse model, which pays penalties for energy short or in surplus, reserve "
+    "not delivered and heat not served. The storage level and the turbine state at the end of each settled day "
+    "are the start of the next, as in operation. **Net cost** = market cost + penalty, in EUR, positive when the "
+    "plant pays; lower is better. The **CVaR 95 %** is the mean of the worst 5 % of days: what a bad day costs. "
+    "The **regret** is what a day cost beyond the plan made with perfect knowledge of that day.")
+
+run = state.run_case()
+covered = run.history.local_days(run.timezone)
+earliest = covered[0] + dt.timedelta(days=run.uncertainty.window_days)
+latest = covered[-1]
+default_last = min(latest, max(earliest, run.delivery_date))
+default_first = max(earliest, default_last - dt.timedelta(days=DEFAULT_DAYS - 1))
+
+with st.expander(f"Start a backtest of the current case ({run.name})", icon=":material/play_circle:",
+                 expanded=False):
+    st.caption(f"The days can run from {earliest} (the first day with the {run.uncertainty.window_days} days of "
+               f"history its bands need) to {latest} (the last day with observations to settle against). It runs "
+               "in a process of its own on the server: you may leave this page or close the tab, and come back to "
+               "follow it. Each day of each strategy takes about a second (two solves).")
+    with st.form("backtest_form"):
+        first_col, last_col = st.columns(2)
+        first_day = first_col.date_input("First day", value=default_first, min_value=earliest, max_value=latest,
+                                         key="backtest_first")
+        last_day = last_col.date_input("Last day", value=default_last, min_value=earliest, max_value=latest,
+                                       key="backtest_last")
+        strategies = st.multiselect("Strategies", STRATEGIES, default=list(STRATEGIES), key="backtest_strategies",
+                                    help="Presets of the paper's Table 7, as published (the case's own Γ edits "
+                                         "are set aside)")
+        fractions_text = st.text_input(
+            "Γ fractions", value="", key="backtest_fractions", placeholder="e.g. 0.125, 0.25, 0.375 (optional)",
+            help="Γ of every source as a share of the day: 0.25 → 6 of 24 hours. A grid of fractions (with the "
+                 "deterministic preset as Γ = 0) draws the price of robustness and gives a recommended Γ.")
+        left, right = st.columns(2)
+        perfect = left.checkbox("Perfect-information plan (for the regret)", value=True, key="backtest_perfect",
+                                help="The plan made on the realized day: the benchmark every strategy is "
+                                     "measured against. One more chain of days.")
+        end_target = right.number_input(
+            "Storage end target [fraction of the storage range], from 0 to 1", min_value=0.0, max_value=1.0,
+            value=None, step=0.05, key="backtest_end", placeholder="empty: carry (never end below the start)",
+            help="Empty: each day ends with at least the heat it started with. A fraction: the day may run the "
+                 "storage down to e_min + fraction × (e_max − e_min), never below it.")
+        label = st.text_input("Label", value="", key="backtest_label", max_chars=190,
+                              placeholder=f"{run.name} backtest")
+        submitted = st.form_submit_button("Start the backtest", type="primary", icon=":material/play_arrow:",
+                                          key="backtest_start")
+    if submitted:
+        launch_backtest(run, first_day, last_day, strategies, fractions_text, perfect, end_target, label)
+    if st.session_state.get("backtest_problem"):
+        refuse(RvppError(st.session_state["backtest_problem"]), "Not started", "Nothing was started.")
+
+if notice := st.session_state.pop("backtest_notice", None):
+    st.info(notice, icon=":material/info:")
+
+st.subheader("Backtests in the store")
+try:
+    listed = bt.store().list()
+except (RvppError, sa.exc.SQLAlchemyError) as err:
+    widgets.problems([f"the store cannot be read: {err}"], "Backtests unavailable", note="Nothing was changed.")
+    st.stop()
+if not listed:
+    st.info("No backtest in the store yet. Start one above: it appears here with its progress.",
+            icon=":material/history:")
+    st.stop()
+
+progresses = {b.id: bt.progress(b.id) for b in listed}
+st.dataframe(
+    [{"Label": b.label, "Case": b.case_name,
+      "Period": f"{b.settings['from']} .. {b.settings['to']}", "Strategies": bt.variant_labels(b.settings),
+      "State": progresses[b.id].state if progresses[b.id] else "not started",
+      "Progress": b.keys_done / b.keys_total if b.keys_total else 0.0,
+      "Days × strategies": f"{b.keys_done} of {b.keys_total}", "Created (UTC)": b.created_at[:16].replace("T", " ")}
+     for b in listed],
+    hide_index=True, width="stretch",
+    column_config={"Progress": st.column_config.ProgressColumn("Progress", min_value=0.0, max_value=1.0,
+                                                               format="percent")})
+ids = [b.id for b in listed]
+if st.session_state.get(CHOSEN) not in ids:
+    st.session_state[CHOSEN] = ids[0]
+info_of = {b.id: b for b in listed}
+ident = st.selectbox("Backtest shown below", ids, key=CHOSEN,
+                     format_func=lambda i: f"{info_of[i].label} · {info_of[i].settings['from']} .. "
+                                           f"{info_of[i].settings['to']}")
+chosen = info_of[ident]
+settings = chosen.settings
+progress_panel(ident)
+
+records = bt.records(ident, chosen.keys_done)
+if records.empty:
+    st.info("No day settled yet; the figures appear with the first days.", icon=":material/hourglass_top:")
+    st.stop()
+if progresses[ident] is not None and progresses[ident].running:
+    st.button("Redraw with the days settled so far", key="backtest_redraw", icon=":material/refresh:")
+
+st.subheader("Cost over the period")
+st.plotly_chart(cumulative_figure(records), key="backtest_cumulative")
+st.caption("Each line adds up the net cost of the days settled so far: a steeper line is a costlier strategy; a "
+           "jump is a bad day. The boxes below show how the daily net cost spreads.")
+st.plotly_chart(distribution_figure(records), key="backtest_distribution")
+
+st.subheader("Per strategy")
+table = metrics.aggregates(records)
+table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
+st.dataframe(table[[c for c in AGGREGATE_COLUMNS if c in table]], hide_index=True, width="stretch",
+             column_config=AGGREGATE_COLUMNS)
+with st.expander("Per month", icon=":material/calendar_month:"):
+    monthly = metrics.monthly(records)
+    st.dataframe(monthly[[c for c in MONTHLY_COLUMNS if c in monthly]], hide_index=True, width="stretch",
+                 column_config=MONTHLY_COLUMNS)
+
+st.subheader("Worst days")
+st.caption("The costliest settled days of one strategy. Open one to see its plan on Results: the day's case "
+           "(its date, its budgets, the storage and turbine state it started from) becomes the current case and "
+           "is solved again, giving the plan that was settled.")
+variants = [BacktestVariant(*v) for v in settings["variants"] if v[0] != PERFECT]
+if variants:
+    labels = {v.label: v for v in variants}
+    shown = st.selectbox("Strategy", list(labels), key="backtest_worst_variant")
+    variant = labels[shown]
+    worst = metrics.worst_days(records, variant.strategy, variant.gamma, WORST_DAYS)
+    if worst.empty:
+        st.caption("No settled day for this strategy yet.")
+    else:
+        st.dataframe(worst[[c for c in WORST_COLUMNS if c in worst]], hide_index=True, width="stretch",
+                     column_config=WORST_COLUMNS)
+        days = [str(d) for d in worst["day"]]
+        costs = dict(zip(days, worst["net_cost_eur"]))
+        left, right = st.columns([3, 2], vertical_alignment="bottom")
+        day = left.selectbox("Day", days, key="backtest_worst_day",
+                             format_func=lambda d: f"{d} · net cost {widgets.eur(costs[d])}")
+        right.button("Open this day's plan on Results", key="backtest_open_day", type="primary",
+                     icon=":material/open_in_browser:", on_click=open_day,
+                     args=(ident, RecordKey(day, variant.strategy, variant.gamma),
+                           f'backtest "{chosen.label}": {day}, {variant.label}'))
+else:
+    st.caption("This backtest ran only the perfect-information plan.")
+if st.session_state.get("backtest_problem"):
+    refuse(RvppError(st.session_state.pop("backtest_problem")), "Not done", "Nothing was changed.")
+
+st.download_button("Export records and inputs (zip)", lambda: export_zip(bt.store(), ident),
+                   file_name=f"backtest-{ident[:12]}.zip", mime="application/zip", on_click="ignore",
+                   key="backtest_export", icon=":material/folder_zip:",
+                   help="records, bids, settled dispatch, aggregates and months as CSV (opens in Excel) and "
+                        "Parquet; the case with its exact history; manifest.json with the settings")
+
+st.subheader("Price of robustness and the recommended Γ")
+grid = bt.fractions_of(settings)
+days = [dt.date.fromisoformat(settings["from"]) + dt.timedelta(days=k)
+        for k in range((dt.date.fromisoformat(settings["to"]) - dt.date.fromisoformat(settings["from"])).days + 1)]
+if len(grid) < 2 or len(days) < 2:
+    st.caption("This backtest has no Γ grid over two days or more. Start one with **Γ fractions** such as "
+               "0.125, 0.25, 0.375 and the deterministic preset (Γ = 0) over a few weeks to see what protection "
+               "costs and which Γ did best.")
+    st.stop()
+st.markdown("The more periods Γ protects, the more the plan holds back: its market cost rises while the "
+            "penalties of bad surprises fall. The Γ with the lowest cost on the **training days** is the "
+            "recommendation; the **test days**, later and unseen by the choice, show whether it holds up against "
+            "the presets.")
+split = max(1, round(len(days) * 2 / 3))
+t1, t2, t3 = st.columns(3)
+train = t1.date_input("Training days", value=(days[0], days[split - 1]), min_value=days[0], max_value=days[-1],
+                      key=f"backtest_train_{ident}")
+test = t2.date_input("Test days", value=(days[split], days[-1]), min_value=days[0], max_value=days[-1],
+                     key=f"backtest_test_{ident}")
+criterion = t3.radio("Criterion", list(CRITERION_NAMES), format_func=CRITERION_NAMES.get, key="backtest_criterion",
+                     help="What the recommendation minimises over the training days")
+if len(train) != 2 or len(test) != 2:
+    st.info("Choose the first and the last day of both periods.", icon=":material/date_range:")
+    st.stop()
+try:
+    rec = recommendation_from(records, tuple(train), tuple(test), grid, criterion, ident)
+except RvppError as err:
+    refuse(err, "No recommendation", "Change the training or test days.")
+    st.stop()
+left, right = st.columns(2)
+left.plotly_chart(robustness_figure(rec.curve, rec.fraction, "train"), key="backtest_robustness_train")
+right.plotly_chart(robustness_figure(rec.curve, rec.fraction, "test"), key="backtest_robustness_test")
+if "LOSES" in rec.verdict:
+    st.warning(rec.verdict, icon=":material/trending_down:")
+else:
+    st.success(rec.verdict, icon=":material/verified:")
+st.dataframe(rec.comparison[[c for c in COMPARISON_COLUMNS if c in rec.comparison]], hide_index=True,
+             width="stretch", column_config=COMPARISON_COLUMNS)
+remembered = bt.recommended()
+if remembered is not None:
+    st.caption("Now remembered: " + bt.recommendation_note(remembered))
+st.button(f"Remember this Γ ({rec.fraction:g} of the day) for Results and Compare", key="backtest_remember",
+          on_click=remember, args=(ident, rec), icon=":material/bookmark_add:",
+          help="Kept in the store: every session and every restart offers it as the recommended strategy.")

@@ -1,0 +1,199 @@
+"""The Backtest page and the recommended Γ on Results and Compare, driven through Streamlit's AppTest.
+
+A small backtest (three days of the paper case: deterministic, Γ 0.25 of the day and the
+perfect-information plan) is computed once into a store file; each test works on its own
+copy. The page's numbers are checked against sums computed here with plain pandas from the
+store's records, never through ``rvpp.backtest.metrics``.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import os
+import shutil
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rvpp
+from rvpp.backtest import BacktestSettings, variants_of
+from rvpp.backtest.engine import run_backtest
+from rvpp.backtest.launch import status, stop
+from rvpp.store import BacktestStore
+from tests.test_app import NET, TIMEOUT_S, case_of, click, figures, number, open_app, shown_kpis, trace, values
+
+FIRST, LAST = dt.date(2025, 5, 2), dt.date(2025, 5, 4)
+FRACTION = 0.25
+RECOMMENDED = f"recommended (Γ = {FRACTION:g} of the day)"
+STORE_FILE = "rvpp.sqlite3"
+
+
+@pytest.fixture(scope="module")
+def recorded(paper_case, tmp_path_factory):
+    """A data folder holding one finished backtest; returns (folder, backtest id)."""
+    folder = tmp_path_factory.mktemp("backtest") / "rvpp-data"
+    folder.mkdir()
+    store = BacktestStore(f"sqlite:///{folder / STORE_FILE}")
+    settings = BacktestSettings(FIRST, LAST, variants_of(["deterministic"], [FRACTION]))
+    ident = run_backtest(paper_case, settings, store, label="three May days")
+    store.engine.dispose()  # the last connection closes: the WAL is folded into the file
+    return folder, ident
+
+
+@pytest.fixture(autouse=True)
+def data_dir(tmp_path, monkeypatch):
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
+    return tmp_path / "rvpp-data"
+
+
+@pytest.fixture
+def stored(recorded, data_dir):
+    """This test's copy of the recorded backtest's store: (store, backtest id)."""
+    folder, ident = recorded
+    shutil.copytree(folder, data_dir)
+    return BacktestStore(f"sqlite:///{data_dir / STORE_FILE}"), ident
+
+
+def settled_records(store: BacktestStore, ident: str) -> pd.DataFrame:
+    records = store.records(ident)
+    assert (records["status"] == "optimal").all()
+    return records.assign(day=pd.to_datetime(records["day"]).dt.date).sort_values("day")
+
+
+def test_the_page_without_a_backtest_says_how_to_start_one():
+    at = open_app("backtest")
+    assert "No backtest in the store yet" in "\n".join(i.value for i in at.info)
+    assert not at.get("plotly_chart")
+    assert at.date_input(key="backtest_first").value <= at.date_input(key="backtest_last").value
+
+
+@pytest.mark.slow
+def test_the_figures_and_tables_are_the_stored_records(stored):
+    store, ident = stored
+    records = settled_records(store, ident)
+    at = open_app("backtest")
+    specs = figures(at)
+    cumulative = specs["Cumulative net cost of the settled days"]
+    boxes = specs["Daily net cost per strategy (box: quartiles and median; points: days)"]
+    perfect = records[records["strategy"] == "perfect"].set_index("day")["net_cost_eur"]
+    table = at.dataframe[1].value.set_index("label")  # the aggregates (the first table lists the backtests)
+    for label, part in records.groupby("label"):
+        net = part["net_cost_eur"].to_numpy()
+        np.testing.assert_allclose(values(trace(cumulative, label)["y"]), np.cumsum(net))
+        np.testing.assert_allclose(values(trace(boxes, label)["y"]), net)
+        row = table.loc[label]
+        assert row["mean_net_cost_eur"] == pytest.approx(net.mean())
+        assert row["cvar95_net_cost_eur"] == pytest.approx(net.max())  # under 20 days: the worst day
+        assert row["mean_regret_eur"] == pytest.approx((part.set_index("day")["net_cost_eur"] - perfect).mean(),
+                                                       abs=1e-6)
+    assert at.dataframe[0].value["Days × strategies"].tolist() == ["9 of 9"]
+
+
+@pytest.mark.slow
+def test_opening_a_worst_day_makes_its_plan_the_current_result(stored):
+    store, ident = stored
+    records = settled_records(store, ident)
+    at = open_app("backtest")
+    at.selectbox(key="backtest_worst_variant").set_value("Γ 0.25 of the day").run()
+    part = records[records["label"] == "Γ 0.25 of the day"]
+    worst = part.loc[part["net_cost_eur"].idxmax()]
+    assert at.selectbox(key="backtest_worst_day").value == str(worst["day"])
+    click(at, "backtest_open_day")
+    assert at.title[0].value == "Results"
+    case = case_of(at)
+    assert case.delivery_date == worst["day"] and case.budgets.fraction == FRACTION
+    assert case.csp[0].storage.e_init_mwh_th == worst["start_state"]["CSP1"]["e_mwh_th"]
+    net, help_text = shown_kpis(at)[NET]
+    assert number(net) == pytest.approx(worst["plan_objective_eur"] / 1000, abs=0.051)
+    assert number(help_text.split("Exact: ")[1]) == pytest.approx(worst["plan_objective_eur"], abs=0.51)
+
+
+@pytest.mark.slow
+def test_the_price_of_robustness_is_drawn_and_its_recommendation_remembered(stored):
+    store, ident = stored
+    records = settled_records(store, ident)
+    at = open_app("backtest")
+    train = at.date_input(key=f"backtest_train_{ident}").value
+    assert tuple(train) == (FIRST, FIRST + dt.timedelta(days=1))  # two thirds of three days
+    curve = figures(at)["Price of robustness (train period): mean daily cost against Γ"]
+    net = trace(curve, "net cost")
+    by_fraction = {0.0: "deterministic", FRACTION: "Γ 0.25 of the day"}
+    expected = [records[(records["label"] == by_fraction[f]) & (records["day"] <= train[1])]["net_cost_eur"].mean()
+                for f in sorted(by_fraction)]
+    np.testing.assert_allclose(values(net["x"]), sorted(by_fraction))
+    np.testing.assert_allclose(values(net["y"]), expected)
+    best = sorted(by_fraction)[int(np.argmin(expected))]
+    assert values(trace(curve, "recommended")["x"]).tolist() == [best]
+    assert store.recommendation() is None
+    click(at, "backtest_remember")
+    remembered = store.recommendation()
+    assert remembered.fraction == best and remembered.backtest_id == ident
+    assert (remembered.train, remembered.test) == ((str(FIRST), str(train[1])), (str(LAST), str(LAST)))
+
+
+def test_periods_the_recommendation_cannot_use_are_refused_in_the_page_words(stored):
+    _store, ident = stored
+    at = open_app("backtest")
+    at.date_input(key=f"backtest_test_{ident}").set_value((FIRST, LAST)).run()
+    message = "\n".join(e.value for e in at.error)
+    assert "No recommendation" in message and "**Test days** must start after **Training days** ends" in message
+
+
+@pytest.mark.slow
+def test_the_recommended_strategy_is_offered_only_once_remembered_and_solves_with_its_gamma(stored, paper_case):
+    store, ident = stored
+    at = open_app("results")
+    assert not at.radio and "No recommended Γ yet" in "\n".join(c.value for c in at.caption)
+    store.remember_recommendation(ident, FRACTION, "mean", (FIRST, FIRST), (LAST, LAST), "a verdict")
+    at.run()
+    at.radio(key="results_bid").set_value("recommended").run()
+    click(at, "results_solve")
+    from dashboard.solving import solver
+    solved = [r for r in solver().results.values() if r.case.budgets.fraction == FRACTION
+              and r.case.delivery_date == paper_case.delivery_date]
+    assert solved and solved[-1].status == "optimal"
+    result = solved[-1]
+    nt = result.problem.nt
+    assert set(result.problem.budgets.values()) == {math.floor(FRACTION * nt + 0.5)}  # 6 of 24 hours
+    assert number(shown_kpis(at)[NET][0]) == pytest.approx(result.objective_eur / 1000, abs=0.051)
+
+    at.switch_page("pages/compare.py").run()
+    click(at, "compare_solve")
+    cost = at.dataframe[0].value
+    assert list(cost.index) == ["Deterministic", "Optimistic", "Balanced", "Pessimistic", RECOMMENDED]
+    assert cost.loc[RECOMMENDED, "DAM+SRM+HPA"] == pytest.approx(result.cost_keur)
+    assert cost.loc["Balanced", "DAM+SRM+HPA"] == pytest.approx(rvpp.solve(paper_case).cost_keur)
+
+
+@pytest.mark.slow
+def test_a_backtest_started_on_the_page_runs_in_its_own_process(data_dir):
+    at = open_app("backtest")
+    at.date_input(key="backtest_first").set_value(LAST)
+    at.date_input(key="backtest_last").set_value(LAST)
+    at.multiselect(key="backtest_strategies").set_value(["deterministic"])
+    at.checkbox(key="backtest_perfect").uncheck()
+    at.text_input(key="backtest_label").input("one day")
+    click(at, "backtest_start")
+    assert not at.error and "Started in the background" in at.info[0].value
+    store = BacktestStore(f"sqlite:///{data_dir / STORE_FILE}")
+    deadline = time.monotonic() + TIMEOUT_S
+    while not (listed := store.list()):
+        assert time.monotonic() < deadline, "the backtest's process never opened it in the store"
+        time.sleep(0.5)
+    assert [(b.label, b.keys_total) for b in listed] == [("one day", 1)]
+    ident = listed[0].id
+    try:
+        while (progress := status(ident, store)) is None or progress.running:
+            assert time.monotonic() < deadline, "the backtest did not finish"
+            time.sleep(0.5)
+        assert progress.state == "finished" and progress.done == progress.total == 1
+        assert progress.pid != os.getpid()  # written by another process
+        at.run()
+        assert at.dataframe[0].value["State"].tolist() == ["finished"]
+        assert len(store.records(ident)) == 1
+    finally:
+        stop(ident, store)
