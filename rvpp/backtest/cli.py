@@ -16,7 +16,7 @@ from ..cli import Number, listed, path_option
 from ..data.case import STRATEGIES, load_case
 from ..data.files import excerpt
 from ..settle.recourse import Penalties
-from ..studies.cli import _scheduler as scheduler_option
+from ..studies.cli import _scheduler as scheduler_option, add_settlement_options
 from .settings import CARRY, BacktestError, BacktestSettings, parse_day, parse_period, variants_of
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
@@ -76,16 +76,7 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--storage-end", type=_storage_end, default=CARRY, metavar="carry|F",
                         help="end-of-day storage rule: carry (default: end at or above the day's start) or a "
                              "fraction F of the storage range (may run down to that level)")
-    penalties = Penalties()
-    multiplier = Number(0)
-    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
-    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
-    parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
-                        help="reserve shortfall price multiplier, >= 0")
-    parser.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
-                        help="price of unserved heat (default: twice the highest HPA tariff)")
-    parser.add_argument("--fix-commitment", action="store_true",
-                        help="settle with the plan's CSP turbine schedule: no start where the plan is off")
+    add_settlement_options(parser)
     parser.add_argument("--no-audit", action="store_true", help="do not audit the plans")
     parser.add_argument("--scheduler", type=scheduler_option, default="processes",
                         help="processes (default: local process pool), serial, local (a local Dask cluster) or "

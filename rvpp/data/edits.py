@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Collection
+from collections.abc import Collection, Mapping
 from typing import Any
 
 from .case import UNIT_KINDS, Case
@@ -273,7 +273,7 @@ def _unit_edits(origin: Case, edited: Case) -> list[str]:
 
 
 def _field_edits(kind: str, old: Any, new: Any) -> list[str]:
-    flat_old, flat_new = _flat(old.model_dump(mode="python")), _flat(new.model_dump(mode="python"))
+    flat_old, flat_new = flatten(old.model_dump(mode="python")), flatten(new.model_dump(mode="python"))
     cap_field = CAPACITY_FIELDS[kind]
     ratio = capacity(kind, new) / capacity(kind, old) if capacity(kind, old) else 1.0
     words = []
@@ -299,11 +299,13 @@ def _capacity_unit(kind: str) -> str:
     return "MW_th" if kind in ("csp", "td") else "MW"
 
 
-def _flat(data: dict, prefix: str = "") -> dict[str, Any]:
-    flat = {}
+def flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested settings as dotted field paths: ``{"storage": {"e_min_mwh_th": 110}}`` gives
+    ``{"storage.e_min_mwh_th": 110}``."""
+    flat: dict[str, Any] = {}
     for key, value in data.items():
-        if isinstance(value, dict):
-            flat.update(_flat(value, f"{prefix}{key}."))
+        if isinstance(value, Mapping):
+            flat.update(flatten(value, f"{prefix}{key}."))
         else:
             flat[f"{prefix}{key}"] = value
     return flat

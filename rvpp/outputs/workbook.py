@@ -39,6 +39,7 @@ import pandas as pd
 import openpyxl
 
 from ..data.case import UNIT_KINDS, Case, parse_case
+from ..data.edits import flatten
 from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, read_file, unzip
 from ..data.history import History
 from ..errors import CaseError, CaseFileError, UploadLimitError
@@ -87,7 +88,7 @@ def unit_table(case: Case, kind: str) -> pd.DataFrame:
     _check_kind(kind)
     rows = []
     for unit, data in zip(getattr(case, kind), case.to_data()["units"][kind]):
-        row = _flatten(data)
+        row = flatten(data)
         row.pop(BREAKPOINTS, None)
         row[SERIES_FIELDS[kind]] = unit.column
         rows.append(row)
@@ -99,7 +100,7 @@ def unit_table(case: Case, kind: str) -> pd.DataFrame:
 def unit_columns(kind: str) -> list[str]:
     """Column names of :func:`unit_table` for ``kind`` (template order, then optional fields)."""
     _check_kind(kind)
-    columns = ["name", *(c for c in _flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
+    columns = ["name", *(c for c in flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
     optional = {"wind": ["forecast_series"], "pv": ["forecast_series"],
                 "csp": ["storage.e_init_mwh_th", "solar_field.forecast_series"],
                 "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"]}
@@ -112,7 +113,7 @@ def unit_columns(kind: str) -> list[str]:
 def new_unit_row(case: Case, kind: str) -> dict[str, Any]:
     """Values a new unit of ``kind`` starts from: a free name, the template and the series
     of the first unit of that kind (or its own name when there is none)."""
-    row = _flatten(UNIT_TEMPLATES[kind])
+    row = flatten(UNIT_TEMPLATES[kind])
     row.pop(BREAKPOINTS, None)
     existing = [u for k, u in case.units() if k == kind]
     row["name"] = next_unit_name(case, kind)
@@ -187,10 +188,10 @@ def write_case_workbook(case: Case, target: str | Path | io.BytesIO) -> str | Pa
     for section in SETTING_SECTIONS:
         for key, value in data[section].items():
             if isinstance(value, Mapping):  # band methods, imbalance price columns
-                settings.update(_flatten(value, f"{section}.{key}."))
+                settings.update(flatten(value, f"{section}.{key}."))
             elif key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam") and value is not None:
                 settings[f"{section}.{key}"] = value
-    settings.update(_flatten({"provenance": data["provenance"]}))
+    settings.update(flatten({"provenance": data["provenance"]}))
     tariff = pd.DataFrame({"hour": range(HOURS_PER_DAY),
                            "tariff_eur_per_mwh": list(case.markets.hpa_tariff_eur_per_mwh)})
     budgets = pd.DataFrame(list(case.budgets.overrides), columns=["source", "gamma"])
@@ -355,16 +356,6 @@ def _csp(case: Case, name: str):
         if unit.name == name:
             return unit
     raise CaseError(f"no CSP named {name!r} (the case has {', '.join(c.name for c in case.csp) or 'none'})")
-
-
-def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
-    flat: dict[str, Any] = {}
-    for key, value in data.items():
-        if isinstance(value, Mapping):
-            flat.update(_flatten(value, f"{prefix}{key}."))
-        else:
-            flat[f"{prefix}{key}"] = value
-    return flat
 
 
 def _unflatten(flat: Mapping[str, Any]) -> dict[str, Any]:

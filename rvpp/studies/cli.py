@@ -63,16 +63,7 @@ def add_study_commands(commands) -> None:
                        metavar="S", help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
     study.add_argument("--time-limit", type=Number(0, low_open=True, unit="s"), metavar="S",
                        help="time limit of every other solve [s]")
-    penalties = Penalties()
-    multiplier = Number(0)
-    study.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
-    study.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
-    study.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
-                       help="reserve shortfall price multiplier, >= 0")
-    study.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
-                       help="price of unserved heat (default: twice the highest HPA tariff)")
-    study.add_argument("--fix-commitment", action="store_true",
-                       help="settle with the plan's CSP turbine schedule: no start where the plan is off")
+    add_settlement_options(study)
     study.add_argument("--backtest-train", type=_period, metavar="D1:D2",
                        help="backtest: training period of the recommended Γ (default: April 2025 on the paper case)")
     study.add_argument("--backtest-test", type=_period, metavar="D3:D4",
@@ -86,6 +77,21 @@ def add_study_commands(commands) -> None:
     study.add_argument("--quiet", action="store_true", help="no progress bars")
     study.set_defaults(run=run_study_command)
 
+
+
+def add_settlement_options(parser: argparse.ArgumentParser) -> None:
+    """The options of the settlement of realized days: penalty multipliers, the price of
+    unserved heat and the turbine schedule (shared by the studies and the backtest)."""
+    penalties = Penalties()
+    multiplier = Number(0)
+    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
+    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
+    parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
+                        help="reserve shortfall price multiplier, >= 0")
+    parser.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
+                        help="price of unserved heat (default: twice the highest HPA tariff)")
+    parser.add_argument("--fix-commitment", action="store_true",
+                        help="settle with the plan's CSP turbine schedule: no start where the plan is off")
 
 def _choice(allowed: tuple[str, ...]):
     def convert(name: str) -> str:
