@@ -49,6 +49,10 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     deviate). In periods without sun charging mode can only idle, so the mode is fixed
     to discharging there whenever discharging mode can idle too (``P̲dis = 0``) or
     charging mode cannot (``P̲ch > 0``).
+
+    From a fixed initial level the reserve shares are bounded by what the first period
+    can reach (:func:`reserve_share_limits`); a tank that starts empty can hold no up
+    reserve (``σ↑ = 0``), so its reserve variables are bounded to zero.
     """
     b = m.csp[csp.name]
     ts, dt = csp.storage, problem.dt_h
@@ -62,11 +66,18 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.r_ch_dn = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th if srm else 0.0))
     b.r_dis_up = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th if srm else 0.0))
     b.r_dis_dn = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th if srm else 0.0))
-    b.sigma_up = pyo.Var(bounds=(0.0, 1.0))
-    b.sigma_dn = pyo.Var(bounds=(0.0, 1.0))
-
     source = problem.sources[csp.name]
     field = np.maximum(source.nominal - np.where(surely_deviating(problem, csp.name), source.deviation, 0.0), 0.0)
+    sigma_up_max, sigma_dn_max = reserve_share_limits(ts, float(field[0]), dt)
+    b.sigma_up = pyo.Var(bounds=(0.0, sigma_up_max))
+    b.sigma_dn = pyo.Var(bounds=(0.0, sigma_dn_max))
+    for t in m.T:
+        if sigma_up_max == 0.0:
+            b.r_ch_up[t].setub(0.0)
+            b.r_dis_up[t].setub(0.0)
+        if sigma_dn_max == 0.0:
+            b.r_ch_dn[t].setub(0.0)
+            b.r_dis_dn[t].setub(0.0)
     idle_when_discharging = ts.p_dis_min_mw_th == 0.0 or ts.p_ch_min_mw_th > 0.0
     for t in m.T:
         if field[t - 1] <= 0.0 and idle_when_discharging:
@@ -99,6 +110,26 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
                                          <= b.sigma_dn * span)
     b.margin_low = pyo.Constraint(m.T, rule=lambda b, t: b.e_ts[t] >= ts.e_min_mwh_th + b.sigma_up * span)
     b.margin_high = pyo.Constraint(m.T, rule=lambda b, t: b.e_ts[t] <= ts.e_max_mwh_th - b.sigma_dn * span)
+
+
+def reserve_share_limits(ts, field_first_mw_th: float, dt_h: float) -> tuple[float, float]:
+    """Upper bounds of the reserve shares ``(σ↑, σ↓)`` implied by a fixed initial level [-].
+
+    After the first period the level lies within ``e_init − P̄dis·dt/η_dis ≤ e[1] ≤
+    e_init + η_ch·min(P̄ch, P̂sf[1])·dt`` (the tank charges only from the field), and
+    the margins (TS11) ``Emin + σ↑·ΔE ≤ e[1] ≤ Emax − σ↓·ΔE`` then give
+    ``σ↑ ≤ (e_init + η_ch·min(P̄ch, P̂sf[1])·dt − Emin)/ΔE`` and
+    ``σ↓ ≤ (Emax − e_init + P̄dis·dt/η_dis)/ΔE``, clipped to [0, 1]. ``P̂sf[1]`` is the
+    field's highest robust availability in the first period [MW_th]. A cyclic day has
+    no fixed level: (1, 1).
+    """
+    if ts.cyclic:
+        return 1.0, 1.0
+    span = ts.e_max_mwh_th - ts.e_min_mwh_th
+    highest = ts.e_init_mwh_th + ts.eta_ch * min(ts.p_ch_max_mw_th, field_first_mw_th) * dt_h
+    lowest = ts.e_init_mwh_th - ts.p_dis_max_mw_th * dt_h / ts.eta_dis
+    return (min(1.0, max(0.0, (highest - ts.e_min_mwh_th) / span)),
+            min(1.0, max(0.0, (ts.e_max_mwh_th - lowest) / span)))
 
 
 def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
@@ -180,12 +211,20 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
 
 
 def _order_fill(m: pyo.ConcreteModel, b, n_fill: int) -> None:
-    """Valid inequalities: inputs are ordered ``x_dn ≤ x_none ≤ x_up``, so are the fill binaries."""
+    """Valid inequalities: inputs are ordered ``x_dn ≤ x_none ≤ x_up``, so are the fill binaries.
+
+    Where the storage can hold no reserve in one direction (its share is bounded to 0,
+    :func:`reserve_share_limits`), that scenario's input equals the nominal one and its
+    fill binaries are taken equal to the nominal ones (at a knot either value fits).
+    """
     fills = range(n_fill)
+    fixed_up, fixed_dn = b.sigma_up.ub == 0.0, b.sigma_dn.ub == 0.0
     b.pb_fill_order_up = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
-        b.pb_fill["none", t, k] <= b.pb_fill["up", t, k]))
+        b.pb_fill["none", t, k] == b.pb_fill["up", t, k] if fixed_up
+        else b.pb_fill["none", t, k] <= b.pb_fill["up", t, k]))
     b.pb_fill_order_dn = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
-        b.pb_fill["dn", t, k] <= b.pb_fill["none", t, k]))
+        b.pb_fill["dn", t, k] == b.pb_fill["none", t, k] if fixed_dn
+        else b.pb_fill["dn", t, k] <= b.pb_fill["none", t, k]))
 
 
 def _reserve_slopes(m: pyo.ConcreteModel, b, curve) -> None:
