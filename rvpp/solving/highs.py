@@ -31,8 +31,9 @@ from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 from .outcome import Outcome, SolveOutcome
 
 # HiGHS options that are not exposed as settings, chosen by measurement (docs/performance.md).
-# The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models.
-HIGHS_OPTIONS = {"mip_heuristic_run_rins": False, "mip_heuristic_run_rens": False}
+# The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models;
+# restarting the root after presolving again costs more cut rounds than it saves.
+HIGHS_OPTIONS = {"mip_heuristic_run_rins": False, "mip_heuristic_run_rens": False, "mip_allow_restart": False}
 
 # HiGHS creates one task scheduler per process at its first run; that first run is
 # serialized, later runs in threads of one process go side by side (HiGHS releases the
