@@ -47,10 +47,19 @@ bench: install
 bench-studies: install
 	$(BIN)/python benchmarks/studies.py
 
-# The paper's studies, then the rolling backtest and recommended Γ (April/May 2025 on the synthetic
-# case). On real data: RVPP_BACKTEST_CASE=<case folder built from real files> make reproduce
+# The paper's studies, then the rolling backtest and recommended Γ: on a case built from the real
+# Spanish files when they are present (RVPP_SPAIN_DATA, or shared/data/spain beside the project;
+# trained on January-February 2018, tested on March 2018), else on the synthetic case (April/May
+# 2025). RVPP_BACKTEST_CASE=<case folder> chooses the case instead.
+SPAIN_DATA ?= $(if $(RVPP_SPAIN_DATA),$(RVPP_SPAIN_DATA),../shared/data/spain)
 reproduce: install
-	$(BIN)/python -m rvpp study reproduce --out out/reproduce
+	@case_dir="$$RVPP_BACKTEST_CASE"; \
+	if [ -z "$$case_dir" ] && [ -f "$(SPAIN_DATA)/entsoe_spain_2015_2018.csv" ]; then \
+		case_dir=out/spain-2018; \
+		$(BIN)/python -m rvpp data build-case --from "$(SPAIN_DATA)/entsoe_spain_2015_2018.csv" \
+			--out "$$case_dir" --start 2017-11-01 --end 2018-03-31 --force || exit 1; \
+	fi; \
+	RVPP_BACKTEST_CASE="$$case_dir" $(BIN)/python -m rvpp study reproduce --out out/reproduce
 
 data: install
 	$(BIN)/python -m rvpp data build
