@@ -47,6 +47,7 @@ GRID_HEADER_PX, GRID_ROW_PX = 35, 35   # Streamlit's data editor: header and row
 P_MAX_X_PX = 168                       # the middle of the "P max [MW]" column of the wind table
 GRID_READY_MS = 1000                   # a data editor takes a moment to accept input once drawn
 EDIT_TRIES, EDIT_WAIT_MS = 3, 20_000
+EDITOR_WAIT_MS = 5_000                 # a double-click opens the cell's editor within this
 QUIET_POLLS, POLL_MS = 3, 1000         # a page counts as drawn after 3 s without Streamlit running
 PAGES = {"Home": "home", "Portfolio": "portfolio", "Markets & tariffs": "markets", "Uncertainty": "uncertainty",
          "Results": "results", "Compare strategies": "compare", "Saved runs": "runs",
@@ -216,12 +217,17 @@ def edit_grid_cell(page, table: int, row: int, x_offset: float, value: str) -> N
     grid.scroll_into_view_if_needed()
     grid.locator(f"#glide-cell-1-{row}").wait_for(state="attached")
     page.wait_for_timeout(GRID_READY_MS)
-    box = grid.bounding_box()
-    page.mouse.dblclick(box["x"] + x_offset, box["y"] + GRID_HEADER_PX + GRID_ROW_PX * (row + 0.5))
-    page.wait_for_timeout(GRID_READY_MS)
-    page.keyboard.press("Control+A")
-    page.keyboard.type(value)
-    page.keyboard.press("Enter")
+    editor = page.locator(".gdg-input").first  # the cell's overlay editor, open while editing
+    for _ in range(EDIT_TRIES):
+        box = grid.bounding_box()
+        page.mouse.dblclick(box["x"] + x_offset, box["y"] + GRID_HEADER_PX + GRID_ROW_PX * (row + 0.5))
+        try:
+            editor.wait_for(state="visible", timeout=EDITOR_WAIT_MS)
+            break
+        except PlaywrightTimeout:
+            page.wait_for_timeout(GRID_READY_MS)
+    editor.fill(value)
+    editor.press("Enter")
 
 
 def chart_data(page, title: str) -> list[dict]:
