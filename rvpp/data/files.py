@@ -163,6 +163,10 @@ def read_file(path: Path, name: str, max_bytes: int | None = None) -> bytes:
 # ----------------------------------------------------------------------------- paths
 
 
+# What makes a written path unsafe (:func:`_path_parts`).
+NUL, ABSOLUTE, STEPS_OUT, EMPTY = "nul", "absolute", "steps out", "empty"
+
+
 def relative_path(text: Any, field: str, file: str) -> PurePosixPath:
     """The path a case writes in ``field`` of ``file``, checked to stay inside its folder.
 
@@ -172,17 +176,11 @@ def relative_path(text: Any, field: str, file: str) -> PurePosixPath:
     example = f"name a file inside the case folder, relative to {file}, e.g. history.csv"
     if not isinstance(text, str) or not text.strip():
         raise CasePathError(f'{file}: "{field}" must {example}')
-    shown = excerpt(text, 80)
-    if "\x00" in text:
-        raise CasePathError(f'{file}: {field} "{shown}" holds a NUL character; {example}')
-    written = text.strip().replace("\\", "/")
-    if written.startswith("/") or WINDOWS_DRIVE.match(written):
-        raise CasePathError(f'{file}: {field} "{shown}" is an absolute path; {example}')
-    parts = [part for part in written.split("/") if part not in ("", ".")]
-    if ".." in parts:
-        raise CasePathError(f'{file}: {field} "{shown}" steps out of the case folder with ".."; {example}')
-    if not parts:
-        raise CasePathError(f'{file}: {field} "{shown}" names the case folder itself; {example}')
+    fault, parts = _path_parts(text.strip())
+    if fault:
+        problem = {NUL: "holds a NUL character", ABSOLUTE: "is an absolute path",
+                   STEPS_OUT: 'steps out of the case folder with ".."', EMPTY: "names the case folder itself"}[fault]
+        raise CasePathError(f'{file}: {field} "{excerpt(text, 80)}" {problem}; {example}')
     return PurePosixPath(*parts)
 
 
@@ -205,19 +203,27 @@ def upload_path(name: str) -> PurePosixPath:
     An absolute name, a ``..`` step or a NUL raises :class:`CasePathError`: an upload may
     only refer to its own files.
     """
-    shown = excerpt(name, 80)
-    if "\x00" in name:
-        raise CasePathError(f'uploaded file "{shown}": the name holds a NUL character')
-    written = name.replace("\\", "/")
+    fault, parts = _path_parts(name)
+    if fault:
+        problem = {NUL: "the name holds a NUL character",
+                   ABSOLUTE: "an absolute path; an upload may only hold files inside its own folder",
+                   STEPS_OUT: 'the name steps out of the upload with ".."', EMPTY: "the name is empty"}[fault]
+        raise CasePathError(f'uploaded file "{excerpt(name, 80)}": {problem}')
+    return PurePosixPath(*parts)
+
+
+def _path_parts(written: str) -> tuple[str | None, list[str]]:
+    """The parts of a relative path (backslashes count as separators, ``.`` and empty parts
+    dropped), or what makes it unsafe: a NUL, an absolute path, a ``..`` step, no part at all."""
+    if "\x00" in written:
+        return NUL, []
+    written = written.replace("\\", "/")
     if written.startswith("/") or WINDOWS_DRIVE.match(written):
-        raise CasePathError(f'uploaded file "{shown}": an absolute path; an upload may only hold files inside '
-                            "its own folder")
+        return ABSOLUTE, []
     parts = [part for part in written.split("/") if part not in ("", ".")]
     if ".." in parts:
-        raise CasePathError(f'uploaded file "{shown}": the name steps out of the upload with ".."')
-    if not parts:
-        raise CasePathError(f'uploaded file "{shown}": the name is empty')
-    return PurePosixPath(*parts)
+        return STEPS_OUT, []
+    return (None, parts) if parts else (EMPTY, [])
 
 
 # ----------------------------------------------------------------------------- zips
