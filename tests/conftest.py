@@ -13,31 +13,26 @@ def paper_case():
     return load_case(PAPER)
 
 
-@pytest.fixture(scope="session")
-def paper_solve(paper_case):
-    """Solve the paper case with options, once per distinct set of options."""
+def cached_solves(case):
+    """Solve ``case`` with options, once per distinct set of options."""
     cache = {}
 
     def run(**options):
         key = repr(sorted(options.items()))
         if key not in cache:
-            cache[key] = solve(with_options(paper_case, **options))
+            cache[key] = solve(with_options(case, **options))
         return cache[key]
 
     return run
+
+
+@pytest.fixture(scope="session")
+def paper_solve(paper_case):
+    """Solve the paper case with options, once per distinct set of options."""
+    return cached_solves(paper_case)
 
 
 @pytest.fixture(scope="session")
 def cyclic_solve(paper_case):
-    """Solve the paper case with a cyclic storage day (:func:`tests.factories.cyclic_storage`)
-    and options, once per distinct set of options."""
-    cyclic = cyclic_storage(paper_case)
-    cache = {}
-
-    def run(**options):
-        key = repr(sorted(options.items()))
-        if key not in cache:
-            cache[key] = solve(with_options(cyclic, **options))
-        return cache[key]
-
-    return run
+    """The same with a cyclic storage day (:func:`tests.factories.cyclic_storage`)."""
+    return cached_solves(cyclic_storage(paper_case))
