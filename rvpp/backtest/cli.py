@@ -16,7 +16,7 @@ from ..cli import Number, listed, path_option
 from ..data.case import STRATEGIES, load_case
 from ..data.files import excerpt
 from ..settle.recourse import Penalties
-from ..studies.cli import _scheduler as scheduler_option, add_settlement_options
+from ..studies.cli import add_settlement_options, scheduler_option
 from .settings import CARRY, BacktestError, BacktestSettings, parse_day, parse_period, variants_of
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"

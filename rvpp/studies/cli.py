@@ -35,7 +35,7 @@ def add_study_commands(commands) -> None:
     study.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
     study.add_argument("--dt", type=choice_of(ALLOWED_DT_H, "h"), help="period length in hours: 1, 0.5 or 0.25")
     study.add_argument("--out", type=path_option, help="output folder (default: out/study-NAME)")
-    study.add_argument("--scheduler", type=_scheduler, default="processes",
+    study.add_argument("--scheduler", type=scheduler_option, default="processes",
                        help="processes (default: local process pool), serial, local (a local Dask cluster) "
                             "or the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
     study.add_argument("--workers", type=Number(1, whole=True),
@@ -106,7 +106,7 @@ def _market_set(text: str) -> str:
     return text
 
 
-def _scheduler(text: str) -> str:
+def scheduler_option(text: str) -> str:
     """``--scheduler``: a name of :data:`SCHEDULERS` or a Dask scheduler address ``[proto://]host:port``."""
     if text in SCHEDULERS or re.fullmatch(r"(?:[a-z]+://)?[^\s:/]+:\d{1,5}", text):
         return text
