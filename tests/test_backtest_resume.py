@@ -25,7 +25,11 @@ COSTS = ["market_cost_eur", "penalty_eur", "net_cost_eur", "plan_objective_eur",
 
 
 def stamps(url: str) -> dict:
-    with sa.create_engine(url).connect() as connection:
+    """When each record was written, by key (none yet while the writer is still creating its tables)."""
+    engine = sa.create_engine(url)
+    if not sa.inspect(engine).has_table("backtest_records"):
+        return {}
+    with engine.connect() as connection:
         rows = connection.execute(sa.text("SELECT day, strategy, gamma, recorded_at FROM backtest_records"))
         return {tuple(row[:3]): row[3] for row in rows}
 
