@@ -296,3 +296,22 @@ def test_the_stochastic_start_is_a_complete_feasible_point_worth_its_settlements
         assert con.upper is None or body <= pyo.value(con.upper) + 1e-5, con.name
     settled = [evaluate(paper, bids, r)["net_cost_eur"] for r in reals]
     assert pyo.value(m.expected_net_cost) == pytest.approx(np.mean(settled), rel=1e-3)
+
+
+def test_the_chain_of_starts_keeps_the_stochastic_optimum(paper):
+    """Seven scenarios start from the benchmark over the first two (a chain 2 → 7); the
+    optimum matches the same model solved by HiGHS without any start, and the expected
+    profit is what its bids earn, settled scenario by scenario."""
+    from rvpp.settle.recourse import build_recourse_model
+    from rvpp.solving.highs import HighsModel
+
+    exact = rvpp.with_options(paper, rel_gap=1e-6)
+    reals = [realization(paper, paper.delivery_date - dt.timedelta(days=k)) for k in (1, 3, 5, 8, 11, 13, 16)]
+    chained = solve_stochastic(exact, reals)
+    assert chained.status == "optimal" and chained.start_s > 0.0
+    plain = HighsModel(build_recourse_model([realized_problem(exact, r) for r in reals], Penalties()))
+    outcome = plain.solve(exact.solver)
+    assert outcome.status == "optimal"
+    assert chained.expected_profit_eur == pytest.approx(-outcome.objective, rel=1e-5)
+    settled = [evaluate(exact, chained.bids, r)["net_cost_eur"] for r in reals]
+    assert -np.mean(settled) == pytest.approx(chained.expected_profit_eur, rel=1e-5)
