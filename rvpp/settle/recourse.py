@@ -53,6 +53,9 @@ FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
 START_STEP = 5  # the stochastic benchmark starts from the bids of its solve over this many scenarios fewer
 START_GAP = 1e-3  # smallest relative gap of the solves that build that MIP start
 MIN_SOLVE_S = 1.0  # the last solve of the stochastic benchmark runs at least this long [s]
+# With a start close to the optimum, HiGHS's neighbourhood searches around it (RINS, RENS; off
+# for the single-day plans, where they cost more than they find) improve it quickly.
+IMPROVE_START = {"mip_heuristic_run_rins": True, "mip_heuristic_run_rens": True}
 IMBALANCE_COLUMNS = ("imbalance_short", "imbalance_long")  # realized π_def, π_sur [EUR/MWh] where the case has them
 HEAT_PRICE_FACTOR = 2.0  # default c_heat = 2 × the highest HPA tariff (MODEL_SPEC §10)
 
@@ -483,7 +486,7 @@ class StochasticPlan:
 
 
 def solve_stochastic(case: Case, scenarios: Sequence[Realization],
-                     penalties: Penalties = Penalties(), *, time_limit_s: float | None = None) -> StochasticPlan:
+                     penalties: Penalties = Penalties()) -> StochasticPlan:
     """Maximize expected profit over equally likely ``scenarios`` with shared bids.
 
     The stochastic benchmark of MODEL_SPEC §10 (the paper's comparison with its
@@ -494,17 +497,24 @@ def solve_stochastic(case: Case, scenarios: Sequence[Realization],
     With more than :data:`START_STEP` scenarios, HiGHS starts from a complete
     incumbent: the bids of the same benchmark over all but the last :data:`START_STEP`
     scenarios (solved first, the same way, to a gap of at least :data:`START_GAP`) and
-    every scenario's best recourse to them (one single-day solve each). For 25
+    every new scenario's best recourse to them (one single-day solve each; the others keep
+    their recourse from that solve). For 25
     scenarios that is a chain 5 → 10 → 15 → 20 → 25, each solve starting from the bids
     of the one before, so the search only has to improve on a near-optimal plan and
-    close the bound instead of looking for a first plan in the whole tree. The chain
+    close the bound instead of looking for a first plan in the whole tree; HiGHS's
+    neighbourhood searches (:data:`IMPROVE_START`) improve it. The chain
     takes at most half of the time left under the case's time limit at each step, so
     the whole call stays within that limit.
     """
     if not scenarios:
         raise RvppError("the stochastic benchmark needs at least one scenario")
+    return _solve_chain(case, scenarios, penalties, case.solver.time_limit_s)[0]
+
+
+def _solve_chain(case: Case, scenarios: Sequence[Realization], penalties: Penalties,
+                 limit: float) -> tuple[StochasticPlan, pyo.ConcreteModel]:
+    """:func:`solve_stochastic` within ``limit`` seconds, with its solved model."""
     started = time.perf_counter()
-    limit = case.solver.time_limit_s if time_limit_s is None else time_limit_s
     problems = [realized_problem(case, real) for real in scenarios]
     m = build_recourse_model(problems, penalties)
     build_s = time.perf_counter() - started
@@ -513,41 +523,54 @@ def solve_stochastic(case: Case, scenarios: Sequence[Realization],
         quick = case.model_copy(update={"solver": case.solver.model_copy(
             update={"rel_gap": max(case.solver.rel_gap, START_GAP)})})
         share = (limit - (time.perf_counter() - started)) / 2
-        first = solve_stochastic(quick, scenarios[:len(scenarios) - START_STEP], penalties, time_limit_s=share)
+        first, solved = _solve_chain(quick, scenarios[:len(scenarios) - START_STEP], penalties, share)
         if first.bids is not None:
-            start = recourse_start(m, case, problems, penalties, first.bids)
+            start = recourse_start(m, case, problems, penalties, first.bids, solved)
     start_s = time.perf_counter() - started - build_s
     left = max(limit - (time.perf_counter() - started), MIN_SOLVE_S)
-    outcome = HighsModel(m).solve(case.solver.model_copy(update={"time_limit_s": left}), start=start)
+    outcome = HighsModel(m).solve(case.solver.model_copy(update={"time_limit_s": left}), start=start,
+                                  options=IMPROVE_START)
     bids = None
     if outcome.usable:
         bids = FirstStage(*(np.array([float(pyo.value(getattr(m, name)[t])) for t in m.T]) for name in FIRST_STAGE))
     flip = (lambda v: None if v is None else -v)
-    return StochasticPlan(bids=bids, status=outcome.status, expected_profit_eur=flip(outcome.objective),
+    plan = StochasticPlan(bids=bids, status=outcome.status, expected_profit_eur=flip(outcome.objective),
                           bound_eur=flip(outcome.bound), mip_gap=outcome.gap, solve_s=outcome.seconds,
                           build_s=build_s, n_scenarios=len(scenarios), message=outcome.message,
                           nodes=outcome.nodes, lp_iterations=outcome.lp_iterations, start_s=start_s)
+    return plan, m
 
 
 def recourse_start(m: pyo.ConcreteModel, case: Case, problems: Sequence[Problem], penalties: Penalties,
-                   bids: FirstStage) -> ComponentMap:
+                   bids: FirstStage, solved: pyo.ConcreteModel | None = None) -> ComponentMap:
     """A complete MIP start for the stochastic model ``m``: ``bids`` and each scenario's best
-    recourse to them (the recourse has slacks, so any bids fit every scenario)."""
+    recourse to them (the recourse has slacks, so any bids fit every scenario).
+
+    ``solved`` is a stochastic model over the first scenarios of ``m`` whose solution holds
+    ``bids``: its scenarios keep the recourse found there, only the others are solved.
+    """
     settings = case.solver.model_copy(update={"rel_gap": max(case.solver.rel_gap, START_GAP)})
     start = ComponentMap()
     for name in FIRST_STAGE:
         for t in m.T:
             start[getattr(m, name)[t]] = float(getattr(bids, name)[t - 1])
+    known = len(solved.scenario) if solved is not None else 0
     for k, problem in enumerate(problems):
-        single = build_recourse_model([problem], penalties, bids)
-        recourse = HighsModel(single)
-        if not recourse.solve(settings, load=False).usable:
-            return ComponentMap()
-        solved = recourse.values()
-        # Both blocks come from add_scenario, so their variables are created in the same order.
-        for mine, theirs in zip(_block_vars(m.scenario[k]), _block_vars(single.scenario[0])):
-            if theirs in solved:
-                start[mine] = solved[theirs]
+        if k < known:
+            block = solved.scenario[k]
+            source = ComponentMap((theirs, theirs.value) for theirs in _block_vars(block))
+        else:
+            single = build_recourse_model([problem], penalties, bids)
+            block = single.scenario[0]
+            recourse = HighsModel(single)
+            if not recourse.solve(settings, load=False).usable:
+                return ComponentMap()
+            source = recourse.values()
+        # Every scenario block comes from add_scenario, so their variables are created in the same order.
+        for mine, theirs in zip(_block_vars(m.scenario[k]), _block_vars(block)):
+            value = source[theirs] if theirs in source else None
+            if value is not None:
+                start[mine] = value
     return start
 
 
