@@ -55,3 +55,40 @@ def test_the_bounds_keep_the_reference_optimum(paper_case, e_init, strategy):
     assert result.status == "optimal", result.message
     reference = reference_optimum(case)
     assert abs(result.objective_eur - reference) <= 1e-6 * max(1.0, abs(reference)), (result.objective_eur, reference)
+
+
+def _twins(case, n: int = 2):
+    """``case`` with ``n`` copies of its CSP, each following the original's solar series."""
+    csp = case.csp[0]
+    copies = [csp.model_copy(update={"name": f"{csp.name}_{i}", "solar_field": csp.solar_field.model_copy(
+        update={"series": csp.column})}) for i in range(1, n)]
+    return case.replace(csp=[csp, *copies])
+
+
+def test_identical_csps_are_paired_and_budgets_that_differ_part_them(paper_case):
+    from rvpp.model.csp import identical_csp_pairs
+    from rvpp.solving.problem import prepare
+
+    case = _twins(with_options(paper_case, strategy="balanced"), 3)
+    names = [c.name for c in case.csp]
+    assert identical_csp_pairs(prepare(case)) == [(names[0], names[1]), (names[1], names[2])]
+    # A different budget for the last plant's field leaves only the first two interchangeable.
+    uneven = with_options(case, gammas={names[2]: 0})
+    assert identical_csp_pairs(prepare(uneven)) == [(names[0], names[1])]
+    # A different tank parts them as well.
+    tanks = case.replace(csp=[case.csp[0], with_storage(case.replace(csp=[case.csp[1]]), e_min_mwh_th=100.0).csp[0]])
+    assert identical_csp_pairs(prepare(tanks)) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("strategy", ["deterministic", "balanced"])
+def test_ordering_identical_csps_keeps_the_reference_optimum(paper_case, strategy):
+    """Two interchangeable CSPs: rvpp orders them by hours online; the reference model,
+    which has no such order, reaches the same optimum, and the plan honours the order."""
+    case = _twins(with_options(paper_case, strategy=strategy, date="2025-05-05", rel_gap=1e-7))
+    result = solve(case)
+    assert result.status == "optimal", result.message
+    reference = reference_optimum(case)
+    assert abs(result.objective_eur - reference) <= 1e-6 * max(1.0, abs(reference)), (result.objective_eur, reference)
+    hours = result.csp.groupby("unit")["online"].sum()
+    assert hours[case.csp[0].name] >= hours[case.csp[1].name]

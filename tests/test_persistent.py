@@ -38,3 +38,25 @@ def test_budgets_re_solve_in_place_and_new_data_rebuild(paper_case):
         assert result.problem is problem and audit_result(result) == []
     assert rebuilds == [1, 1, 2, 3]
     assert problems[2].case.csp[0].storage.e_init_mwh_th == 400.0
+
+
+@pytest.mark.slow
+def test_a_budget_that_parts_identical_csps_rebuilds_without_their_order(paper_case):
+    """Two interchangeable CSPs are ordered by hours online (rvpp.model.csp.add_csp_symmetry);
+    giving one of them its own budget makes them different plants, so the order must go:
+    the model is rebuilt rather than re-solved in place, and the plan is a fresh solve's."""
+    day = with_options(paper_case, strategy="balanced", date="2025-04-15")
+    csp = day.csp[0]
+    twin = csp.model_copy(update={"name": f"{csp.name}_2", "solar_field": csp.solar_field.model_copy(
+        update={"series": csp.column})})
+    twins = day.replace(csp=[csp, twin])
+    first = prepare(twins)
+    parted = with_budgets(first, with_options(twins, gammas={twin.name: 0}))
+    kept = DayModel()
+    kept.solve(first)
+    assert hasattr(kept.model, "csp_order")
+    result = kept.solve(parted)
+    assert kept.rebuilds == 2 and not hasattr(kept.model, "csp_order")
+    alone = solve_problem(parted)
+    assert result.status == alone.status == "optimal"
+    assert result.objective_eur == pytest.approx(alone.objective_eur, abs=1e-4 * abs(alone.objective_eur) + 0.01)

@@ -12,7 +12,7 @@ import pyomo.environ as pyo
 from ..solving.problem import Problem
 from ..solving.robust import add_robustness
 from .csp import (add_csp_commitment, add_csp_power_block, add_csp_reserves, add_csp_solar_field,
-                  add_csp_storage)
+                  add_csp_storage, add_csp_symmetry)
 from .market import (SCENARIOS, activation, add_electric_balance, add_heat_balance, add_market_bids,
                      add_market_limits, add_objective, add_time)
 from .units import add_electrical_demand, add_ndres, add_thermal_demand
@@ -27,6 +27,7 @@ def build_model(problem: Problem) -> pyo.ConcreteModel:
     add_time(m, problem)
     add_market_bids(m, problem)
     add_units(m, problem)
+    add_csp_symmetry(m, problem)
     add_market_limits(m, problem)
     add_electric_balance(m, problem)
     add_heat_balance(m, problem)

@@ -254,3 +254,30 @@ def add_csp_reserves(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.r_dn = pyo.Expression(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t])
     b.reserve_up_cap = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= cap)
     b.reserve_dn_cap = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= cap)
+
+
+
+def identical_csp_pairs(problem: Problem) -> list[tuple[str, str]]:
+    """Consecutive CSPs of ``problem`` that are interchangeable: equal parameters and initial
+    state, equal solar-field band and budget."""
+    groups: dict[tuple, list[str]] = {}
+    for csp in problem.case.csp:
+        src = problem.sources[csp.name]
+        key = (csp.model_dump_json(exclude={"name": True, "solar_field": {"series"}}), csp.column,
+               src.nominal.tobytes(), src.deviation.tobytes(), src.gamma)
+        groups.setdefault(key, []).append(csp.name)
+    return [(a, b) for names in groups.values() for a, b in zip(names, names[1:])]
+
+
+def add_csp_symmetry(m: pyo.ConcreteModel, problem: Problem) -> None:
+    """Valid inequalities for interchangeable CSPs (:func:`identical_csp_pairs`):
+    ``Σt u_a[t] ≥ Σt u_b[t]``.
+
+    Exchanging two such plants' whole schedules turns a plan into another of the same
+    cost, so some optimum has them ordered by hours online; the search then need not
+    visit both orders. Not for settlements, where each plant keeps its own schedule.
+    """
+    pairs = identical_csp_pairs(problem)
+    if pairs:
+        m.csp_order = pyo.Constraint(range(len(pairs)), rule=lambda m, i: (
+            sum(m.csp[pairs[i][0]].online[t] for t in m.T) >= sum(m.csp[pairs[i][1]].online[t] for t in m.T)))

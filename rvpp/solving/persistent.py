@@ -24,6 +24,7 @@ import time
 from pyomo.common.collections import ComponentMap
 
 from ..model import build_model
+from ..model.csp import identical_csp_pairs
 from .highs import HighsModel
 from .plan import not_solved, plan_result
 from .problem import Problem, infeasibility_reasons
@@ -80,6 +81,8 @@ class DayModel:
             return False
         if any(problem.sources[c.name].gamma < self.model.robust[c.name].built_gamma for c in problem.case.csp):
             return False
+        if identical_csp_pairs(problem) != identical_csp_pairs(built):
+            return False  # the order of interchangeable CSPs holds only among equal budgets
         strip = lambda case: {k: v for k, v in case.to_data().items() if k != "budgets"}  # noqa: E731
         return strip(built.case) == strip(problem.case) and \
             built.case.budgets.mode == problem.case.budgets.mode
