@@ -7,7 +7,8 @@ time of each solve is recorded next to its wall time (on a machine shared with o
 work it is the closer measure of what a quiet machine gives), and so are HiGHS's node
 and LP-iteration counts, which do not depend on the load at all. Writes ``benchmarks/results/solve_times.json``.
 
-Usage: ``python benchmarks/solve_times.py [--quick]`` (quick: four days).
+Usage: ``python benchmarks/solve_times.py [--quick] [--periods 60 15]`` (quick: four days;
+periods: the period lengths in minutes to time, both by default).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from rvpp import load_case, solve, with_options  # noqa: E402
 
 # Targets [s] of build + solve + extract per strategy: median and worst day.
 TARGETS = {1.0: {"median": 0.3, "max": 1.0}, 0.25: {"median": 2.0, "max": 5.0}}
+PERIOD_MINUTES = {60: 1.0, 15: 0.25}
 
 
 def timed_solve(case) -> dict:
@@ -35,12 +37,13 @@ def timed_solve(case) -> dict:
             "solve_s": round(result.solve_s, 3), "extract_s": round(result.extract_s, 3), "nodes": result.nodes, "lp_iterations": result.lp_iterations}
 
 
-def run(days: tuple[str, ...], quick: bool) -> dict:
+def run(days: tuple[str, ...], quick: bool, period_lengths_h: tuple[float, ...] = tuple(TARGETS)) -> dict:
     base = load_case(CASE)
     solve(base)  # imports and first-call costs are not part of any measurement
     document = header("solve_times", "quick" if quick else "full")
     document.update(case=base.name, default_day=base.delivery_date.isoformat(), days=list(days), results={})
-    for dt_h, target in TARGETS.items():
+    for dt_h in period_lengths_h:
+        target = TARGETS[dt_h]
         per_strategy = {}
         for strategy in STRATEGIES:
             rows = {}
@@ -78,8 +81,12 @@ def print_table(document: dict) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="four days instead of twelve")
+    parser.add_argument("--periods", type=int, nargs="+", choices=sorted(PERIOD_MINUTES, reverse=True),
+                        default=sorted(PERIOD_MINUTES, reverse=True), metavar="MINUTES",
+                        help="period lengths to time, in minutes (60, 15 or both; default both)")
     args = parser.parse_args()
-    document = run(QUICK_DAYS if args.quick else DAYS, args.quick)
+    lengths = tuple(PERIOD_MINUTES[minutes] for minutes in dict.fromkeys(args.periods))
+    document = run(QUICK_DAYS if args.quick else DAYS, args.quick, lengths)
     write_result(document)
     print_table(document)
 
