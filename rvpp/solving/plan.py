@@ -6,9 +6,12 @@
 
 from __future__ import annotations
 
+import gc
 import time
 from pathlib import Path
 from collections.abc import Callable
+
+from pyomo.common.gc_manager import PauseGC
 
 from ..data.case import Case
 from .diagnose import explain_infeasibility
@@ -32,7 +35,22 @@ def solve(case: Case, progress: Progress | None = None) -> Result:
 
 
 def solve_problem(problem: Problem, progress: Progress | None = None, started: float | None = None) -> Result:
-    """Solve an already prepared :class:`Problem`."""
+    """Solve an already prepared :class:`Problem`.
+
+    The Pyomo model is cyclic garbage once its plan tables are read. Python's cyclic
+    collector is paused while the model lives and its youngest generation is collected
+    afterwards, so the model is freed young instead of reaching the oldest generation,
+    whose full collections scan the whole process (60-90 ms with a case's history
+    loaded, about once every four hourly solves).
+    """
+    with PauseGC():
+        result = _solve_problem(problem, progress, started)
+    if gc.isenabled():
+        gc.collect(0)
+    return result
+
+
+def _solve_problem(problem: Problem, progress: Progress | None, started: float | None) -> Result:
     say = progress or (lambda _msg: None)
     started = time.perf_counter() if started is None else started
     reasons = infeasibility_reasons(problem)
