@@ -20,6 +20,26 @@ def _v(component) -> float:
     return float(value)
 
 
+def _series(component, index) -> np.ndarray:
+    """Values of an indexed variable or expression over ``index`` [its unit], round-off set to 0.
+
+    A variable's value is read directly (the costly part of ``pyo.value`` is its checks);
+    an expression is evaluated. A variable without a value counts as 0, as in :func:`_v`.
+    """
+    if component.ctype is pyo.Var:
+        values = np.fromiter((component[i].value for i in index), dtype=float, count=len(index))
+    else:
+        values = np.fromiter((pyo.value(component[i], exception=False) for i in index), dtype=float,
+                             count=len(index))
+    values[np.isnan(values) | (np.abs(values) < SOLVER_ZERO)] = 0.0
+    return values
+
+
+def _integers(component, index) -> np.ndarray:
+    """Values of an indexed binary variable, rounded to whole numbers."""
+    return np.rint(_series(component, index)).astype(np.int64)
+
+
 def extract(m: pyo.ConcreteModel, problem: Problem) -> dict:
     """Read a solved model into plain numbers and tables."""
     case, T = problem.case, list(m.T)
@@ -46,10 +66,10 @@ def _market_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     da, up, dn = (problem.sources[n] for n in PRICE_COLUMNS)
     return pd.DataFrame({
         **_period_columns(problem),
-        "p_da_mw": [_v(m.p_da[t]) for t in T],
-        "r_sr_up_mw": [_v(m.r_sr_up[t]) for t in T],
-        "r_sr_dn_mw": [_v(m.r_sr_dn[t]) for t in T],
-        "h_hpa_mw": [_v(m.h_hpa[t]) for t in T],
+        "p_da_mw": _series(m.p_da, T),
+        "r_sr_up_mw": _series(m.r_sr_up, T),
+        "r_sr_dn_mw": _series(m.r_sr_dn, T),
+        "h_hpa_mw": _series(m.h_hpa, T),
         "price_da_mid": da.nominal,
         "price_da_pos": da.deviation_up,
         "price_da_neg": da.deviation,
@@ -61,39 +81,42 @@ def _market_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     })
 
 
-def _chi(m, name: str, T: list[int]) -> list[float]:
-    return [round(_v(m.robust[name].chi[t])) for t in T]
+def _chi(m, name: str, T: list[int]) -> np.ndarray:
+    return _integers(m.robust[name].chi, T)
 
 
 def _units_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
-    rows = []
-    base = _period_columns(problem)
+    """One row per unit and period, units in the case's order; built as whole columns."""
+    columns = {key: [] for key in ("unit", "kind", "p_mw", "r_up_mw", "r_dn_mw", "nominal_mw", "deviation_mw",
+                                   "bound_mw", "chi")}
 
     def add(kind, name, p, r_up, r_dn, nominal, deviation, bound, chi):
-        rows.append(pd.DataFrame({**base, "unit": name, "kind": kind, "p_mw": p, "r_up_mw": r_up,
-                                  "r_dn_mw": r_dn, "nominal_mw": nominal, "deviation_mw": deviation,
-                                  "bound_mw": bound, "chi": chi}))
+        for key, value in zip(columns, (np.full(len(T), name, dtype=object), np.full(len(T), kind, dtype=object),
+                                        p, r_up, r_dn, nominal, deviation, bound, chi)):
+            columns[key].append(np.asarray(value))
 
     for kind, unit in problem.case.units():
         name = unit.name
         src = problem.sources[name]
         if kind in ("wind", "pv", "ed"):
             b = m.ndres[name] if kind != "ed" else m.ed[name]
-            add(kind, name, [_v(b.p[t]) for t in T], [_v(b.r_up[t]) for t in T], [_v(b.r_dn[t]) for t in T],
-                src.nominal, src.deviation, [_v(b.bound[t]) for t in T], _chi(m, name, T))
+            add(kind, name, _series(b.p, T), _series(b.r_up, T), _series(b.r_dn, T),
+                src.nominal, src.deviation, _series(b.bound, T), _chi(m, name, T))
         elif kind == "td":
             b = m.td[name]
             zeros = np.zeros(len(T))
-            add(kind, name, [_v(b.h[t]) for t in T], zeros, zeros, src.nominal, src.deviation,
-                [_v(b.bound[t]) for t in T], _chi(m, name, T))
+            add(kind, name, _series(b.h, T), zeros, zeros, src.nominal, src.deviation,
+                _series(b.bound, T), _chi(m, name, T))
         else:
             b = m.csp[name]
             empty = np.full(len(T), np.nan)
-            add(kind, name, [_v(b.e["none", t]) for t in T], [_v(b.r_up[t]) for t in T],
-                [_v(b.r_dn[t]) for t in T], empty, empty, empty, empty)
-    if not rows:
+            add(kind, name, _series(b.e, [("none", t) for t in T]), _series(b.r_up, T),
+                _series(b.r_dn, T), empty, empty, empty, np.full(len(T), pd.NA, dtype=object))
+    if not columns["unit"]:
         return pd.DataFrame()
-    table = pd.concat(rows, ignore_index=True)
+    count = len(columns["unit"])
+    base = {key: np.tile(np.asarray(value), count) for key, value in _period_columns(problem).items()}
+    table = pd.DataFrame({**base, **{key: np.concatenate(parts) for key, parts in columns.items()}})
     table["chi"] = table["chi"].astype("Int64")
     return table
 
@@ -104,32 +127,32 @@ def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     for csp in problem.case.csp:
         b, src, ts = m.csp[csp.name], problem.sources[csp.name], csp.storage
         span = ts.e_max_mwh_th - ts.e_min_mwh_th
-        e = {s: [_v(b.e[s, t]) if s in m.S else _v(b.e["none", t]) for t in T] for s in ("none", "up", "dn")}
+        e = {s: _series(b.e, [(s if s in m.S else "none", t) for t in T]) for s in ("none", "up", "dn")}
         sigma_up, sigma_dn = _v(b.sigma_up), _v(b.sigma_dn)
         frames.append(pd.DataFrame({
             **base, "unit": csp.name,
-            "p_sf_mw": [_v(b.p_sf[t]) for t in T],
+            "p_sf_mw": _series(b.p_sf, T),
             "sf_nominal_mw": src.nominal,
             "sf_deviation_mw": src.deviation,
-            "sf_bound_mw": [_v(b.bound[t]) for t in T],
+            "sf_bound_mw": _series(b.bound, T),
             "chi": _chi(m, csp.name, T),
-            "p_pb_mw": [_v(b.p_pb[t]) for t in T],
+            "p_pb_mw": _series(b.p_pb, T),
             "e_none_mw": e["none"], "e_up_mw": e["up"], "e_dn_mw": e["dn"],
-            "ts_charge_mw": [_v(b.p_ch[t]) for t in T],
-            "ts_discharge_mw": [_v(b.p_dis[t]) for t in T],
-            "ts_energy_mwh": [_v(b.e_ts[t]) for t in T],
-            "ts_r_up_mw": [_v(b.r_ts_up[t]) for t in T],
-            "ts_r_dn_mw": [_v(b.r_ts_dn[t]) for t in T],
-            "charging": [round(_v(b.charging[t])) for t in T],
-            "online": [round(_v(b.online[t])) for t in T],
-            "startup": [round(_v(b.startup[t])) for t in T],
-            "heat_to_td_mw": [_v(b.h[t]) for t in T],
+            "ts_charge_mw": _series(b.p_ch, T),
+            "ts_discharge_mw": _series(b.p_dis, T),
+            "ts_energy_mwh": _series(b.e_ts, T),
+            "ts_r_up_mw": _series(b.r_ts_up, T),
+            "ts_r_dn_mw": _series(b.r_ts_dn, T),
+            "charging": _integers(b.charging, T),
+            "online": _integers(b.online, T),
+            "startup": _integers(b.startup, T),
+            "heat_to_td_mw": _series(b.h, T),
             "sigma_up": sigma_up, "sigma_dn": sigma_dn,
-            "shutdown": [round(_v(b.shutdown[t])) for t in T],
-            "ts_r_ch_up_mw": [_v(b.r_ch_up[t]) for t in T],
-            "ts_r_ch_dn_mw": [_v(b.r_ch_dn[t]) for t in T],
-            "ts_r_dis_up_mw": [_v(b.r_dis_up[t]) for t in T],
-            "ts_r_dis_dn_mw": [_v(b.r_dis_dn[t]) for t in T],
+            "shutdown": _integers(b.shutdown, T),
+            "ts_r_ch_up_mw": _series(b.r_ch_up, T),
+            "ts_r_ch_dn_mw": _series(b.r_ch_dn, T),
+            "ts_r_dis_up_mw": _series(b.r_dis_up, T),
+            "ts_r_dis_dn_mw": _series(b.r_dis_dn, T),
             "ts_energy_floor_mwh": ts.e_min_mwh_th + sigma_up * span,
             "ts_energy_ceiling_mwh": ts.e_max_mwh_th - sigma_dn * span,
         }))
