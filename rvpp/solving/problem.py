@@ -128,9 +128,10 @@ def problem_from_bands(case: Case, periods: pd.DatetimeIndex, bands: pd.DataFram
     """A :class:`Problem` from given bands ``(source, lo|mid|hi)`` per period."""
     budgets = strategy_budgets(case, len(periods))
     sources: dict[str, Source] = {}
-    lo = {name: bands[(name, "lo")].to_numpy(float) for name in bands.columns.levels[0]}
-    mid = {name: bands[(name, "mid")].to_numpy(float) for name in bands.columns.levels[0]}
-    hi = {name: bands[(name, "hi")].to_numpy(float) for name in bands.columns.levels[0]}
+    values = bands.to_numpy(float, copy=True)
+    position = {key: j for j, key in enumerate(bands.columns)}
+    lo, mid, hi = ({name: values[:, position[(name, stat)]] for name in bands.columns.levels[0]}
+                   for stat in ("lo", "mid", "hi"))
     sources["price_da"] = Source("price_da", "price_da", None, mid["price_da"],
                                  mid["price_da"] - lo["price_da"], budgets["price_da"],
                                  deviation_up=hi["price_da"] - mid["price_da"])

@@ -62,13 +62,9 @@ def forecast_bands(
     values = np.column_stack([window[column].to_numpy(dtype=float) * scale for column, scale in columns.values()])
     by_hour = {h: np.quantile(values[hours == h], quantiles, axis=0) for h in sorted(set(hours))}
     table = np.stack([by_hour[h] for h in periods.hour])  # [period, stat, source]
-    pieces = {}
-    for j, source in enumerate(columns):
-        for i, stat in enumerate(STATS):
-            pieces[(source, stat)] = table[:, i, j]
-    bands = pd.DataFrame(pieces, index=pd.RangeIndex(1, len(periods) + 1, name="t"))
-    bands.columns = pd.MultiIndex.from_tuples(bands.columns, names=["source", "stat"])
-    return bands
+    by_source = table.transpose(0, 2, 1).reshape(len(periods), len(columns) * len(STATS))
+    return pd.DataFrame(by_source, index=pd.RangeIndex(1, len(periods) + 1, name="t"),
+                        columns=pd.MultiIndex.from_product([list(columns), STATS], names=["source", "stat"]))
 
 
 def realized_values(
