@@ -105,8 +105,9 @@ def compile_model(m: pyo.Block) -> CompiledModel:
     columns = info.columns
     n = len(columns)
     a = info.A.tocsc() if n else info.A
-    lower = np.array([-INF if v.lb is None else v.lb for v in columns], dtype=float)
-    upper = np.array([INF if v.ub is None else v.ub for v in columns], dtype=float)
+    bounds = np.array([v.bounds for v in columns], dtype=float).reshape(n, 2)  # None (no bound) becomes NaN
+    lower = np.where(np.isnan(bounds[:, 0]), -INF, bounds[:, 0])
+    upper = np.where(np.isnan(bounds[:, 1]), INF, bounds[:, 1])
     integer = np.array([v.is_integer() for v in columns], dtype=bool)
     rhs = np.asarray(info.rhs, dtype=float)
     sense = np.array([op for _, op in info.rows], dtype=int)
