@@ -28,6 +28,8 @@ Three variants of the constraint budgets exist (``Budgets.mode`` and
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pyomo.environ as pyo
 
@@ -141,11 +143,11 @@ def set_budgets(m: pyo.ConcreteModel, problem: Problem) -> None:
 
 def _fix_chi(block, chi: np.ndarray) -> None:
     """Fix χ where the data decide it; leave it free (NaN) among ties at the Γ boundary."""
-    for t in block.chi:
-        if np.isnan(chi[t - 1]):
-            block.chi[t].unfix()
+    for var, value in zip(block.chi.values(), chi.tolist()):
+        if math.isnan(value):
+            var.unfix()
         else:
-            block.chi[t].fix(int(chi[t - 1]))
+            var.fix(int(value), skip_validation=True)  # 0 or 1 by construction
 
 
 def _paper_binary(block, dev: np.ndarray, periods) -> dict:
