@@ -198,6 +198,25 @@ def test_case_selects_forecast_bands_per_source_and_prepare_uses_them():
         assert price.deviation_up[t] == pytest.approx(q[2] - q[1])
 
 
+def test_bands_of_a_day_drawn_again_are_fresh_copies_and_follow_every_input():
+    # Climatology of W = 30 + 5·cos(i) over the window D-5..D-1, the same in every hour.
+    case = _case()
+    d = day_index(DAY)
+    window = 30.0 + 5.0 * np.cos(np.arange(d - 5, d))
+    first = prepare(case).bands
+    first[("W", "mid")] = -1.0  # a caller's change never reaches the next caller
+    again = prepare(case.replace(budgets={"strategy": "pessimistic"})).bands
+    for stat, q in (("lo", 0.2), ("mid", 0.5), ("hi", 0.8)):
+        assert np.allclose(again[("W", stat)], np.quantile(window, q))
+    # Another quantile, window length or history content gives other bands.
+    assert np.allclose(prepare(case.replace(uncertainty={"q_lo": 0.1})).bands[("W", "lo")],
+                       np.quantile(window, 0.1))
+    longer = np.quantile(30.0 + 5.0 * np.cos(np.arange(d - 7, d)), 0.5)
+    assert np.allclose(prepare(case.replace(uncertainty={"window_days": 7})).bands[("W", "mid")], longer)
+    doubled = case.history.with_columns({"W": 2.0 * case.history.frame["W"].to_numpy()})
+    assert np.allclose(prepare(case.replace(history=doubled)).bands[("W", "mid")], 2.0 * np.quantile(window, 0.5))
+
+
 def test_case_refuses_forecast_bands_it_cannot_draw():
     with pytest.raises(CaseError, match='wind "W": uncertainty.bands asks for forecast bands but the unit has no '
                                         "forecast_series"):

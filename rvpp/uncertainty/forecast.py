@@ -33,6 +33,8 @@ naive price models take the hour before it; where it occurs twice, its first occ
 from __future__ import annotations
 
 import datetime as dt
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -49,6 +51,11 @@ assert tuple(PRICE_LAGS_DAYS) == PRICE_MODELS
 HOURS = 24
 NEIGHBOUR_SHARE = 0.2  # share of the window's hours whose errors set the quantiles at one forecast level
 MIN_NEIGHBOURS = 24
+# Bands of the most recently drawn days, keyed by everything they depend on, so a day
+# solved again under another strategy, budget or market set draws its bands once.
+RECENT_BANDS = 32
+_recent_bands: OrderedDict[tuple, pd.DataFrame] = OrderedDict()
+_recent_lock = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -100,11 +107,31 @@ def has_forecast(spec: BandSpec) -> bool:
 def case_bands(case: Case, periods: pd.DatetimeIndex, methods: dict[str, str] | None = None) -> pd.DataFrame:
     """Bands per period of every source of ``case``, each by its method [t = 1..NT; (source, lo|mid|hi)].
 
-    ``methods`` draws the named sources by another method (e.g. to compare the two).
+    ``methods`` draws the named sources by another method (e.g. to compare the two). The
+    bands of the last :data:`RECENT_BANDS` distinct requests are kept, keyed by the history's
+    content fingerprint (no history is held) and every setting they depend on; each call
+    returns its own copy.
     """
     specs = band_specs(case)
     if methods:
         specs = {name: replace(specs[name], method=method) for name, method in methods.items()}
+    settings = case.uncertainty
+    key = (case.history.fingerprint, case.delivery_date, case.timezone, str(periods.tz), periods.asi8.tobytes(),
+           tuple(specs.items()), settings.window_days, settings.q_lo, settings.q_hi)
+    with _recent_lock:
+        bands = _recent_bands.get(key)
+        if bands is not None:
+            _recent_bands.move_to_end(key)
+    if bands is None:
+        bands = _draw_bands(case, periods, specs)
+        with _recent_lock:
+            _recent_bands[key] = bands
+            while len(_recent_bands) > RECENT_BANDS:
+                _recent_bands.popitem(last=False)
+    return bands.copy()
+
+
+def _draw_bands(case: Case, periods: pd.DatetimeIndex, specs: dict[str, BandSpec]) -> pd.DataFrame:
     settings = case.uncertainty
     common = dict(n_days=settings.window_days, q_lo=settings.q_lo, q_hi=settings.q_hi, timezone=case.timezone)
     parts = []
