@@ -14,6 +14,7 @@ from __future__ import annotations
 import datetime as dt
 from dataclasses import dataclass, field
 
+import numpy as np
 import pandas as pd
 
 from .outcome import Outcome
@@ -109,13 +110,17 @@ def flexibility_table(units: pd.DataFrame, case) -> pd.DataFrame:
     """
     dt_h = case.dt_h
     rows = []
+    if units.empty:
+        kinds, r_up, r_dn = np.array([], dtype=object), np.zeros(0), np.zeros(0)
+    else:
+        kinds, r_up, r_dn = (units[c].to_numpy() for c in ("kind", "r_up_mw", "r_dn_mw"))
     for kind in FLEX_KINDS:
         capacity = sum(u.p_max_mw for u in getattr(case, kind))
         if capacity == 0:
             continue
-        part = units[units["kind"] == kind] if not units.empty else units
-        up = float(part["r_up_mw"].sum() * dt_h) if len(part) else 0.0
-        dn = float(part["r_dn_mw"].sum() * dt_h) if len(part) else 0.0
+        rows_of_kind = kinds == kind
+        up = float(r_up[rows_of_kind].sum() * dt_h)
+        dn = float(r_dn[rows_of_kind].sum() * dt_h)
         rows.append({"kind": kind, "r_up_mwh": up, "r_dn_mwh": dn, "capacity_mw": capacity,
                      "r_up_h": up / capacity, "r_dn_h": dn / capacity})
     return pd.DataFrame(rows, columns=["kind", "r_up_mwh", "r_dn_mwh", "capacity_mw", "r_up_h", "r_dn_h"])
