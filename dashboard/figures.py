@@ -2,22 +2,29 @@
 
 A plan's figures are pure functions of its result, so they are kept
 (``st.cache_resource``) by the result's identity: the case's content and the solve's
-outcome and timings. Pages draw them and must not change them.
+outcome and timings. Pages draw them and must not change them. The plans of a Γ sweep
+are plans like any other; their figures carry the Γ in their title
+(:func:`titled_figure`) and the sweep's cost curve marks the Γ shown (:func:`sweep_curve`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+import pandas as pd
 import plotly.graph_objects as go
 import streamlit as st
 
 from rvpp import Result
 from rvpp.outputs import plots
 from rvpp.outputs.economics import waterfall_figure
+from rvpp.outputs.style import GREY
 
 from .state import case_key
 
-KEPT = 32  # plans whose figures are kept
+KEPT = 64  # plans whose figures are kept (a sweep of the default day has 25)
+KEUR = 1000.0
 
 
 def result_key(result: Result) -> str:
@@ -39,6 +46,27 @@ def plan_figures(result: Result) -> dict[str, go.Figure | None]:
     for csp in result.case.csp:
         figures[f"storage {csp.name}"] = plots.storage_figure(result, csp.name)
     return figures
+
+
+@st.cache_resource(show_spinner=False, max_entries=2 * KEPT, hash_funcs={Result: result_key})
+def titled_figure(result: Result, name: str, title: str) -> go.Figure:
+    """The figure ``name`` of :func:`plan_figures` under another title (one copy per title)."""
+    figure = go.Figure(plan_figures(result)[name])
+    figure.update_layout(title_text=title)
+    return figure
+
+
+@st.cache_resource(show_spinner=False, max_entries=2 * KEPT)
+def sweep_curve(sweep: str, gamma: int, _gammas: Sequence[int], _points: Sequence[Result]) -> go.Figure:
+    """Cost and price protection against Γ of the plans of the sweep ``sweep`` (its key), with
+    the plan at ``gamma`` marked; plans without a plan are left out."""
+    frame = pd.DataFrame([{"gamma": g, "cost_keur": r.cost_keur,
+                           "protection_keur": sum(r.protection_eur.values()) / KEUR}
+                          for g, r in zip(_gammas, _points) if r.has_plan])
+    figure = plots.robustness_figure(frame)
+    figure.add_vline(x=gamma, line_dash="dot", line_color=GREY)
+    figure.update_layout(title_text=f"Price of robustness · plan shown: Γ = {gamma}")
+    return figure
 
 
 def heat_bought(result: Result) -> bool:

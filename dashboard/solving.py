@@ -17,6 +17,12 @@ so starting one takes milliseconds. Two reasons for processes:
   is. (HiGHS's interrupt callback would need the solver module to poll a flag; killing
   a process needs nothing from it and frees the core immediately.)
 
+A **sweep** solves one case for a grid of budgets Γ (the same Γ for every source) in one
+solver process with :func:`rvpp.solving.sweep.sweep_gamma`, which builds the day's
+model once and re-solves it in place for each Γ. It is kept like a solve, by the case's
+content and the grid, in a table of its own: once it is warm, a page picks the plan of
+any Γ of the grid without solving (:func:`swept`).
+
 At most :data:`WORKERS` solves run at once (the others wait for a free slot, shown on
 the page). A page waiting for its solve only polls (every :data:`POLL_S`) and draws
 the elapsed time, the solver's stage and an estimate from the last solve of the same
@@ -26,7 +32,9 @@ waiting, and the solve finishes and is kept for when the page is shown again.
 
 from __future__ import annotations
 
+import hashlib
 import json
+import math
 import multiprocessing
 import os
 import threading
@@ -46,9 +54,11 @@ from .state import REQUESTED, ROOT, case_key
 MAX_WORKERS = 2        # solves at once; more would compete for a small server's cores
 WORKERS = max(1, min(MAX_WORKERS, os.cpu_count() or 1))
 KEPT = 64              # solved cases kept in memory (about 1.3 MB each)
+KEPT_SWEEPS = 4        # sweeps kept in memory (25 plans of 1.3 MB on the default day)
+SWEEP_POINTS = 49      # at most this many Γ in a sweep: every period up to 48 periods, else evenly spread
 POLL_S = 0.1           # how often a waiting page refreshes its progress [s]
 JOIN_S = 5.0           # how long to wait for a finished solver process to exit [s]
-PRELOAD = ["dashboard.worker", "rvpp.solving.plan"]
+PRELOAD = ["dashboard.worker", "rvpp.solving.plan", "rvpp.solving.sweep"]
 BENCHMARKS = ROOT / "benchmarks" / "results"
 CONTEXT = multiprocessing.get_context("forkserver")
 CANCELLED = "solve_cancelled"  # session key: the last solve of this session was cancelled
@@ -60,14 +70,18 @@ class SolveCancelled(rvpp.RvppError):
 
 @dataclass(eq=False)
 class Job:
-    """One solve in its own process: its stage, its outcome and its cancel switch."""
+    """One solve (or, with ``gammas``, one sweep) in its own process: its stage, its outcome
+    and its cancel switch."""
 
     key: str
     case: Case
+    gammas: tuple[int, ...] | None = None
     started: float = field(default_factory=time.perf_counter)
     stage: str = "waiting for a free solver"
+    done_points: tuple[int, int] | None = None  # a sweep's plans solved so far, of how many
     finished: float | None = None
-    result: Result | None = None
+    returned_at: float | None = None  # wall-clock time (epoch) the answer came back from the solver
+    result: Result | list[Result] | None = None
     problems: list[str] | None = None
     cancelled: bool = False
     process: multiprocessing.process.BaseProcess | None = None
@@ -86,8 +100,9 @@ class Job:
 
     def _solve(self) -> None:
         receive, send = CONTEXT.Pipe(duplex=False)
-        self.process = CONTEXT.Process(target=worker.solve_into, args=(send, self.case), daemon=True,
-                                       name="rvpp-solve")
+        target, args = ((worker.solve_into, (send, self.case)) if self.gammas is None
+                        else (worker.sweep_into, (send, self.case, list(self.gammas))))
+        self.process = CONTEXT.Process(target=target, args=args, daemon=True, name="rvpp-solve")
         self.stage = "starting the solver"
         self.process.start()
         send.close()
@@ -97,6 +112,11 @@ class Job:
                 if kind == "stage":
                     self.stage = payload
                     continue
+                if kind == "progress":
+                    self.done_points = payload
+                    self.stage = f"{payload[0]} of {payload[1]} plans solved"
+                    continue
+                self.returned_at = time.time()
                 if kind == "result":
                     self.result = payload
                 else:
@@ -118,6 +138,7 @@ class Solver:
         self.lock = threading.Lock()
         self.jobs: dict[str, Job] = {}
         self.results: OrderedDict[str, Result] = OrderedDict()
+        self.sweeps: OrderedDict[str, list[Result]] = OrderedDict()
         self.seconds: dict[str, float] = {}        # case key -> wall time of its last solve [s]
         self.shape_seconds: dict[tuple, float] = {}  # case shape -> wall time of its last solve [s]
 
@@ -132,14 +153,22 @@ class Solver:
         with self.lock:
             self._keep(case_key(result.case), result)
 
-    def start(self, case: Case) -> Job:
-        """The job solving ``case``: the one under way, or a new one."""
-        key = case_key(case)
+    def sweep(self, key: str) -> list[Result] | None:
+        """The plans of a finished sweep (:func:`sweep_key`), or ``None``."""
+        with self.lock:
+            if key in self.sweeps:
+                self.sweeps.move_to_end(key)
+            return self.sweeps.get(key)
+
+    def start(self, case: Case, gammas: Sequence[int] | None = None) -> Job:
+        """The job solving ``case`` (or sweeping it over ``gammas``): the one under way, or a new one."""
+        grid = None if gammas is None else tuple(int(g) for g in gammas)
+        key = case_key(case) if grid is None else sweep_key(case, grid)
         with self.lock:
             job = self.jobs.get(key)
             if job is not None and not job.cancelled:
                 return job
-            job = self.jobs[key] = Job(key, case)
+            job = self.jobs[key] = Job(key, case, grid)
         threading.Thread(target=job.run, args=(self,), name="rvpp-solve", daemon=True).start()
         return job
 
@@ -158,19 +187,26 @@ class Solver:
             if self.jobs.get(job.key) is job:
                 del self.jobs[job.key]
             if job.result is not None:
-                self._keep(job.key, job.result)
+                if job.gammas is None:
+                    self._keep(job.key, job.result)
+                else:
+                    self.sweeps[job.key] = job.result
+                    while len(self.sweeps) > KEPT_SWEEPS:
+                        self.sweeps.popitem(last=False)
                 self.seconds[job.key] = job.elapsed_s
-                self.shape_seconds[shape(job.case)] = job.elapsed_s
+                self.shape_seconds[shape(job.case, job.gammas)] = job.elapsed_s
         job.done.set()
 
-    def expected_s(self, case: Case) -> tuple[float, str] | None:
-        """How long a solve of ``case`` should take and where that number comes from."""
-        key = case_key(case)
+    def expected_s(self, case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:
+        """How long a solve of ``case`` (or its sweep over ``gammas``) should take and where
+        that number comes from."""
+        work = "solve" if gammas is None else "sweep"
+        key = case_key(case) if gammas is None else sweep_key(case, gammas)
         if key in self.seconds:
-            return self.seconds[key], "the last solve of this case"
-        if shape(case) in self.shape_seconds:
-            return self.shape_seconds[shape(case)], "the last solve of a case like this one on this server"
-        return benchmark_s(case)
+            return self.seconds[key], f"the last {work} of this case"
+        if shape(case, gammas) in self.shape_seconds:
+            return self.shape_seconds[shape(case, gammas)], f"the last {work} of a case like this one on this server"
+        return benchmark_s(case, gammas)
 
     def _keep(self, key: str, result: Result) -> None:
         self.results[key] = result
@@ -179,17 +215,33 @@ class Solver:
             self.results.popitem(last=False)
 
 
-def shape(case: Case) -> tuple:
-    """What a solve's time depends on most: periods, strategy, budget mode, units, markets."""
-    return (case.dt_h, case.budgets.strategy, case.budgets.mode, len(case.unit_names()), case.markets.label)
+def shape(case: Case, gammas: Sequence[int] | None = None) -> tuple:
+    """What a solve's time depends on most: periods, strategy, budget mode, units, markets
+    (and a sweep's number of Γ)."""
+    return (case.dt_h, case.budgets.strategy, case.budgets.mode, len(case.unit_names()), case.markets.label,
+            None if gammas is None else len(gammas))
 
 
-def benchmark_s(case: Case) -> tuple[float, str] | None:
-    """The solve time of ``case``'s shape measured by ``benchmarks/dashboard.py``, if recorded."""
-    wanted = f"{case.name}/{case.dt_h * 60:g} min/{case.budgets.strategy}"
+def sweep_key(case: Case, gammas: Sequence[int]) -> str:
+    """A digest of a sweep's input: the case's content and the grid of Γ."""
+    return hashlib.sha256(f"{case_key(case)}|sweep|{','.join(map(str, gammas))}".encode()).hexdigest()
+
+
+def sweep_grid(nt: int) -> list[int]:
+    """The Γ a sweep solves for a day of ``nt`` periods: every one from 0 to ``nt`` when that is
+    at most :data:`SWEEP_POINTS` plans, else an even step, always ending at ``nt``."""
+    step = max(1, math.ceil(nt / (SWEEP_POINTS - 1)))
+    return sorted({*range(0, nt + 1, step), nt})
+
+
+def benchmark_s(case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:
+    """The solve (or sweep) time of ``case``'s shape measured by ``benchmarks/dashboard.py``, if recorded."""
+    table = "solve_s_by_case" if gammas is None else "sweep_s_by_case"
+    wanted = (f"{case.name}/{case.dt_h * 60:g} min/{case.budgets.strategy}" if gammas is None
+              else f"{case.name}/{case.dt_h * 60:g} min/{len(gammas)} Γ")
     for path in sorted(BENCHMARKS.glob("*.json")):
         try:
-            measured = json.loads(path.read_text(encoding="utf-8")).get("solve_s_by_case", {})
+            measured = json.loads(path.read_text(encoding="utf-8")).get(table, {})
         except (OSError, ValueError, AttributeError):
             continue
         if wanted in measured:
@@ -249,6 +301,34 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
     return [found[case_key(c)] for c in cases]
 
 
+def swept(case: Case, gammas: Sequence[int]) -> list[Result] | None:
+    """The plans of ``case`` for each Γ of ``gammas`` if this server has swept them, else ``None``
+    (never solves)."""
+    return solver().sweep(sweep_key(case, gammas))
+
+
+def sweep(case: Case, gammas: Sequence[int], label: str) -> list[Result] | None:
+    """The plans of ``case`` for each Γ of ``gammas`` (the same Γ for every source), sweeping
+    them in one solver process if needed while the page shows progress and Cancel.
+
+    Returns ``None`` (with the reason shown) when the case cannot be swept or the sweep
+    was cancelled.
+    """
+    found = swept(case, gammas)
+    if found is not None:
+        return found
+    job = solver().start(case, gammas)
+    _wait([job], label, 1)
+    if job.cancelled:
+        st.info(f"{label}: cancelled after {job.elapsed_s:.1f} s. Press the button to start again.",
+                icon=":material/cancel:")
+        return None
+    if job.problems:
+        widgets.problems(job.problems, "Cannot solve", note="Fix the case on the other pages and solve again.")
+        return None
+    return job.result
+
+
 def _wait(jobs: list[Job], label: str, total: int) -> None:
     """Poll the jobs, drawing elapsed time, stage and an estimate, with a Cancel button."""
     slot = st.empty()
@@ -259,12 +339,17 @@ def _wait(jobs: list[Job], label: str, total: int) -> None:
         cancel_column.button("Cancel", key=f"cancel_{keys[0][:16]}", icon=":material/stop_circle:",
                              on_click=_cancel, args=(keys,),
                              help="Stops the solve at once (for every tab waiting on the same input).")
-    expected = solver().expected_s(jobs[0].case) if len(jobs) == 1 else None
+    expected = solver().expected_s(jobs[0].case, jobs[0].gammas) if len(jobs) == 1 else None
     while True:
         running = [job for job in jobs if not job.done.is_set()]
         elapsed = max(job.elapsed_s for job in jobs)
         done = total - len(running)
-        if expected:
+        points = jobs[0].done_points if len(jobs) == 1 else None
+        if points and points[0]:  # a sweep under way: its share of plans solved, the rest extrapolated
+            fraction = points[0] / points[1]
+            left = elapsed * (points[1] - points[0]) / points[0]
+            hint = f" · about {left:.0f} s left" if running and left >= 1 else ""
+        elif expected:
             fraction = min(0.95, elapsed / max(expected[0], 1e-3))
             hint = f" · about {expected[0]:.0f} s expected ({expected[1]})" if expected[0] >= 1 else ""
         else:

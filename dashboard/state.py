@@ -159,11 +159,20 @@ def case_key(case: Case) -> str:
 def mark_requested(case: Case) -> None:
     """Remember that this session asked for ``case``: its pages then show the plan (from the
     cache, or by waiting for the solve under way) without another click."""
-    st.session_state[REQUESTED].add(case_key(case))
+    mark_requested_key(case_key(case))
 
 
 def is_requested(case: Case) -> bool:
-    return case_key(case) in st.session_state[REQUESTED]
+    return is_requested_key(case_key(case))
+
+
+def mark_requested_key(key: str) -> None:
+    """Remember that this session asked for the work of ``key`` (a case's or a sweep's digest)."""
+    st.session_state[REQUESTED].add(key)
+
+
+def is_requested_key(key: str) -> bool:
+    return key in st.session_state[REQUESTED]
 
 
 def default_label(edited: Case | None = None) -> str:

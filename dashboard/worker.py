@@ -1,4 +1,5 @@
-"""What a solver process runs: one solve, its stages and its result sent back through a pipe.
+"""What a solver process runs: one solve (or one sweep of Γ), its stages and its result sent
+back through a pipe.
 
 Light on purpose: the server imports it to name the target of a solver process, and
 only the solver processes import the optimisation stack (the fork server of
@@ -8,6 +9,8 @@ HiGHS already imported). It must not import Streamlit.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import rvpp
 from rvpp import Case, CaseError, RvppError
 
@@ -15,9 +18,23 @@ from rvpp import Case, CaseError, RvppError
 def solve_into(connection, case: Case) -> None:
     """Solve ``case`` and send ``("stage", text)`` messages, then one ``("result", Result)``,
     ``("refused", problems)`` or ``("failed", message)``."""
+    _answer(connection, lambda: rvpp.solve(case, progress=lambda stage: connection.send(("stage", stage))))
+
+
+def sweep_into(connection, case: Case, gammas: list[int]) -> None:
+    """Solve ``case`` for every Γ of ``gammas`` (the same Γ for every source, one model
+    re-solved in place) and send ``("progress", (done, total))`` messages, then one
+    ``("result", [Result, ...])`` in the order of ``gammas``, or the refusal or failure."""
+    from rvpp.solving.sweep import sweep_gamma  # imports the optimisation stack: solver processes only
+
+    _answer(connection, lambda: sweep_gamma(
+        case, gammas, progress=lambda done, total: connection.send(("progress", (done, total)))))
+
+
+def _answer(connection, work: Callable[[], object]) -> None:
+    """Run ``work`` and send its result, or why it has none, then close ``connection``."""
     try:
-        result = rvpp.solve(case, progress=lambda stage: connection.send(("stage", stage)))
-        connection.send(("result", result))
+        connection.send(("result", work()))
     except CaseError as err:
         connection.send(("refused", list(err.problems)))
     except RvppError as err:

@@ -3,7 +3,7 @@ flexibility tables), or any two to four runs of the library side by side."""
 
 import streamlit as st
 
-from dashboard import backtests, library, solving, state, widgets
+from dashboard import backtests, library, solving, state, sweeps, widgets
 from rvpp import RvppError
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
@@ -138,3 +138,11 @@ if cases and (clicked or ready):
             st.success(notice[1], icon=":material/check:")
         elif notice:
             widgets.problems([notice[1]], "Not saved", note="Nothing was changed.")
+
+st.subheader("One Γ for every source")
+st.markdown("Between the strategies: give every source the same budget Γ, from 0 (the forecast) to every period "
+            "going wrong, and see the plan and its economics for each. The plans are solved once for every Γ; "
+            "then moving Γ shows them at once.")
+problem = solving.prepare(run)
+if problem is not None:
+    sweeps.gamma_slider(run, problem.nt, round(problem.nt / 2), page="compare", charts=("economics", "trades"))

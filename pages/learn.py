@@ -1,20 +1,16 @@
 """Learn: robust bidding explained with live charts of the current case."""
 
 import numpy as np
-import pandas as pd
 import streamlit as st
 
-import rvpp
-from dashboard import solving, state, widgets
+from dashboard import solving, state, sweeps, widgets
 from rvpp.settle.audit import price_exposures, protection_exact
-from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure, robustness_figure,
+from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure,
                         thin_clock_ticks)
 from rvpp.solving.problem import top_gamma_deviation
 
 state.through_app("pages/learn.py")
 
-CURVE_POINTS = 9  # budgets 0, NT/8, ..., NT on the price-of-robustness curve
-KEUR = 1000.0
 NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 
 st.title("Robust bidding explained")
@@ -121,26 +117,11 @@ if all(state.is_requested(c) for c in variants.values()) or st.button(
 
 st.header("4 · The price of robustness")
 st.markdown(
-    f"Give every source the same budget Γ and solve for Γ = 0 to {nt}: the cost rises with Γ because the plan "
-    "buys more, sells less and offers less reserve to stay feasible when more periods go wrong. The dashed "
-    "line is the part of the cost that is price protection.")
-gammas = sorted({int(round(g)) for g in np.linspace(0, nt, CURVE_POINTS)})
-sweep = [rvpp.with_options(run, gammas={source: g for source in run.sources()}) for g in gammas]
-if all(state.is_requested(c) for c in sweep) or st.button(f"Compute the curve ({len(gammas)} solves)",
-                                                        key="learn_curve", icon=":material/play_arrow:"):
-    for case in sweep:
-        state.mark_requested(case)
-    results = solving.solve_all(sweep, "Solving the budgets")
-    if results is None:  # refused (the reason is shown) or cancelled
-        st.stop()
-    points = pd.DataFrame([{"gamma": g, "cost_keur": r.cost_keur,
-                            "protection_keur": sum(r.protection_eur.values()) / KEUR}
-                           for g, r in zip(gammas, results) if r.has_plan])
-    st.plotly_chart(robustness_figure(points), key="learn_curve_chart")
-    skipped = [g for g, r in zip(gammas, results) if not r.has_plan]
-    if skipped:
-        st.caption(f"No feasible plan for Γ = {', '.join(map(str, skipped))}: the demands cannot be met when "
-                   "that many periods go wrong.")
+    f"Give every source the same budget Γ and solve for every Γ from 0 to {nt}: the cost rises with Γ because "
+    "the plan buys more, sells less and offers less reserve to stay feasible when more periods go wrong. The "
+    "dashed line is the part of the cost that is price protection. Move Γ to see the plan behind each point.")
+sweeps.gamma_slider(run, nt, round(float(np.mean([s.gamma for s in problem.sources.values()]))), page="learn",
+                    charts=("trades",), curve=True)
 
 st.header("5 · What paper mode does not protect against")
 st.markdown(

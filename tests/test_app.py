@@ -373,6 +373,81 @@ def test_learn_moves_the_adversary_live(paper_solve):
     assert trace(band, "Deviates (χ = 1) in 9 periods")
 
 
+@pytest.fixture
+def solver_processes(monkeypatch):
+    """Every solver process the dashboard starts, as (case, Γ grid or None for one solve)."""
+    from dashboard import solving
+
+    started = []
+    run = solving.Job._solve
+
+    def counted(job):
+        started.append((job.case, job.gammas))
+        return run(job)
+
+    monkeypatch.setattr(solving.Job, "_solve", counted)
+    return started
+
+
+def exact_eur(at: AppTest, label: str) -> float:
+    """The exact amount in EUR a KPI card gives in its help."""
+    help_text = shown_kpis(at)[label][1]
+    return number(re.search(r"Exact: (\S+) EUR", help_text).group(1))
+
+
+def assert_shows_gamma_plan(at: AppTest, paper_case, paper_solve, gamma: int) -> None:
+    """The slider's plan is worth what the library's plan of the same Γ for every source is worth,
+    within the solver's relative gap (both plans are that close to the same bound)."""
+    expected = paper_solve(gammas={source: gamma for source in paper_case.sources()})
+    assert expected.status == "optimal"
+    tolerance = 1.0 + paper_case.solver.rel_gap * abs(expected.objective_eur)  # + whole euros shown
+    assert exact_eur(at, NET) == pytest.approx(expected.objective_eur, abs=tolerance)
+    assert number(shown_kpis(at)[NET][0]) == pytest.approx(expected.objective_eur / 1000, abs=0.051 + tolerance / 1000)
+    assert f"Bids at Γ = {gamma}: day-ahead energy and reserve bands" in figures(at)
+
+
+@pytest.mark.slow
+def test_learn_gamma_slider_sweeps_once_then_moves_without_solving(paper_case, paper_solve, solver_processes):
+    from dashboard import solving
+
+    solving.solver().sweeps.clear()  # cold, whichever test of this process swept before
+    at = open_app("learn")
+    slider = at.select_slider(key="learn_sweep_gamma_24")
+    assert slider.disabled and slider.options == [str(g) for g in range(25)]
+    assert "25 solves" in at.button(key="learn_sweep").label
+    assert [g for _, g in solver_processes if g is not None] == []  # nothing swept before the click
+    click(at, "learn_sweep")
+    sweeps = [(case, g) for case, g in solver_processes if g is not None]
+    assert len(sweeps) == 1 and sweeps[0][1] == tuple(range(25))
+    assert not at.select_slider(key="learn_sweep_gamma_24").disabled
+    curve = next(spec for title, spec in figures(at).items() if title.startswith("Price of robustness"))
+    assert len(values(curve["data"][0]["x"])) == 25
+    before = len(solver_processes)
+    for gamma in (6, 18, 0):
+        at.select_slider(key="learn_sweep_gamma_24").set_value(gamma).run()
+        assert not at.exception, at.exception
+        assert f"Price of robustness · plan shown: Γ = {gamma}" in figures(at)
+        assert_shows_gamma_plan(at, paper_case, paper_solve, gamma)
+    assert len(solver_processes) == before  # a warm move solves nothing
+
+
+@pytest.mark.slow
+def test_compare_gamma_slider_reuses_the_sweep_in_a_new_session(paper_case, paper_solve, solver_processes):
+    at = open_app("compare")
+    if at.select_slider(key="compare_sweep_gamma_24").disabled:
+        click(at, "compare_sweep")
+    swept = len(solver_processes)
+    assert swept <= 1
+    other = open_app("compare")  # another tab: the server's sweep shows without a click
+    slider = other.select_slider(key="compare_sweep_gamma_24")
+    assert not slider.disabled and slider.value == 12
+    assert_shows_gamma_plan(other, paper_case, paper_solve, 12)
+    other.select_slider(key="compare_sweep_gamma_24").set_value(3).run()
+    assert_shows_gamma_plan(other, paper_case, paper_solve, 3)
+    assert "The day's economics at Γ = 3" in figures(other)
+    assert len(solver_processes) == swept
+
+
 # ----------------------------------------------------------------------------- sessions
 
 
