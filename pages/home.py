@@ -4,9 +4,10 @@ import streamlit as st
 
 import rvpp
 from dashboard import solving, state, widgets
+from dashboard.figures import band_figure
 from rvpp.data.variants import Variant
 from rvpp.outputs.bundle import read_case_files
-from rvpp.outputs.plots import bands_figure, trades_figure
+from rvpp.outputs.plots import trades_figure
 
 state.through_app("pages/home.py")
 
@@ -99,7 +100,7 @@ else:
                "bids against:")
     problem = solving.prepare(state.run_case())
     if problem is not None:
-        st.plotly_chart(bands_figure(problem, "price_da"), key="home_price_band")
+        st.plotly_chart(band_figure(problem, "price_da"), key="home_price_band")
 
 st.subheader("Load another case")
 folders = state.server_folders_allowed()  # off unless the server was started with RVPP_ALLOW_SERVER_FOLDERS=1
