@@ -11,6 +11,16 @@
 * ``solve_to_charts_*``: from clicking Solve on Results until all six charts are drawn;
   ``solve_*_s`` is the solve's own time as the page reports it (build + HiGHS + tables)
   and ``overhead_*_s`` the difference (process start, transfer, drawing).
+  ``drawn_after_solve_*_s``: from the moment the solver's answer reached the server (the
+  time the page states under its status line, to the millisecond) until the sixth chart
+  is drawn in the browser (both on this machine's clock).
+* ``sweep_s_by_case``: wall time of ``sweep_gamma`` over Γ = 0..NT on the default case
+  (in this process); the dashboard quotes it before its first sweep of such a case.
+* ``gamma_sweep_warmup_s``: on Learn, from clicking "Compute the plans for every Γ" until
+  the cost curve is drawn (the sweep in a solver process, then the page).
+* ``gamma_slider_redraw_*``: once the sweep is warm, from pressing an arrow key on the
+  Γ slider (Learn, Compare) until the plan chart titled with the new Γ is drawn;
+  ``GAMMA_MOVES`` moves each, their median in ``gamma_slider_redraw_s`` (both pages).
 * ``revisit_s``: back to Results after another page (the plan is kept).
 * ``library_*``: a run library of ``LIBRARY_RUNS`` saved runs: listing it in this
   process, and opening the Saved runs page in the browser until its table is drawn.
@@ -34,6 +44,7 @@ import sys
 import tempfile
 import time
 import urllib.request
+from datetime import datetime, timedelta
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -50,6 +61,7 @@ WAIT_MS = 180_000
 CHARTS_ON_RESULTS = 6
 LIBRARY_RUNS = 200
 REPEAT = 3
+GAMMA_MOVES = 6
 FIRST_CLICK_DELAY_MS = 3000  # a user reading Home before the first click
 PERIODS = {60: 1.0, 15: 0.25}
 
@@ -73,6 +85,23 @@ def solve_times(case: rvpp.Case) -> dict:
             measured[f"{case.name}/{minutes} min/{strategy}"] = median(runs)
             print(f"solve {minutes} min {strategy}: {measured[f'{case.name}/{minutes} min/{strategy}']} s",
                   file=sys.stderr, flush=True)
+    return measured
+
+
+def sweep_times(case: rvpp.Case) -> dict:
+    """Wall time of the dashboard's Γ sweep (every Γ from 0 to NT) per period length [s]."""
+    from dashboard.solving import sweep_grid
+    from rvpp.solving.sweep import sweep_gamma
+
+    measured = {}
+    for minutes, dt_h in PERIODS.items():
+        day = rvpp.with_options(case, dt_h=dt_h)
+        grid = sweep_grid(rvpp.prepare(day).nt)
+        started = time.perf_counter()
+        sweep_gamma(day, grid)
+        measured[f"{case.name}/{minutes} min/{len(grid)} Γ"] = round(time.perf_counter() - started, 2)
+        print(f"sweep {minutes} min: {measured[f'{case.name}/{minutes} min/{len(grid)} Γ']} s", file=sys.stderr,
+              flush=True)
     return measured
 
 
@@ -128,16 +157,82 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
+# Records in the page, on the browser's clock (epoch ms), when the n-th chart first has its
+# drawing (Plotly's .main-svg) and when a chart title first reads a given text.
+WATCH = """() => {
+  window.__drawn = {}; window.__titles = {};
+  if (window.__watching) return;
+  window.__watching = true;
+  new MutationObserver(() => {
+    const now = Date.now();
+    document.querySelectorAll('[data-testid=stPlotlyChart]').forEach((chart, i) => {
+      if (!(i in window.__drawn) && chart.querySelector('.main-svg')) window.__drawn[i] = now;
+    });
+    document.querySelectorAll('.gtitle').forEach(title => {
+      if (!(title.textContent in window.__titles)) window.__titles[title.textContent] = now;
+    });
+  }).observe(document.body, {subtree: true, childList: true, characterData: true, attributes: true});
+}"""
+
+
+def server_epoch(clock: str) -> float:
+    """``HH:MM:SS.mmm`` of the server (same machine, same time zone) as epoch seconds, on the day
+    that puts it nearest to now."""
+    now = datetime.now()
+    moment = datetime.combine(now.date(), datetime.strptime(clock, "%H:%M:%S.%f").time())
+    nearest = min((moment + timedelta(days=d) for d in (-1, 0, 1)), key=lambda m: abs((m - now).total_seconds()))
+    return nearest.timestamp()
+
+
 def solve_to_charts(page, label: str) -> dict:
-    """Click Solve on Results and wait for every chart; the solve time as the page reports it."""
+    """Click Solve on Results and wait for every chart; the solve time as the page reports it, and
+    the time from the solver's answer (as the page states it) to the last chart drawn."""
+    page.evaluate(WATCH)
     started = time.perf_counter()
     page.get_by_role("button", name="Solve", exact=True).click()
     page.get_by_test_id("stPlotlyChart").nth(CHARTS_ON_RESULTS - 1).locator(".main-svg").first.wait_for()
     total = time.perf_counter() - started
     card = page.get_by_test_id("stMetric").filter(has_text="Solve time")
     solve_s = float(re.findall(r"\d+\.\d+", card.inner_text())[-1])
+    note = page.get_by_text("The solver's answer came back at").text_content()
+    returned = server_epoch(re.search(r"at (\d\d:\d\d:\d\d\.\d{3})", note).group(1))
+    drawn = page.evaluate("() => window.__drawn")[str(CHARTS_ON_RESULTS - 1)] / 1000
     return {f"solve_to_charts_{label}_s": round(total, 2), f"solve_{label}_s": solve_s,
-            f"overhead_{label}_s": round(total - solve_s, 2)}
+            f"overhead_{label}_s": round(total - solve_s, 2),
+            f"drawn_after_solve_{label}_s": round(drawn - returned, 3)}
+
+
+def gamma_slider(page, title: str, chart_title: str, timings: dict) -> list[float]:
+    """Move the Γ slider of the page ``title`` with the keyboard, GAMMA_MOVES times; the time from
+    each key press until the chart titled ``chart_title`` (with the new Γ) is drawn [s]."""
+    nav(page, title)
+    slider = page.get_by_test_id("stSlider").filter(has_text="Γ of every source")
+    button = page.get_by_role("button", name=re.compile("Compute the plans for every Γ"))
+    thumb = slider.get_by_role("slider")
+    button.or_(page.locator(".gtitle", has_text=chart_title.split("{")[0])).first.wait_for()
+    if button.count():
+        started = time.perf_counter()
+        button.click()
+        page.locator(".gtitle", has_text="plan shown: Γ =").first.wait_for()
+        timings["gamma_sweep_warmup_s"] = round(time.perf_counter() - started, 2)
+    gamma = int(thumb.input_value())
+    page.locator(".gtitle", has_text=chart_title.format(gamma=gamma)).first.wait_for()
+    page.evaluate(WATCH)
+    moves = []
+    for i in range(GAMMA_MOVES):
+        # Up to new plans (their figures are built on the way), then back to plans already drawn.
+        key, gamma = ("ArrowRight", gamma + 1) if i < GAMMA_MOVES // 2 else ("ArrowLeft", gamma - 1)
+        wanted = chart_title.format(gamma=gamma)
+        page.evaluate("() => { window.__titles = {}; }")
+        thumb.focus()
+        pressed = time.time()
+        page.keyboard.press(key)
+        page.locator(".gtitle", has_text=wanted).first.wait_for()
+        shown = page.evaluate("(wanted) => Object.entries(window.__titles).find(([t]) => t.includes(wanted))[1]",
+                              wanted)
+        moves.append(round(shown / 1000 - pressed, 3))
+        page.wait_for_timeout(500)  # a user looks at the plan before the next move
+    return moves
 
 
 def nav(page, name: str) -> None:
@@ -181,6 +276,13 @@ def browser_timings(data_dir: Path) -> dict:
             page.get_by_role("button", name="Solve", exact=True).wait_for()
             page.wait_for_timeout(FIRST_CLICK_DELAY_MS)
             timings.update(solve_to_charts(page, "first"))
+            learn = gamma_slider(page, "Robust bidding explained", "Bids at Γ = {gamma}:", timings)
+            compare = gamma_slider(page, "Compare strategies", "Bids at Γ = {gamma}:", timings)
+            timings["gamma_slider_redraw_learn_s"] = learn
+            timings["gamma_slider_redraw_learn_median_s"] = median(learn)
+            timings["gamma_slider_redraw_compare_s"] = compare
+            timings["gamma_slider_redraw_compare_median_s"] = median(compare)
+            timings["gamma_slider_redraw_s"] = median(learn + compare)
             nav(page, "Uncertainty")
             page.get_by_text("Pessimistic", exact=True).first.click()
             page.get_by_test_id("stSidebar").get_by_text("pessimistic · DAM+SRM+HPA").wait_for()
@@ -217,6 +319,7 @@ def main() -> None:
     case = rvpp.load_case(ROOT / "data" / "cases" / "paper")
     report = {"case": case.name, "load_average_before": os.getloadavg()[0]}
     report["solve_s_by_case"] = solve_times(case)
+    report["sweep_s_by_case"] = sweep_times(case)
     report.update(draw_times(case))
     with tempfile.TemporaryDirectory(prefix="rvpp-bench-") as folder:
         report.update(fill_library(Path(folder), case))

@@ -42,6 +42,7 @@ import time
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from datetime import datetime
 
 import streamlit as st
 
@@ -54,7 +55,7 @@ from .state import REQUESTED, ROOT, case_key
 MAX_WORKERS = 2        # solves at once; more would compete for a small server's cores
 WORKERS = max(1, min(MAX_WORKERS, os.cpu_count() or 1))
 KEPT = 64              # solved cases kept in memory (about 1.3 MB each)
-KEPT_SWEEPS = 4        # sweeps kept in memory (25 plans of 1.3 MB on the default day)
+KEPT_SWEEPS = 4        # sweeps kept in memory (25 plans, about 30 MB, on the default day)
 SWEEP_POINTS = 49      # at most this many Γ in a sweep: every period up to 48 periods, else evenly spread
 POLL_S = 0.1           # how often a waiting page refreshes its progress [s]
 JOIN_S = 5.0           # how long to wait for a finished solver process to exit [s]
@@ -297,7 +298,9 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
         if len(cases) == 1:
             result = jobs[0].result
             state = "complete" if result.has_plan else "error"
-            st.status(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", state=state, expanded=False)
+            with st.status(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", state=state, expanded=False):
+                st.caption(f"The solver's answer came back at {answered(jobs[0])} (server clock); what follows "
+                           "is drawing.")
     return [found[case_key(c)] for c in cases]
 
 
@@ -327,6 +330,11 @@ def sweep(case: Case, gammas: Sequence[int], label: str) -> list[Result] | None:
         widgets.problems(job.problems, "Cannot solve", note="Fix the case on the other pages and solve again.")
         return None
     return job.result
+
+
+def answered(job: Job) -> str:
+    """When the solver's answer reached the server, to the millisecond: ``HH:MM:SS.mmm``."""
+    return f"{datetime.fromtimestamp(job.returned_at):%H:%M:%S.%f}"[:-3]
 
 
 def _wait(jobs: list[Job], label: str, total: int) -> None:

@@ -35,7 +35,7 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
     slider_key = f"{page}_sweep_gamma_{nt}"
     if slider_key not in st.session_state:
         st.session_state[slider_key] = min(grid, key=lambda g: abs(g - default))
-    label = f"Γ of every source [periods of the {nt}]"
+    label = "Γ of every source [periods]"
     points = solving.swept(run, grid)
     if points is None:
         if not state.is_requested_key(key):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -159,6 +160,30 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         assert list(bids.columns) == MARKET_COLUMNS
         np.testing.assert_allclose(bids["p_da_mw"], expected.market["p_da_mw"], atol=1e-5)
         page.screenshot(path=ARTIFACTS / "results.png", full_page=True)
+
+
+def test_the_learn_gamma_slider_moves_by_keyboard_to_the_plan_of_each_gamma(app_url, paper_case, paper_solve):
+    with chromium_page() as page:
+        page.goto(app_url)
+        open_page(page, "Robust bidding explained")
+        slider = page.get_by_test_id("stSlider").filter(has_text="Γ of every source")
+        compute = page.get_by_role("button", name=re.compile("Compute the plans for every Γ"))
+        curve = page.locator(".gtitle", has_text="plan shown: Γ =").first
+        compute.or_(curve).first.wait_for()
+        if compute.count():  # another test of this server may have swept the case already
+            compute.click()
+        curve.wait_for()
+        thumb = slider.get_by_role("slider")
+        start = int(thumb.input_value())
+        for gamma in (start + 1, start + 2):
+            thumb.focus()
+            page.keyboard.press("ArrowRight")
+            page.locator(".gtitle", has_text=f"Bids at Γ = {gamma}:").first.wait_for()
+            expected = paper_solve(gammas={source: gamma for source in paper_case.sources()})
+            card = page.get_by_test_id("stMetric").filter(has_text="Net result [kEUR]").first
+            shown = float(card.get_by_test_id("stMetricValue").inner_text().replace("−", "-").replace(",", ""))
+            assert shown == pytest.approx(expected.objective_eur / 1000, abs=0.051 + 1e-4 * abs(expected.cost_keur))
+        page.screenshot(path=ARTIFACTS / "learn-gamma-slider.png", full_page=True)
 
 
 def test_a_link_straight_to_a_page_on_a_fresh_server_opens_that_page():
