@@ -574,3 +574,42 @@ def test_a_cancelled_solve_stops_its_process_at_once(paper_case):
     quick = solver.start(paper_case)  # the solver keeps working after a cancel
     assert quick.done.wait(TIMEOUT_S) and quick.result.status == "optimal"
     assert solver.expected_s(paper_case)[1] == "the last solve of this case"
+
+
+def test_the_sweep_grid_takes_every_period_up_to_48_then_an_even_step():
+    from dashboard.solving import sweep_grid
+
+    assert sweep_grid(24) == list(range(25))
+    assert sweep_grid(48) == list(range(49))
+    assert sweep_grid(96) == list(range(0, 97, 2))
+    assert sweep_grid(50) == list(range(0, 51, 2))
+    assert sweep_grid(100) == [*range(0, 100, 3), 100]
+
+
+@pytest.mark.slow
+def test_a_sweep_counts_its_plans_and_a_cancelled_one_stops_at_once(paper_case, paper_solve):
+    from dashboard.solving import Solver, sweep_key
+
+    solver = Solver(workers=1)
+    slow = rvpp.with_options(paper_case, dt_h=0.25)
+    grid = list(range(0, 97, 2))
+    job = solver.start(slow, grid)
+    deadline = time.monotonic() + TIMEOUT_S
+    while not (job.done_points and job.done_points[0] >= 1) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert job.done_points[1] == len(grid) and job.process.is_alive()
+    started = time.monotonic()
+    solver.cancel([job.key])
+    assert job.done.wait(10)
+    assert time.monotonic() - started < 5
+    assert job.cancelled and job.result is None and not job.process.is_alive()
+    assert solver.sweep(job.key) is None
+    quick = solver.start(paper_case, [0, 12, 24])
+    assert quick.done.wait(TIMEOUT_S) and quick.done_points == (3, 3)
+    points = solver.sweep(sweep_key(paper_case, [0, 12, 24]))
+    for gamma, point in zip((0, 12, 24), points):
+        expected = paper_solve(gammas={source: gamma for source in paper_case.sources()})
+        assert dict(point.case.budgets.overrides) == {source: gamma for source in paper_case.sources()}
+        assert point.objective_eur == pytest.approx(expected.objective_eur,
+                                                    abs=1.0 + paper_case.solver.rel_gap * abs(expected.objective_eur))
+    assert solver.expected_s(paper_case, [0, 12, 24])[1] == "the last sweep of this case"
