@@ -287,12 +287,7 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
     if jobs:
         _wait(jobs, label, len(cases))
         for job in jobs:
-            if job.cancelled:
-                st.info(f"{label}: cancelled after {job.elapsed_s:.1f} s. Press the solve button to start again.",
-                        icon=":material/cancel:")
-                return None
-            if job.problems:
-                widgets.problems(job.problems, "Cannot solve", note="Fix the case on the other pages and solve again.")
+            if _without_result(job, label, again="the solve button"):
                 return None
             found[job.key] = job.result
         if len(cases) == 1:
@@ -322,14 +317,20 @@ def sweep(case: Case, gammas: Sequence[int], label: str) -> list[Result] | None:
         return found
     job = solver().start(case, gammas)
     _wait([job], label, 1)
+    return None if _without_result(job, label, again="the button") else job.result
+
+
+def _without_result(job: Job, label: str, again: str) -> bool:
+    """Whether ``job`` ended without a result; if so, say why in place (cancelled: press
+    ``again`` to start again; refused: the reasons)."""
     if job.cancelled:
-        st.info(f"{label}: cancelled after {job.elapsed_s:.1f} s. Press the button to start again.",
+        st.info(f"{label}: cancelled after {job.elapsed_s:.1f} s. Press {again} to start again.",
                 icon=":material/cancel:")
-        return None
+        return True
     if job.problems:
         widgets.problems(job.problems, "Cannot solve", note="Fix the case on the other pages and solve again.")
-        return None
-    return job.result
+        return True
+    return False
 
 
 def answered(job: Job) -> str:
