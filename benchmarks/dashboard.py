@@ -202,6 +202,11 @@ def solve_to_charts(page, label: str) -> dict:
             f"drawn_after_solve_{label}_s": round(drawn - returned, 3)}
 
 
+def wait_idle(page) -> None:
+    """Until Streamlit shows no run under way (its status widget), as a user waits to see the page."""
+    page.wait_for_function("() => !document.querySelector('[data-testid=stStatusWidget]')")
+
+
 def gamma_slider(page, title: str, chart_title: str, timings: dict) -> list[float]:
     """Move the Γ slider of the page ``title`` with the keyboard, GAMMA_MOVES times; the time from
     each key press until the chart titled ``chart_title`` (with the new Γ) is drawn [s]."""
@@ -223,6 +228,7 @@ def gamma_slider(page, title: str, chart_title: str, timings: dict) -> list[floa
         # Up to new plans (their figures are built on the way), then back to plans already drawn.
         key, gamma = ("ArrowRight", gamma + 1) if i < GAMMA_MOVES // 2 else ("ArrowLeft", gamma - 1)
         wanted = chart_title.format(gamma=gamma)
+        wait_idle(page)
         page.evaluate("() => { window.__titles = {}; }")
         thumb.focus()
         pressed = time.time()

@@ -176,6 +176,7 @@ def test_the_learn_gamma_slider_moves_by_keyboard_to_the_plan_of_each_gamma(app_
         thumb = slider.get_by_role("slider")
         start = int(thumb.input_value())
         for gamma in (start + 1, start + 2):
+            page.wait_for_function("() => !document.querySelector('[data-testid=stStatusWidget]')")
             thumb.focus()
             page.keyboard.press("ArrowRight")
             page.locator(".gtitle", has_text=f"Bids at Γ = {gamma}:").first.wait_for()
