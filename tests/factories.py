@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -95,3 +96,15 @@ def cyclic_storage(case):
     with a cyclic day the tank carries the afternoon's heat into the night instead, no heat is
     bought on the default day and every market set has a plan."""
     return with_storage(case, e_init_mwh_th=None)
+
+
+def wait_for(predicate, timeout_s: float = 600.0, every_s: float = 0.3):
+    """The first truthy value of ``predicate()``, polled every ``every_s`` seconds; fails the
+    test after ``timeout_s`` (a ceiling for work to finish, never a performance assertion)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(every_s)
+    raise AssertionError("timed out")

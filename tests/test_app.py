@@ -24,6 +24,7 @@ from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
 from rvpp.store import RunLibrary
+from tests.factories import wait_for
 
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
@@ -555,21 +556,24 @@ def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_sol
     assert [r.label for r in RunLibrary(run_library).list()] == [second.label]
 
 
+def _cancel_stops_at_once(solver, job) -> None:
+    """Cancel ``job`` and check that its process ends within seconds, with no result."""
+    started = time.monotonic()
+    solver.cancel([job.key])
+    assert job.done.wait(10)
+    assert time.monotonic() - started < 5
+    assert job.cancelled and job.result is None and not job.process.is_alive()
+
+
 def test_a_cancelled_solve_stops_its_process_at_once(paper_case):
     from dashboard.solving import Solver
 
     solver = Solver(workers=1)
     slow = rvpp.with_options(paper_case, dt_h=0.25, strategy="pessimistic")
     job = solver.start(slow)
-    deadline = time.monotonic() + TIMEOUT_S
-    while job.stage != "solving with HiGHS" and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert job.stage == "solving with HiGHS" and job.process.is_alive()
-    started = time.monotonic()
-    solver.cancel([job.key])
-    assert job.done.wait(10)
-    assert time.monotonic() - started < 5
-    assert job.cancelled and job.result is None and not job.process.is_alive()
+    wait_for(lambda: job.stage == "solving with HiGHS", TIMEOUT_S, every_s=0.05)
+    assert job.process.is_alive()
+    _cancel_stops_at_once(solver, job)
     assert solver.result(job.key) is None
     quick = solver.start(paper_case)  # the solver keeps working after a cancel
     assert quick.done.wait(TIMEOUT_S) and quick.result.status == "optimal"
@@ -594,15 +598,9 @@ def test_a_sweep_counts_its_plans_and_a_cancelled_one_stops_at_once(paper_case, 
     slow = rvpp.with_options(paper_case, dt_h=0.25)
     grid = list(range(0, 97, 2))
     job = solver.start(slow, grid)
-    deadline = time.monotonic() + TIMEOUT_S
-    while not (job.done_points and job.done_points[0] >= 1) and time.monotonic() < deadline:
-        time.sleep(0.05)
+    wait_for(lambda: job.done_points and job.done_points[0] >= 1, TIMEOUT_S, every_s=0.05)
     assert job.done_points[1] == len(grid) and job.process.is_alive()
-    started = time.monotonic()
-    solver.cancel([job.key])
-    assert job.done.wait(10)
-    assert time.monotonic() - started < 5
-    assert job.cancelled and job.result is None and not job.process.is_alive()
+    _cancel_stops_at_once(solver, job)
     assert solver.sweep(job.key) is None
     quick = solver.start(paper_case, [0, 12, 24])
     assert quick.done.wait(TIMEOUT_S) and quick.done_points == (3, 3)

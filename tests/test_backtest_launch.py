@@ -4,7 +4,6 @@ and can be stopped and started again where it stopped."""
 from __future__ import annotations
 
 import datetime as dt
-import time
 
 import pytest
 
@@ -15,16 +14,7 @@ from rvpp.backtest.settings import parse_day
 from rvpp.cli import _parser
 from rvpp.settle.recourse import Penalties
 from rvpp.store import BacktestStore
-
-
-def wait_for(predicate, timeout_s: float = 600.0):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        value = predicate()
-        if value:
-            return value
-        time.sleep(0.3)
-    raise AssertionError("timed out")
+from tests.factories import wait_for
 
 
 @pytest.mark.parametrize("settings", [
