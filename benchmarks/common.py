@@ -54,7 +54,22 @@ def machine() -> dict:
         except metadata.PackageNotFoundError:
             versions[name] = None
     return {"python": platform.python_version(), "platform": platform.platform(), "machine": platform.machine(),
-            "processor": platform.processor() or None, "cores": os.cpu_count(), "packages": versions}
+            "processor": platform.processor() or cpu_model(), "cores": os.cpu_count(), "packages": versions}
+
+
+def cpu_model() -> str | None:
+    """The processor's name and clock as the kernel reports them (``platform.processor()`` is
+    often empty on Linux): two machines of one architecture can differ by half in solve times."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as info:
+            fields = [line.split(":", 1) for line in info if ":" in line]
+    except OSError:
+        return None
+    names = sorted({value.strip() for key, value in fields if key.strip() == "model name"})
+    clocks = [float(value) for key, value in fields if key.strip() == "cpu MHz"]
+    if not names:
+        return None
+    return ", ".join(names) + (f" at {max(clocks):.0f} MHz" if clocks else "")
 
 
 def header(name: str, mode: str) -> dict:
