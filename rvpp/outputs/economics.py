@@ -20,9 +20,10 @@ import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
 from ..solving.results import Result
-from .style import FIGURE_HEIGHT, GAIN_COLOR, GRID_COLOR, LOSS_COLOR, NET_COLOR, TRANSPARENT
+from .style import FIGURE_HEIGHT, FIGURE_MARGIN, GAIN_COLOR, GRID_COLOR, LOSS_COLOR, NET_COLOR, TRANSPARENT
 
 KILO = 1000.0
+NAMES_MARGIN_B = {"full": 110, "short": 92}  # [px] below a waterfall for its tilted part names
 SHORT = {"DAM revenue": "DAM", "SR revenue": "SR", "HPA cost": "HPA", "Operating cost": "O&M",
          "Robust protection": "Protection", "Net": "Net"}  # step names in narrow panels
 
@@ -116,12 +117,13 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
     if not results:
         raise ValueError("no plans to draw")
     labels = list(results)
+    naming = "full" if len(labels) == 1 else "short"
     fig = make_subplots(rows=1, cols=len(labels), shared_yaxes=True, horizontal_spacing=0.03,
                         subplot_titles=labels if len(labels) > 1 else None)
     for col, label in enumerate(labels, start=1):
         steps = economics(results[label]).steps()
         values = [v / KILO for v in steps.values()]
-        names = list(steps) if len(labels) == 1 else [SHORT[k] for k in steps]
+        names = list(steps) if naming == "full" else [SHORT[k] for k in steps]
         fig.add_trace(go.Waterfall(
             x=names, y=values, measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
             text=[f"{v:+,.1f}".replace("-", "−") for v in values], textposition="outside", cliponaxis=False,
@@ -130,7 +132,8 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
             hovertemplate="%{x}: %{y:+,.1f} kEUR<extra>" + label + "</extra>", showlegend=False), row=1, col=col)
     title = "The day's economics: from revenues to the net result" + (f" ({labels[0]})" if len(labels) == 1 else "")
     fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT + 40,
-                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, margin=dict(t=100, b=60, l=70, r=30))
+                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT,
+                      margin={**FIGURE_MARGIN, "b": NAMES_MARGIN_B[naming]})
     fig.update_xaxes(title_text="Part of the objective", gridcolor=GRID_COLOR, tickangle=-30)
     fig.update_yaxes(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
     fig.update_yaxes(title_text="Amount [kEUR]", row=1, col=1)

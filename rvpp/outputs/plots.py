@@ -21,8 +21,8 @@ from plotly.subplots import make_subplots
 from ..settle.audit import price_exposures, protection_exact
 from ..solving.problem import Problem
 from ..solving.results import FLEX_KINDS, Result
-from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS, MARKET_COLORS,
-                    ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
+from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, FIGURE_MARGIN, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS,
+                    MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
 
 CLOCK_TITLE = "Delivery day, period start (local time)"
 HOURS_PER_TICK = 1  # one x tick per clock hour
@@ -35,6 +35,7 @@ TRADE_NAMES = {"p_da_mw": "day-ahead energy", "r_sr_up_mw": "up reserve", "r_sr_
                "h_hpa_mw": "heat"}
 SOURCE_TITLES = {"price_da": "Day-ahead price", "price_sr_up": "Up-reserve price",
                  "price_sr_dn": "Down-reserve price"}
+TOTALS_MARGIN_R = 80  # [px] the reserve figure's day totals: their tilted unit-kind labels reach past the plot
 
 
 # ----------------------------------------------------------------------------- plan figures
@@ -167,7 +168,7 @@ def reserve_share_figure(result: Result) -> go.Figure:
         fig.update_yaxes(title_text=f"{direction.capitalize()} reserve [MW]", row=row, col=1)
         fig.update_yaxes(title_text=f"{direction.capitalize()}, day total [MWh]", row=row, col=2)
     _style(fig, result, "Reserve by unit kind", None, height=FIGURE_HEIGHT + 160, clock_col=1, x_title=False)
-    fig.update_layout(barmode="stack", hovermode="closest")
+    fig.update_layout(barmode="stack", hovermode="closest", margin_r=TOTALS_MARGIN_R)
     fig.update_xaxes(title_text=CLOCK_TITLE, row=2, col=1)
     return fig
 
@@ -493,7 +494,7 @@ def _style_axes(fig: go.Figure, labels: list[str], dt_h: float, title: str, y_ti
     ticks = labels[::step]
     fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=height, hovermode="x unified",
                       paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, legend=_legend(),
-                      margin=dict(t=100, b=60, l=70, r=30))
+                      margin=FIGURE_MARGIN)
     fig.update_xaxes(type="category", categoryorder="array", categoryarray=labels, tickmode="array",
                      tickvals=ticks, ticktext=ticks, tickangle=-45, col=clock_col)
     fig.update_xaxes(gridcolor=GRID_COLOR)
