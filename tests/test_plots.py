@@ -196,3 +196,20 @@ def test_figures_refuse_results_without_a_plan(paper_solve):
     assert infeasible.status == "infeasible"
     with pytest.raises(ValueError, match="no plan"):
         plots.trades_figure(infeasible)
+
+
+@pytest.mark.parametrize("rows, cols, options", [
+    (1, 1, dict(shared_yaxes=True, horizontal_spacing=0.03)),
+    (1, 4, dict(shared_yaxes=True, horizontal_spacing=0.03, subplot_titles=["a", "bb", "c", "d"])),
+    (2, 1, dict(shared_xaxes=True, row_heights=[0.68, 0.32], vertical_spacing=0.05)),
+    (2, 2, dict(column_widths=[0.78, 0.22], shared_xaxes="columns", horizontal_spacing=0.09, vertical_spacing=0.08)),
+    (4, 1, dict(shared_xaxes=True, vertical_spacing=0.06)),
+    (3, 3, dict(row_heights=[3, 1, 2], horizontal_spacing=0.1, vertical_spacing=0.07, shared_xaxes=True,
+                shared_yaxes=True, subplot_titles=["a", "", "c", "d", "e", "f", "g", "h", "i"])),
+])
+def test_subplot_grids_are_laid_out_as_make_subplots_lays_them_out(rows, cols, options):
+    from plotly.subplots import make_subplots
+
+    expected = make_subplots(rows=rows, cols=cols, **options).layout.to_plotly_json()
+    expected.pop("template", None)
+    assert plots.subplots_layout(rows, cols, **options) == expected

@@ -17,9 +17,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import plotly.graph_objects as go
-from plotly.subplots import make_subplots
 
 from ..solving.results import Result
+from .plots import cell_axes, subplots_layout
 from .style import FIGURE_HEIGHT, FIGURE_MARGIN, GAIN_COLOR, GRID_COLOR, LOSS_COLOR, NET_COLOR, TRANSPARENT
 
 KILO = 1000.0
@@ -118,23 +118,28 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
         raise ValueError("no plans to draw")
     labels = list(results)
     naming = "full" if len(labels) == 1 else "short"
-    fig = make_subplots(rows=1, cols=len(labels), shared_yaxes=True, horizontal_spacing=0.03,
-                        subplot_titles=labels if len(labels) > 1 else None)
+    traces = []
     for col, label in enumerate(labels, start=1):
         steps = economics(results[label]).steps()
         values = [v / KILO for v in steps.values()]
-        names = list(steps) if naming == "full" else [SHORT[k] for k in steps]
-        fig.add_trace(go.Waterfall(
-            x=names, y=values, measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
+        traces.append(dict(
+            type="waterfall", x=list(steps) if naming == "full" else [SHORT[k] for k in steps], y=values,
+            measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
             text=[f"{v:+,.1f}".replace("-", "−") for v in values], textposition="outside", cliponaxis=False,
             increasing={"marker": {"color": GAIN_COLOR}}, decreasing={"marker": {"color": LOSS_COLOR}},
             totals={"marker": {"color": NET_COLOR}}, connector={"line": {"color": GRID_COLOR}},
-            hovertemplate="%{x}: %{y:+,.1f} kEUR<extra>" + label + "</extra>", showlegend=False), row=1, col=col)
+            hovertemplate="%{x}: %{y:+,.1f} kEUR<extra>" + label + "</extra>", showlegend=False,
+            **cell_axes(1, col, cols=len(labels))))
+    layout = subplots_layout(1, len(labels), shared_yaxes=True, horizontal_spacing=0.03,
+                             subplot_titles=labels if len(labels) > 1 else None)
+    for name, axis in layout.items():
+        if name.startswith("xaxis"):
+            axis.update(title={"text": "Part of the objective"}, gridcolor=GRID_COLOR, tickangle=-30)
+        elif name.startswith("yaxis"):
+            axis.update(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
+    layout["yaxis"]["title"] = {"text": "Amount [kEUR]"}
     title = "The day's economics: from revenues to the net result" + (f" ({labels[0]})" if len(labels) == 1 else "")
-    fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT + 40,
-                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT,
-                      margin={**FIGURE_MARGIN, "b": NAMES_MARGIN_B[naming]})
-    fig.update_xaxes(title_text="Part of the objective", gridcolor=GRID_COLOR, tickangle=-30)
-    fig.update_yaxes(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
-    fig.update_yaxes(title_text="Amount [kEUR]", row=1, col=1)
-    return fig
+    layout.update(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT + 40,
+                  paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT,
+                  margin={**FIGURE_MARGIN, "b": NAMES_MARGIN_B[naming]})
+    return go.Figure(data=traces, layout=layout)

@@ -7,6 +7,11 @@ time), every axis title carries its unit, every trace has a legend entry and a h
 value. Backgrounds are transparent and the colours come from :mod:`rvpp.outputs.style`
 (Okabe & Ito's colour-blind safe set), which reads on light and dark themes alike, so
 the same figure serves the dashboard and static exports (``fig.write_image``).
+
+Builders collect their traces and layout as plain dicts and make one ``go.Figure`` of
+them at the end, so Plotly checks every property once; adding traces and updating axes
+one call at a time checks them again on each call, several times the work for a page of
+figures.
 """
 
 from __future__ import annotations
@@ -16,7 +21,6 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 import plotly.graph_objects as go
-from plotly.subplots import make_subplots
 
 from ..settle.audit import price_exposures, protection_exact
 from ..solving.problem import Problem
@@ -36,6 +40,7 @@ TRADE_NAMES = {"p_da_mw": "day-ahead energy", "r_sr_up_mw": "up reserve", "r_sr_
 SOURCE_TITLES = {"price_da": "Day-ahead price", "price_sr_up": "Up-reserve price",
                  "price_sr_dn": "Down-reserve price"}
 TOTALS_MARGIN_R = 80  # [px] the reserve figure's day totals: their tilted unit-kind labels reach past the plot
+SUBPLOT_TITLE_SIZE = 16  # [px] as make_subplots sets it
 
 
 # ----------------------------------------------------------------------------- plan figures
@@ -46,35 +51,31 @@ def trades_figure(result: Result) -> go.Figure:
     market = _plan(result).market
     x = _labels(result)
     p, up, dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
-    fig = go.Figure()
-    fig.add_bar(x=x, y=p, name="DAM energy (+ sell, − buy)", marker_color=MARKET_COLORS["dam"],
-                hovertemplate="%{y:.2f} MW")
-    fig.add_bar(x=x, y=up, base=p, name="SR up band", marker_color=MARKET_COLORS["sr_up"], opacity=0.75,
-                width=0.35, customdata=up, hovertemplate="%{customdata:.2f} MW", marker_pattern_shape="/")
-    fig.add_bar(x=x, y=dn, base=p - dn, name="SR down band", marker_color=MARKET_COLORS["sr_dn"], opacity=0.75,
-                width=0.35, customdata=dn, hovertemplate="%{customdata:.2f} MW", marker_pattern_shape="\\")
-    _style(fig, result, "Day-ahead energy and secondary-reserve bands", "Power [MW]")
-    fig.update_layout(barmode="overlay")
-    return fig
+    band = dict(type="bar", x=x, opacity=0.75, width=0.35, hovertemplate="%{customdata:.2f} MW")
+    traces = [
+        _bar(x, p, "DAM energy (+ sell, − buy)", MARKET_COLORS["dam"], "%{y:.2f} MW"),
+        {**band, "y": up, "base": p, "customdata": up, "name": "SR up band",
+         "marker": dict(color=MARKET_COLORS["sr_up"], pattern=dict(shape="/"))},
+        {**band, "y": dn, "base": p - dn, "customdata": dn, "name": "SR down band",
+         "marker": dict(color=MARKET_COLORS["sr_dn"], pattern=dict(shape="\\"))},
+    ]
+    layout = _plan_layout(result, "Day-ahead energy and secondary-reserve bands", "Power [MW]")
+    return go.Figure(data=traces, layout={**layout, "barmode": "overlay"})
 
 
 def heat_figure(result: Result) -> go.Figure:
     """Heat supply by CSP plant and HPA purchase, stacked, against the thermal demand [MW_th]."""
     result = _plan(result)
     x = _labels(result)
-    fig = go.Figure()
-    for i, (name, part) in enumerate(_by_unit(result.csp)):
-        fig.add_bar(x=x, y=part["heat_to_td_mw"].to_numpy(float), name=f"{name} heat",
-                    marker_color=_shade(VERMILION, i, result.csp["unit"].nunique()),
-                    hovertemplate="%{y:.2f} MW_th")
-    fig.add_bar(x=x, y=result.market["h_hpa_mw"].to_numpy(float), name="HPA purchase",
-                marker_color=MARKET_COLORS["hpa"], hovertemplate="%{y:.2f} MW_th")
-    demand = _kind_sum(result, "td", "p_mw")
-    fig.add_scatter(x=x, y=demand, name="Thermal demand", mode="lines+markers",
-                    line=dict(color=GREEN, width=3), hovertemplate="%{y:.2f} MW_th")
-    _style(fig, result, "Heat supply against thermal demand", "Heat [MW_th]")
-    fig.update_layout(barmode="stack")
-    return fig
+    plants = _by_unit(result.csp)
+    traces = [_bar(x, part["heat_to_td_mw"].to_numpy(float), f"{name} heat", _shade(VERMILION, i, len(plants)),
+                   "%{y:.2f} MW_th") for i, (name, part) in enumerate(plants)]
+    traces.append(_bar(x, result.market["h_hpa_mw"].to_numpy(float), "HPA purchase", MARKET_COLORS["hpa"],
+                       "%{y:.2f} MW_th"))
+    traces.append(dict(type="scatter", x=x, y=_kind_sum(result, "td", "p_mw"), name="Thermal demand",
+                       mode="lines+markers", line=dict(color=GREEN, width=3), hovertemplate="%{y:.2f} MW_th"))
+    layout = _plan_layout(result, "Heat supply against thermal demand", "Heat [MW_th]")
+    return go.Figure(data=traces, layout={**layout, "barmode": "stack"})
 
 
 def dispatch_figure(result: Result) -> go.Figure:
@@ -82,19 +83,16 @@ def dispatch_figure(result: Result) -> go.Figure:
     result = _plan(result)
     x = _labels(result)
     units = result.units
-    fig = go.Figure()
+    traces = []
     for kind in ("wind", "pv", "csp", "ed"):
         parts = _by_unit(units[units["kind"] == kind])
-        for i, (name, part) in enumerate(parts):
-            sign = -1.0 if kind == "ed" else 1.0
-            fig.add_bar(x=x, y=sign * part["p_mw"].to_numpy(float), name=name, legendgroup=kind,
-                        marker_color=_shade(KIND_COLORS[kind], i, len(parts)),
-                        hovertemplate="%{y:.2f} MW")
-    fig.add_scatter(x=x, y=result.market["p_da_mw"].to_numpy(float), name="DAM position",
-                    mode="lines+markers", line=dict(color=BLUE, width=3), hovertemplate="%{y:.2f} MW")
-    _style(fig, result, "Electrical dispatch by unit (consumption negative)", "Power [MW]")
-    fig.update_layout(barmode="relative")
-    return fig
+        sign = -1.0 if kind == "ed" else 1.0
+        traces += [{**_bar(x, sign * part["p_mw"].to_numpy(float), name, _shade(KIND_COLORS[kind], i, len(parts)),
+                           "%{y:.2f} MW"), "legendgroup": kind} for i, (name, part) in enumerate(parts)]
+    traces.append(dict(type="scatter", x=x, y=result.market["p_da_mw"].to_numpy(float), name="DAM position",
+                       mode="lines+markers", line=dict(color=BLUE, width=3), hovertemplate="%{y:.2f} MW"))
+    layout = _plan_layout(result, "Electrical dispatch by unit (consumption negative)", "Power [MW]")
+    return go.Figure(data=traces, layout={**layout, "barmode": "relative"})
 
 
 def storage_figure(result: Result, csp: str | None = None) -> go.Figure:
@@ -111,33 +109,27 @@ def storage_figure(result: Result, csp: str | None = None) -> go.Figure:
     rows = result.csp[result.csp["unit"] == name].sort_values("t")
     x = _labels(result)
     n = len(x)
-    e_min, e_max = np.full(n, storage.e_min_mwh_th), np.full(n, storage.e_max_mwh_th)
-    floor = rows["ts_energy_floor_mwh"].to_numpy(float)
-    ceiling = rows["ts_energy_ceiling_mwh"].to_numpy(float)
-    fig = make_subplots(rows=2, cols=1, shared_xaxes=True, row_heights=[0.68, 0.32], vertical_spacing=0.05)
-    energy = "%{y:.1f} MWh_th"
-    fig.add_scatter(x=x, y=e_min, name="Minimum energy", mode="lines", line=dict(color=GREY, dash="dash"),
-                    hovertemplate=energy, row=1, col=1)
-    fig.add_scatter(x=x, y=floor, name="Margin kept for up reserve (σ↑)", mode="lines", fill="tonexty",
-                    fillcolor=rgba(PURPLE, 0.25), line=dict(color=PURPLE, dash="dot"), hovertemplate=energy,
-                    row=1, col=1)
-    fig.add_scatter(x=x, y=e_max, name="Maximum energy", mode="lines", line=dict(color=GREY, dash="dash"),
-                    hovertemplate=energy, row=1, col=1)
-    fig.add_scatter(x=x, y=ceiling, name="Margin kept for down reserve (σ↓)", mode="lines", fill="tonexty",
-                    fillcolor=rgba(SKY, 0.25), line=dict(color=SKY, dash="dot"), hovertemplate=energy,
-                    row=1, col=1)
-    fig.add_scatter(x=x, y=rows["ts_energy_mwh"].to_numpy(float), name="Stored energy (end of period)",
-                    mode="lines+markers", line=dict(color=VERMILION, width=3), hovertemplate=energy, row=1, col=1)
-    fig.add_bar(x=x, y=rows["ts_charge_mw"].to_numpy(float), name="Charge", marker_color=GREEN,
-                hovertemplate="%{y:.2f} MW_th", row=2, col=1)
-    fig.add_bar(x=x, y=-rows["ts_discharge_mw"].to_numpy(float), name="Discharge (negative)",
-                marker_color=ORANGE, hovertemplate="%{y:.2f} MW_th", row=2, col=1)
-    _style(fig, result, f"{name}: thermal storage", None, height=FIGURE_HEIGHT + 120, x_title=False)
-    fig.update_yaxes(title_text="Stored energy [MWh_th]", row=1, col=1)
-    fig.update_yaxes(title_text="Power [MW_th]", row=2, col=1)
-    fig.update_xaxes(title_text=CLOCK_TITLE, row=2, col=1)
-    fig.update_layout(barmode="relative")
-    return fig
+    energy = dict(type="scatter", x=x, mode="lines", hovertemplate="%{y:.1f} MWh_th", **cell_axes(1, 1))
+    limit = {**energy, "line": dict(color=GREY, dash="dash")}
+    power = cell_axes(2, 1)
+    traces = [
+        {**limit, "y": np.full(n, storage.e_min_mwh_th), "name": "Minimum energy"},
+        {**energy, "y": rows["ts_energy_floor_mwh"].to_numpy(float), "name": "Margin kept for up reserve (σ↑)",
+         "fill": "tonexty", "fillcolor": rgba(PURPLE, 0.25), "line": dict(color=PURPLE, dash="dot")},
+        {**limit, "y": np.full(n, storage.e_max_mwh_th), "name": "Maximum energy"},
+        {**energy, "y": rows["ts_energy_ceiling_mwh"].to_numpy(float), "name": "Margin kept for down reserve (σ↓)",
+         "fill": "tonexty", "fillcolor": rgba(SKY, 0.25), "line": dict(color=SKY, dash="dot")},
+        {**energy, "y": rows["ts_energy_mwh"].to_numpy(float), "name": "Stored energy (end of period)",
+         "mode": "lines+markers", "line": dict(color=VERMILION, width=3)},
+        {**_bar(x, rows["ts_charge_mw"].to_numpy(float), "Charge", GREEN, "%{y:.2f} MW_th"), **power},
+        {**_bar(x, -rows["ts_discharge_mw"].to_numpy(float), "Discharge (negative)", ORANGE, "%{y:.2f} MW_th"),
+         **power},
+    ]
+    grid = subplots_layout(2, 1, shared_xaxes=True, row_heights=(0.68, 0.32), vertical_spacing=0.05)
+    layout = _plan_layout(result, f"{name}: thermal storage", None, height=FIGURE_HEIGHT + 120, grid=grid,
+                          x_title=False)
+    _titled(layout, yaxis="Stored energy [MWh_th]", yaxis2="Power [MW_th]", xaxis2=CLOCK_TITLE)
+    return go.Figure(data=traces, layout={**layout, "barmode": "relative"})
 
 
 def reserve_share_figure(result: Result) -> go.Figure:
@@ -146,31 +138,32 @@ def reserve_share_figure(result: Result) -> go.Figure:
     x = _labels(result)
     dt_h = result.problem.dt_h
     units = result.units
-    fig = make_subplots(rows=2, cols=2, column_widths=[0.78, 0.22], shared_xaxes="columns",
-                        horizontal_spacing=0.09, vertical_spacing=0.08)
+    kinds = [kind for kind in FLEX_KINDS if (units["kind"] == kind).any()]
+    traces = []  # on a 2 × 2 grid: up above down, per period on the left, day totals on the right
     for row, (column, band) in enumerate((("r_up_mw", "r_sr_up_mw"), ("r_dn_mw", "r_sr_dn_mw")), start=1):
         direction = "up" if row == 1 else "down"
-        totals = []
-        for kind in FLEX_KINDS:
-            if not (units["kind"] == kind).any():
-                continue
-            per_period = _kind_sum(result, kind, column)
-            totals.append((kind, float(per_period.sum() * dt_h)))
-            fig.add_bar(x=x, y=per_period, name=KIND_LABELS[kind], legendgroup=kind, showlegend=row == 1,
-                        marker_color=KIND_COLORS[kind], row=row, col=1,
-                        hovertemplate=f"{KIND_LABELS[kind]} {direction}: %{{y:.2f}} MW<extra></extra>")
-        fig.add_scatter(x=x, y=result.market[band].to_numpy(float), name="SR band offered", mode="lines",
-                        legendgroup="band", showlegend=row == 1, line=dict(color=BLUE, width=2, shape="hvh"),
-                        row=row, col=1, hovertemplate=f"offered {direction}: %{{y:.2f}} MW<extra></extra>")
-        fig.add_bar(x=[KIND_LABELS[k] for k, _ in totals], y=[v for _, v in totals],
-                    marker_color=[KIND_COLORS[k] for k, _ in totals], showlegend=False, row=row, col=2,
-                    name=f"{direction} total", hovertemplate="%{x}: %{y:.1f} MWh<extra></extra>")
-        fig.update_yaxes(title_text=f"{direction.capitalize()} reserve [MW]", row=row, col=1)
-        fig.update_yaxes(title_text=f"{direction.capitalize()}, day total [MWh]", row=row, col=2)
-    _style(fig, result, "Reserve by unit kind", None, height=FIGURE_HEIGHT + 160, clock_col=1, x_title=False)
-    fig.update_layout(barmode="stack", hovermode="closest", margin_r=TOTALS_MARGIN_R)
-    fig.update_xaxes(title_text=CLOCK_TITLE, row=2, col=1)
-    return fig
+        per_period, totals = cell_axes(row, 1, cols=2), cell_axes(row, 2, cols=2)
+        sums = {kind: _kind_sum(result, kind, column) for kind in kinds}
+        for kind, values in sums.items():
+            traces.append({**_bar(x, values, KIND_LABELS[kind], KIND_COLORS[kind],
+                                  f"{KIND_LABELS[kind]} {direction}: %{{y:.2f}} MW<extra></extra>"),
+                           "legendgroup": kind, "showlegend": row == 1, **per_period})
+        traces.append(dict(type="scatter", x=x, y=result.market[band].to_numpy(float), name="SR band offered",
+                           mode="lines", legendgroup="band", showlegend=row == 1,
+                           line=dict(color=BLUE, width=2, shape="hvh"),
+                           hovertemplate=f"offered {direction}: %{{y:.2f}} MW<extra></extra>", **per_period))
+        traces.append(dict(type="bar", x=[KIND_LABELS[k] for k in kinds],
+                           y=[float(values.sum() * dt_h) for values in sums.values()],
+                           marker=dict(color=[KIND_COLORS[k] for k in kinds]), showlegend=False,
+                           name=f"{direction} total", hovertemplate="%{x}: %{y:.1f} MWh<extra></extra>", **totals))
+    grid = subplots_layout(2, 2, column_widths=(0.78, 0.22), shared_xaxes="columns", horizontal_spacing=0.09,
+                           vertical_spacing=0.08)
+    layout = _plan_layout(result, "Reserve by unit kind", None, height=FIGURE_HEIGHT + 160, grid=grid,
+                          clock_axes=("xaxis", "xaxis3"), x_title=False)
+    _titled(layout, yaxis="Up reserve [MW]", yaxis2="Up, day total [MWh]", yaxis3="Down reserve [MW]",
+            yaxis4="Down, day total [MWh]", xaxis3=CLOCK_TITLE)
+    layout.update(barmode="stack", hovermode="closest", margin={**layout["margin"], "r": TOTALS_MARGIN_R})
+    return go.Figure(data=traces, layout=layout)
 
 
 # ----------------------------------------------------------------------------- forecast bands
@@ -205,42 +198,41 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
     color = SERIES_COLORS[0] if src.is_price else KIND_COLORS[src.unit_kind]
     names = (("Upper percentile", "Lower percentile", "Median") if method == "climatology" else
              ("Upper bound: forecast + error", "Lower bound: forecast + error", "Forecast + median error"))
-    fig = go.Figure()
-    fig.add_scatter(x=x, y=hi, name=f"{names[0]} ({_percent(q.q_hi)})", mode="lines",
-                    line=dict(color=color, width=1), hovertemplate=f"%{{y:.2f}} {unit}")
-    fig.add_scatter(x=x, y=lo, name=f"{names[1]} ({_percent(q.q_lo)})", mode="lines",
-                    line=dict(color=color, width=1), fill="tonexty", fillcolor=rgba(color, 0.22),
-                    hovertemplate=f"%{{y:.2f}} {unit}")
-    fig.add_scatter(x=x, y=mid, name=names[2], mode="lines", line=dict(color=color, width=3, dash="dash"),
-                    hovertemplate=f"%{{y:.2f}} {unit}")
+    line = dict(type="scatter", x=x, mode="lines", hovertemplate=f"%{{y:.2f}} {unit}")
+    traces = [
+        {**line, "y": hi, "name": f"{names[0]} ({_percent(q.q_hi)})", "line": dict(color=color, width=1)},
+        {**line, "y": lo, "name": f"{names[1]} ({_percent(q.q_lo)})", "line": dict(color=color, width=1),
+         "fill": "tonexty", "fillcolor": rgba(color, 0.22)},
+        {**line, "y": mid, "name": names[2], "line": dict(color=color, width=3, dash="dash")},
+    ]
     if compare is not None:
         label, other_lo, other_hi = compare
-        for name, values in ((f"{label}: upper", other_hi), (f"{label}: lower", other_lo)):
-            fig.add_scatter(x=x, y=np.asarray(values, float), name=name, mode="lines",
-                            line=dict(color=GREY, width=2, dash="dot"), hovertemplate=f"%{{y:.2f}} {unit}")
+        traces += [{**line, "y": np.asarray(values, float), "name": name, "line": dict(color=GREY, width=2, dash="dot")}
+                   for name, values in ((f"{label}: upper", other_hi), (f"{label}: lower", other_lo))]
     if realized is not None:
-        fig.add_scatter(x=x, y=np.asarray(realized, float), name="Realized", mode="lines+markers",
-                        line=dict(color=PURPLE if color == ORANGE else ORANGE, width=2), marker=dict(size=5),
-                        hovertemplate=f"realized %{{y:.2f}} {unit}")
+        traces.append({**line, "y": np.asarray(realized, float), "name": "Realized", "mode": "lines+markers",
+                       "line": dict(color=PURPLE if color == ORANGE else ORANGE, width=2), "marker": dict(size=5),
+                       "hovertemplate": f"realized %{{y:.2f}} {unit}"})
+    shapes = []
     if chi is not None:
         chi = np.asarray(chi, dtype=float)
         if len(chi) != problem.nt:
             raise ValueError(f"chi has {len(chi)} values for {problem.nt} periods")
         adverse = np.where(chi < 0, hi, hi if src.kind == "consumption" else lo)
         marked = np.flatnonzero(chi != 0)
-        for t in marked:
-            fig.add_vrect(x0=t - 0.5, x1=t + 0.5, fillcolor=CHI_SHADE, line_width=0, layer="below")
+        shapes = [dict(type="rect", xref="x", yref="y domain", x0=t - 0.5, x1=t + 0.5, y0=0, y1=1,
+                       fillcolor=CHI_SHADE, line=dict(width=0), layer="below") for t in marked]
         if not src.is_price:
-            bound = np.where(chi != 0, adverse, src.nominal)
-            fig.add_scatter(x=x, y=bound, name="Bound the plan respects", mode="lines",
-                            line=dict(color=VERMILION, width=2, shape="hvh"), hovertemplate=f"%{{y:.2f}} {unit}")
-        fig.add_scatter(x=[x[t] for t in marked], y=adverse[marked], name=f"Deviates (χ = 1) in {len(marked)} periods",
-                        mode="markers", marker=dict(color=VERMILION, size=11, symbol="x"),
-                        hovertemplate=f"deviates to %{{y:.2f}} {unit}")
+            traces.append({**line, "y": np.where(chi != 0, adverse, src.nominal), "name": "Bound the plan respects",
+                           "line": dict(color=VERMILION, width=2, shape="hvh")})
+        traces.append(dict(type="scatter", x=[x[t] for t in marked], y=adverse[marked],
+                           name=f"Deviates (χ = 1) in {len(marked)} periods", mode="markers",
+                           marker=dict(color=VERMILION, size=11, symbol="x"),
+                           hovertemplate=f"deviates to %{{y:.2f}} {unit}"))
     title = SOURCE_TITLES[source] if src.is_price else f"{source} ({KIND_LABELS[src.unit_kind].lower()})"
     kind_of_band = "forecast band" if method == "climatology" else "forecast-error band"
-    _style_axes(fig, problem.labels, problem.dt_h, f"{title}: {kind_of_band}", _source_axis(source, src, unit))
-    return fig
+    layout = _clock_layout(problem.labels, problem.dt_h, f"{title}: {kind_of_band}", _source_axis(source, src, unit))
+    return go.Figure(data=traces, layout={**layout, "shapes": shapes} if shapes else layout)
 
 
 def band_overlays(problem: Problem, source: str) -> dict:
@@ -310,15 +302,12 @@ def exposure_figure(result: Result, source: str, gamma: int) -> go.Figure:
     worst = _top_periods(exposure, gamma)
     protection = protection_exact(exposure, gamma)
     x = _labels(result)
-    fig = go.Figure()
-    fig.add_bar(x=x, y=np.where(worst, 0.0, exposure), name="Possible loss", marker_color=GREY,
-                hovertemplate="%{y:.1f} EUR")
-    fig.add_bar(x=x, y=np.where(worst, exposure, 0.0), name=f"Picked by the adversary (Γ = {gamma})",
-                marker_color=VERMILION, hovertemplate="%{y:.1f} EUR")
+    traces = [_bar(x, np.where(worst, 0.0, exposure), "Possible loss", GREY, "%{y:.1f} EUR"),
+              _bar(x, np.where(worst, exposure, 0.0), f"Picked by the adversary (Γ = {gamma})", VERMILION,
+                   "%{y:.1f} EUR")]
     title = f"{SOURCE_TITLES[source]}: loss per period, protection {protection:,.0f} EUR"
-    _style(fig, result, title, "Loss if the price moves adversely [EUR]")
-    fig.update_layout(barmode="stack")
-    return fig
+    layout = _plan_layout(result, title, "Loss if the price moves adversely [EUR]")
+    return go.Figure(data=traces, layout={**layout, "barmode": "stack"})
 
 
 def compare_trades_figure(results: Mapping[str, Result]) -> go.Figure:
@@ -332,19 +321,21 @@ def compare_trades_figure(results: Mapping[str, Result]) -> go.Figure:
         raise ValueError("no plans to compare")
     first = next(iter(plans.values()))
     rows = [row for row in COMPARE_ROWS if row[0] not in idle_trades(plans)]
-    fig = make_subplots(rows=len(rows), cols=1, shared_xaxes=True, vertical_spacing=0.06)
+    traces = []
     for i, (label, result) in enumerate(plans.items()):
         look = run_style(label, i)
-        for row, (column, axis, unit) in enumerate(rows, start=1):
-            fig.add_scatter(x=_labels(result), y=result.market[column].to_numpy(float), name=label,
-                            legendgroup=label, showlegend=row == 1, mode="lines+markers",
-                            line=dict(color=look["color"], width=2, shape="hvh", dash=look["dash"]),
-                            marker=dict(size=6, symbol=look["symbol"]),
-                            hovertemplate=f"{label}: %{{y:.2f}} {unit}<extra></extra>", row=row, col=1)
-            fig.update_yaxes(title_text=axis, row=row, col=1)
-    _style(fig, first, "Trades of each plan", None, height=FIGURE_HEIGHT + 95 * len(rows), x_title=False)
-    fig.update_xaxes(title_text=CLOCK_TITLE, row=len(rows), col=1)
-    return fig
+        traces += [dict(type="scatter", x=_labels(result), y=result.market[column].to_numpy(float), name=label,
+                        legendgroup=label, showlegend=row == 1, mode="lines+markers",
+                        line=dict(color=look["color"], width=2, shape="hvh", dash=look["dash"]),
+                        marker=dict(size=6, symbol=look["symbol"]),
+                        hovertemplate=f"{label}: %{{y:.2f}} {unit}<extra></extra>", **cell_axes(row, 1))
+                   for row, (column, _, unit) in enumerate(rows, start=1)]
+    grid = subplots_layout(len(rows), 1, shared_xaxes=True, vertical_spacing=0.06)
+    layout = _plan_layout(first, "Trades of each plan", None, height=FIGURE_HEIGHT + 95 * len(rows), grid=grid,
+                          x_title=False)
+    _titled(layout, **{_axis_name(cell_axes(row, 1)["yaxis"]): axis for row, (_, axis, _) in enumerate(rows, start=1)})
+    _titled(layout, **{_axis_name(cell_axes(len(rows), 1)["xaxis"]): CLOCK_TITLE})
+    return go.Figure(data=traces, layout=layout)
 
 
 def idle_trades(results: Mapping[str, Result]) -> list[str]:
@@ -358,44 +349,38 @@ def robustness_figure(points: pd.DataFrame) -> go.Figure:
 
     ``points`` has columns ``gamma``, ``cost_keur`` and ``protection_keur``.
     """
-    fig = go.Figure()
-    fig.add_scatter(x=points["gamma"], y=points["cost_keur"], name="Cost (−profit)", mode="lines+markers",
-                    line=dict(color=VERMILION, width=3), hovertemplate="Γ = %{x}: %{y:.1f} kEUR")
-    fig.add_scatter(x=points["gamma"], y=points["protection_keur"], name="Price protection in the cost",
-                    mode="lines+markers", line=dict(color=BLUE, width=2, dash="dash"),
-                    hovertemplate="Γ = %{x}: %{y:.1f} kEUR")
-    fig.update_layout(title="Price of robustness", height=FIGURE_HEIGHT, paper_bgcolor=TRANSPARENT,
-                      plot_bgcolor=TRANSPARENT, hovermode="x unified", legend=_legend())
-    fig.update_xaxes(title_text="Budget Γ of every source [periods]", gridcolor=GRID_COLOR, dtick=2)
-    fig.update_yaxes(title_text="Cost [kEUR]", gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
-    return fig
+    line = dict(type="scatter", x=points["gamma"], mode="lines+markers", hovertemplate="Γ = %{x}: %{y:.1f} kEUR")
+    traces = [{**line, "y": points["cost_keur"], "name": "Cost (−profit)", "line": dict(color=VERMILION, width=3)},
+              {**line, "y": points["protection_keur"], "name": "Price protection in the cost",
+               "line": dict(color=BLUE, width=2, dash="dash")}]
+    layout = dict(title=dict(text="Price of robustness"), height=FIGURE_HEIGHT, paper_bgcolor=TRANSPARENT,
+                  plot_bgcolor=TRANSPARENT, hovermode="x unified", legend=_legend(),
+                  xaxis=dict(title=dict(text="Budget Γ of every source [periods]"), gridcolor=GRID_COLOR, dtick=2),
+                  yaxis=dict(title=dict(text="Cost [kEUR]"), gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR))
+    return go.Figure(data=traces, layout=layout)
 
 
 def curve_figure(breakpoints: Sequence[Sequence[float]], p_el_max_mw: float) -> go.Figure:
     """Power-block conversion: electrical output [MW] against thermal input [MW_th]."""
     inputs = np.array([p for p, _ in breakpoints], dtype=float)
     output = np.array([p * eta for p, eta in breakpoints], dtype=float)
-    fig = go.Figure()
-    fig.add_scatter(x=inputs, y=output, name="Output at the breakpoints", mode="lines+markers",
-                    line=dict(color=VERMILION, width=3),
-                    hovertemplate="%{x:.2f} MW_th → %{y:.2f} MW<extra></extra>")
-    fig.add_scatter(x=[inputs[0], inputs[-1]], y=[p_el_max_mw, p_el_max_mw], name="Turbine nameplate",
-                    mode="lines", line=dict(color=GREY, dash="dash"),
-                    hovertemplate="%{y:.1f} MW<extra></extra>")
-    fig.update_layout(title="Power-block conversion curve", height=FIGURE_HEIGHT - 80, legend=_legend(),
-                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT)
-    fig.update_xaxes(title_text="Thermal input [MW_th]", gridcolor=GRID_COLOR)
-    fig.update_yaxes(title_text="Electrical output [MW]", gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
-    return fig
+    traces = [dict(type="scatter", x=inputs, y=output, name="Output at the breakpoints", mode="lines+markers",
+                   line=dict(color=VERMILION, width=3), hovertemplate="%{x:.2f} MW_th → %{y:.2f} MW<extra></extra>"),
+              dict(type="scatter", x=[inputs[0], inputs[-1]], y=[p_el_max_mw, p_el_max_mw], name="Turbine nameplate",
+                   mode="lines", line=dict(color=GREY, dash="dash"), hovertemplate="%{y:.1f} MW<extra></extra>")]
+    layout = dict(title=dict(text="Power-block conversion curve"), height=FIGURE_HEIGHT - 80, legend=_legend(),
+                  paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT,
+                  xaxis=dict(title=dict(text="Thermal input [MW_th]"), gridcolor=GRID_COLOR),
+                  yaxis=dict(title=dict(text="Electrical output [MW]"), gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR))
+    return go.Figure(data=traces, layout=layout)
 
 
 def tariff_figure(problem: Problem) -> go.Figure:
     """HPA tariff per period [EUR/MWh_th]."""
-    fig = go.Figure()
-    fig.add_scatter(x=problem.labels, y=problem.tariff_hpa, name="HPA tariff", mode="lines+markers",
-                    line=dict(color=GREEN, width=3, shape="hvh"), hovertemplate="%{y:.1f} EUR/MWh_th")
-    _style_axes(fig, problem.labels, problem.dt_h, "Heat purchase agreement tariff", "Tariff [EUR/MWh_th]")
-    return fig
+    tariff = dict(type="scatter", x=problem.labels, y=problem.tariff_hpa, name="HPA tariff", mode="lines+markers",
+                  line=dict(color=GREEN, width=3, shape="hvh"), hovertemplate="%{y:.1f} EUR/MWh_th")
+    layout = _clock_layout(problem.labels, problem.dt_h, "Heat purchase agreement tariff", "Tariff [EUR/MWh_th]")
+    return go.Figure(data=[tariff], layout=layout)
 
 
 def thin_clock_ticks(fig: go.Figure, hours: int) -> go.Figure:
@@ -475,34 +460,121 @@ def _percent(q: float) -> str:
 
 
 def _legend() -> dict:
-    return dict(orientation="h", yanchor="bottom", y=1.02, xanchor="left", x=0, title_text="", traceorder="normal")
+    return dict(orientation="h", yanchor="bottom", y=1.02, xanchor="left", x=0, title=dict(text=""),
+                traceorder="normal")
 
 
-def _style(fig: go.Figure, result: Result, title: str, y_title: str | None, height: int = FIGURE_HEIGHT,
-           **axes) -> None:
-    _style_axes(fig, _labels(result), result.problem.dt_h, title, y_title, height, **axes)
+def _bar(x, y, name: str, color: str, hover: str) -> dict:
+    """A bar trace of one colour."""
+    return dict(type="bar", x=x, y=y, name=name, marker=dict(color=color), hovertemplate=hover)
 
 
-def _style_axes(fig: go.Figure, labels: list[str], dt_h: float, title: str, y_title: str | None,
-                height: int = FIGURE_HEIGHT, clock_col: int | None = None, x_title: bool = True) -> None:
-    """Shared look: clock-hour categories on x, unit-labelled y, transparent background.
+def _plan_layout(result: Result, title: str, y_title: str | None, **options) -> dict:
+    """:func:`_clock_layout` on the delivery day of ``result``."""
+    return _clock_layout(_labels(result), result.problem.dt_h, title, y_title, **options)
 
-    ``clock_col`` limits the clock axis to one subplot column; ``x_title=False`` leaves
-    the x titles to the caller (subplots title only their bottom axis).
+
+def _clock_layout(labels: list[str], dt_h: float, title: str, y_title: str | None, height: int = FIGURE_HEIGHT,
+                  grid: dict | None = None, clock_axes: Sequence[str] | None = None, x_title: bool = True) -> dict:
+    """Shared look, as a layout: clock-hour categories on x, unit-labelled y, transparent
+    background; on one plot, or on the subplots of ``grid`` (:func:`subplots_layout`).
+
+    ``clock_axes`` limits the clock to some x axes (``"xaxis3"``; all by default);
+    ``x_title=False`` leaves the x titles to the caller (subplots title only their bottom axis).
     """
     step = max(1, int(round(HOURS_PER_TICK / dt_h)))
     ticks = labels[::step]
-    fig.update_layout(title=dict(text=title, y=0.98, yanchor="top"), height=height, hovermode="x unified",
-                      paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, legend=_legend(),
-                      margin=FIGURE_MARGIN)
-    fig.update_xaxes(type="category", categoryorder="array", categoryarray=labels, tickmode="array",
-                     tickvals=ticks, ticktext=ticks, tickangle=-45, col=clock_col)
-    fig.update_xaxes(gridcolor=GRID_COLOR)
-    if x_title:
-        fig.update_xaxes(title_text=CLOCK_TITLE)
-    fig.update_yaxes(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
-    if y_title:
-        fig.update_yaxes(title_text=y_title)
+    clock = dict(type="category", categoryorder="array", categoryarray=labels, tickmode="array", tickvals=ticks,
+                 ticktext=ticks, tickangle=-45)
+    layout = grid if grid is not None else {"xaxis": {}, "yaxis": {}}
+    for name, axis in layout.items():
+        if name.startswith("xaxis"):
+            axis.update(clock if clock_axes is None or name in clock_axes else {}, gridcolor=GRID_COLOR)
+            if x_title:
+                axis["title"] = {"text": CLOCK_TITLE}
+        elif name.startswith("yaxis"):
+            axis.update(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
+            if y_title:
+                axis["title"] = {"text": y_title}
+    layout.update(title=dict(text=title, y=0.98, yanchor="top"), height=height, hovermode="x unified",
+                  paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT, legend=_legend(), margin=dict(FIGURE_MARGIN))
+    return layout
+
+
+def subplots_layout(rows: int, cols: int, *, horizontal_spacing: float = 0.0, vertical_spacing: float = 0.0,
+                    column_widths: Sequence[float] | None = None, row_heights: Sequence[float] | None = None,
+                    shared_xaxes: bool | str = False, shared_yaxes: bool = False,
+                    subplot_titles: Sequence[str] | None = None) -> dict:
+    """The layout of a grid of subplots, as plain data for a figure built from dicts: the
+    axis domains and anchors, shared axes and subplot titles that Plotly's ``make_subplots``
+    gives for the same arguments (its arithmetic; ``tests/test_plots.py`` checks they agree).
+
+    ``make_subplots`` builds and checks a whole figure for it, 40 ms a grid the first time.
+    Shared x axes follow the bottom plot of their column and lose their tick labels
+    (``shared_xaxes`` is ``True`` or ``"columns"``); shared y axes follow the first plot of
+    their row.
+    """
+    widths = _spans(cols, horizontal_spacing, column_widths)
+    heights = _spans(rows, vertical_spacing, row_heights)[::-1]  # from the bottom row up
+    layout: dict = {}
+    titles = []
+    for row in range(rows):
+        from_bottom = rows - 1 - row
+        y = sum(heights[:from_bottom]) + from_bottom * vertical_spacing
+        y_domain = [y, min(y + heights[from_bottom], 1.0)]
+        for col in range(cols):
+            x = sum(widths[:col]) + col * horizontal_spacing
+            x_domain = [x, x + widths[col]]
+            axes = cell_axes(row + 1, col + 1, cols)
+            layout[_axis_name(axes["xaxis"])] = {"anchor": axes["yaxis"], "domain": x_domain}
+            layout[_axis_name(axes["yaxis"])] = {"anchor": axes["xaxis"], "domain": list(y_domain)}
+            title = subplot_titles[row * cols + col] if subplot_titles else None
+            if title:
+                titles.append({"font": {"size": SUBPLOT_TITLE_SIZE}, "showarrow": False, "text": title,
+                               "x": sum(x_domain) / 2.0, "xanchor": "center", "xref": "paper",
+                               "y": y_domain[1], "yanchor": "bottom", "yref": "paper"})
+    for row in range(1, rows if shared_xaxes else 1):
+        for col in range(1, cols + 1):
+            _share(layout[_axis_name(cell_axes(row, col, cols)["xaxis"])], cell_axes(rows, col, cols)["xaxis"])
+    for row in range(1, rows + 1 if shared_yaxes else 1):
+        for col in range(2, cols + 1):
+            _share(layout[_axis_name(cell_axes(row, col, cols)["yaxis"])], cell_axes(row, 1, cols)["yaxis"])
+    if titles:
+        layout["annotations"] = titles
+    return layout
+
+
+def _spans(count: int, spacing: float, weights: Sequence[float] | None) -> list[float]:
+    """Widths (or heights) of ``count`` subplots between ``spacing`` gaps, in proportion to
+    ``weights`` (equal without), as ``make_subplots`` computes them."""
+    if weights is None:
+        return [(1.0 - spacing * (count - 1)) / count] * count
+    total = float(sum(weights))
+    return [(1.0 - spacing * (count - 1)) * (w / total) for w in weights]
+
+
+def _share(axis: dict, leader: str) -> None:
+    """Make ``axis`` follow the axis ``leader`` (``"x3"``), without tick labels of its own."""
+    axis.update(matches=leader, showticklabels=False)
+
+
+def cell_axes(row: int, col: int, cols: int = 1) -> dict:
+    """The axes of a trace in the subplot at ``row``, ``col`` of a grid ``cols`` wide (as
+    ``make_subplots`` numbers them: row by row, ``x`` and ``y`` first)."""
+    n = (row - 1) * cols + col
+    suffix = "" if n == 1 else str(n)
+    return {"xaxis": f"x{suffix}", "yaxis": f"y{suffix}"}
+
+
+def _axis_name(reference: str) -> str:
+    """The layout's name of the axis a trace refers to: ``"y2"`` → ``"yaxis2"``."""
+    return f"{reference[0]}axis{reference[1:]}"
+
+
+def _titled(layout: dict, **titles: str) -> None:
+    """Title the axes of ``layout`` named in ``titles`` (``yaxis2="Power [MW_th]"``)."""
+    for axis, text in titles.items():
+        layout[axis]["title"] = {"text": text}
 
 
 def _shade(color: str, i: int, n: int) -> str:
