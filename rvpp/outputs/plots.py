@@ -407,17 +407,18 @@ def _labels(result: Result) -> list[str]:
 
 
 def _by_unit(table: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
+    """Each unit's rows in period order, the units in the table's order (none for an empty
+    table, which may lack the columns: a case without CSP plants)."""
     if table.empty:
         return []
-    return [(name, table[table["unit"] == name].sort_values("t")) for name in dict.fromkeys(table["unit"])]
+    return [(name, part.sort_values("t")) for name, part in table.groupby("unit", sort=False)]
 
 
 def _kind_sum(result: Result, kind: str, column: str) -> np.ndarray:
+    """``column`` summed over the units of ``kind``, per period (zero without such units)."""
     units = result.units
     part = units[units["kind"] == kind]
-    if part.empty:
-        return np.zeros(result.problem.nt)
-    return part.groupby("t")[column].sum().reindex(range(1, result.problem.nt + 1), fill_value=0.0).to_numpy(float)
+    return np.bincount(part["t"].to_numpy(int) - 1, weights=part[column].to_numpy(float), minlength=result.problem.nt)
 
 
 def _top_periods(exposure: np.ndarray, gamma: int) -> np.ndarray:
