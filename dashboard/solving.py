@@ -292,8 +292,9 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
             found[job.key] = job.result
         if len(cases) == 1:
             result = jobs[0].result
-            state = "complete" if result.has_plan else "error"
-            with st.status(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", state=state, expanded=False):
+            # An expander, not st.status: st.status sleeps 50 ms on creation, before the plan is drawn.
+            icon = ":material/check:" if result.has_plan else ":material/error:"
+            with st.expander(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", icon=icon):
                 st.caption(f"The solver's answer came back at {answered(jobs[0])} (server clock); what follows "
                            "is drawing.")
     return [found[case_key(c)] for c in cases]
