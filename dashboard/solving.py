@@ -93,11 +93,17 @@ class Job:
         return (self.finished or time.perf_counter()) - self.started
 
     def run(self, solver: "Solver") -> None:
-        """In a thread of the server: wait for a slot, solve in a new process, keep the outcome."""
+        """In a thread of the server: wait for a slot, solve in a new process, keep the outcome.
+
+        The outcome is handed over before the solver process has exited: the page draws the plan
+        while the process ends (5-15 ms), and the slot is freed once it has.
+        """
         with solver.slots:
             if not self.cancelled:
                 self._solve()
-        solver.finish(self)
+            solver.finish(self)
+            if self.process is not None:
+                self.process.join(JOIN_S)
 
     def _solve(self) -> None:
         receive, send = CONTEXT.Pipe(duplex=False)
@@ -124,11 +130,11 @@ class Job:
                     self.problems = payload if kind == "refused" else [f"the solver failed: {payload}"]
                 break
         except EOFError:  # the process ended without an answer: killed by Cancel, or out of memory
+            self.process.join(JOIN_S)  # gone before the job says it is done
             if not self.cancelled:
                 self.problems = ["the solver process stopped unexpectedly (out of memory?); solve again"]
         finally:
             receive.close()
-            self.process.join(JOIN_S)
 
 
 class Solver:
