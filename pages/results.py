@@ -67,6 +67,8 @@ if not result.has_plan:
     st.stop()
 
 widgets.kpi_cards(result)
+# Every figure before the first is drawn: the browser draws each chart twice (Streamlit applies its theme
+# once a chart is mounted), and the second drawing of a chart sent alone comes before the next chart's first.
 figures = plan_figures(result)
 st.plotly_chart(figures["economics"], key="results_economics")
 
