@@ -223,8 +223,12 @@ def gamma_slider(page, title: str, chart_title: str, timings: dict) -> list[floa
         button.click()
         page.locator(".gtitle", has_text="plan shown: Γ =").first.wait_for()
         timings["gamma_sweep_warmup_s"] = round(time.perf_counter() - started, 2)
-    gamma = int(thumb.input_value())
-    page.locator(".gtitle", has_text=chart_title.format(gamma=gamma)).first.wait_for()
+    # The Γ on show, as the chart's title states it: the slider's thumb, read while the page is
+    # still being redrawn after the sweep, once gave 0 for a plan shown at 5.
+    shown = page.locator(".gtitle", has_text=chart_title.split("{")[0]).first
+    shown.wait_for()
+    wait_idle(page)
+    gamma = int(re.search(r"Γ = (\d+)", shown.text_content()).group(1))
     page.evaluate(WATCH)
     moves = []
     for i in range(GAMMA_MOVES):
