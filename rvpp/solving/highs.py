@@ -1,9 +1,9 @@
 """Run HiGHS on a Pyomo model through its matrix and report the outcome as a :class:`SolveOutcome`.
 
-The model is compiled once to a sparse matrix with Pyomo's linear standard-form
-compiler (``compile_model``) and handed to highspy directly, which costs a fraction of
-Pyomo's own solver interface (measured on the paper case: 0.03 s instead of 0.2 s for
-a 24-period model, 0.07 s instead of 0.44 s for 96 periods). A :class:`HighsModel`
+The model is compiled once to a sparse matrix (``compile_model``, by
+:func:`rvpp.solving.linear.standard_form`) and handed to highspy directly, which costs a
+fraction of Pyomo's own solver interface (measured on the paper case: 0.03 s instead of
+0.2 s for a 24-period model, 0.07 s instead of 0.44 s for 96 periods). A :class:`HighsModel`
 keeps the compiled matrix and the HiGHS object, so a caller that changes data in the
 Pyomo model (mutable parameters, variable bounds) recompiles and re-solves without
 rebuilding the model, optionally from a MIP start.
@@ -28,6 +28,7 @@ from pyomo.common.errors import InfeasibleConstraintException
 from pyomo.core.base.var import VarData
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
+from .linear import StandardForm, TrivialInfeasibility, Unsupported, standard_form
 from .outcome import Outcome, SolveOutcome
 
 # HiGHS options that are not exposed as settings, chosen by measurement (docs/performance.md).
@@ -91,34 +92,32 @@ class CompiledModel:
         return bool(self.integer.any())
 
 
-class TrivialInfeasibility(Exception):
-    """A constraint without variables that no value can satisfy."""
-
-
 def compile_model(m: pyo.Block) -> CompiledModel:
-    """The active objective and constraints of ``m`` as a ``HighsLp`` (fixed variables become constants)."""
+    """The active objective and constraints of ``m`` as a ``HighsLp`` (fixed variables become constants).
+
+    Compiled by :func:`rvpp.solving.linear.standard_form`; a model with an expression it
+    does not read goes through Pyomo's own compiler, which gives the same matrix.
+    """
     try:
-        with _compile_lock:
-            info = LinearStandardFormCompiler().write(m, mixed_form=True, set_sense=None)
-    except InfeasibleConstraintException as exc:
-        raise TrivialInfeasibility(str(exc)) from exc
-    columns = info.columns
+        form = standard_form(m)
+    except Unsupported:
+        form = _pyomo_standard_form(m)
+    columns = form.columns
     n = len(columns)
-    a = info.A.tocsc() if n else info.A
+    a = form.a
     bounds = np.array([v.bounds for v in columns], dtype=float).reshape(n, 2)  # None (no bound) becomes NaN
     lower = np.where(np.isnan(bounds[:, 0]), -INF, bounds[:, 0])
     upper = np.where(np.isnan(bounds[:, 1]), INF, bounds[:, 1])
     integer = np.array([v.is_integer() for v in columns], dtype=bool)
-    rhs = np.asarray(info.rhs, dtype=float)
-    sense = np.array([op for _, op in info.rows], dtype=int)
+    rhs, sense = form.rhs, form.sense
     row_lower = np.where(sense == 1, -INF, rhs)
     row_upper = np.where(sense == -1, INF, rhs)
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = n, len(rhs)
-    lp.col_cost_ = np.asarray(info.c.toarray()).ravel() if n else np.zeros(0)
+    lp.col_cost_ = form.cost if n else np.zeros(0)
     lp.col_lower_, lp.col_upper_ = lower, upper
     lp.row_lower_, lp.row_upper_ = row_lower, row_upper
-    lp.offset_ = float(info.c_offset[0]) if len(info.c_offset) else 0.0
+    lp.offset_ = form.offset
     lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
     lp.a_matrix_.num_col_, lp.a_matrix_.num_row_ = n, len(rhs)
     lp.a_matrix_.start_ = a.indptr if n else np.zeros(1, dtype=np.int32)
@@ -126,9 +125,23 @@ def compile_model(m: pyo.Block) -> CompiledModel:
     if integer.any():
         lp.integrality_ = [highspy.HighsVarType.kInteger if i else highspy.HighsVarType.kContinuous
                            for i in integer]
-    maximize = bool(info.objectives) and info.objectives[0].sense == pyo.maximize
-    lp.sense_ = highspy.ObjSense.kMaximize if maximize else highspy.ObjSense.kMinimize
+    lp.sense_ = highspy.ObjSense.kMaximize if form.maximize else highspy.ObjSense.kMinimize
     return CompiledModel(columns=list(columns), lp=lp, integer=integer)
+
+
+def _pyomo_standard_form(m: pyo.Block) -> StandardForm:
+    """:func:`standard_form` by Pyomo's linear standard-form compiler (``mixed_form``)."""
+    try:
+        with _compile_lock:
+            info = LinearStandardFormCompiler().write(m, mixed_form=True, set_sense=None)
+    except InfeasibleConstraintException as exc:
+        raise TrivialInfeasibility(str(exc)) from exc
+    n = len(info.columns)
+    return StandardForm(columns=list(info.columns), a=info.A.tocsc() if n else info.A,
+                        rhs=np.asarray(info.rhs, dtype=float), sense=np.array([op for _, op in info.rows], dtype=int),
+                        cost=np.asarray(info.c.toarray()).ravel() if n else np.zeros(0),
+                        offset=float(info.c_offset[0]) if len(info.c_offset) else 0.0,
+                        maximize=bool(info.objectives) and info.objectives[0].sense == pyo.maximize)
 
 
 class HighsModel:
