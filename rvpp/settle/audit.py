@@ -90,25 +90,37 @@ class AuditDay:
         return int(round(hours / self.dt_h))
 
 
-def band(case: Case, column: str, scale: float, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def band(case: Case, column: str, scale: float, hours: np.ndarray,
+         window: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(lo, mid, hi)`` of one history column per period, the period's clock hour in ``hours``.
 
     MODEL_SPEC §6 (the paper's climatology): over the ``window_days`` whole local days
     before the delivery day, per local clock hour, the ``q_lo`` percentile, the median and
     the ``q_hi`` percentile (numpy's linear interpolation) of ``scale`` x the column. Other
     ways to draw a band (e.g. from a point forecast and its past errors) belong here.
+    ``window``: :func:`climatology_window` of the case, when the caller has it already.
     """
-    frame = case.history.frame
-    local = frame.index.tz_convert(case.timezone)
+    rows, clock = window if window is not None else climatology_window(case)
+    values = case.history.frame[column].to_numpy(float)[rows] * scale
+    quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
+    wanted = sorted(set(hours.tolist()))
+    groups = [values[clock == h] for h in wanted]
+    if len({len(group) for group in groups}) == 1:  # one call for all hours (as many days in each)
+        per_hour = dict(zip(wanted, np.quantile(np.column_stack(groups), quantiles, axis=0).T))
+    else:
+        per_hour = {h: np.quantile(group, quantiles) for h, group in zip(wanted, groups)}
+    lo, mid, hi = np.array([per_hour[h] for h in hours.tolist()]).T
+    return lo, mid, hi
+
+
+def climatology_window(case: Case) -> tuple[np.ndarray, np.ndarray]:
+    """The history rows of the ``window_days`` whole local days before the delivery day (a mask)
+    and their local clock hours."""
+    local = case.history.frame.index.tz_convert(case.timezone)
     days = np.array(local.date)
     first = case.delivery_date - dt.timedelta(days=case.uncertainty.window_days)
-    window = (days >= first) & (days < case.delivery_date)
-    values = frame[column].to_numpy(float)[window] * scale
-    clock = np.asarray(local.hour)[window]
-    quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
-    per_hour = {h: np.quantile(values[clock == h], quantiles) for h in set(hours)}
-    lo, mid, hi = np.array([per_hour[h] for h in hours]).T
-    return lo, mid, hi
+    rows = (days >= first) & (days < case.delivery_date)
+    return rows, np.asarray(local.hour)[rows]
 
 
 def forecast_band(case: Case, column: str, scale: float, forecast: str | None,
@@ -185,12 +197,16 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
     hours, nt = np.asarray(periods.hour), len(periods)
     gammas = budgets(case, nt)
 
+    window = None
+
     def lo_mid_hi(name: str, column: str, scale: float, kind: str | None = None, forecast: str | None = None):
+        nonlocal window
         if bands is not None:
             return tuple(bands[(name, stat)].to_numpy(float) for stat in ("lo", "mid", "hi"))
         if case.uncertainty.band_method(name, kind) == "forecast":
             return forecast_band(case, column, scale, forecast, periods)
-        return band(case, column, scale, hours)
+        window = window or climatology_window(case)
+        return band(case, column, scale, hours, window)
 
     sources = {}
     lo, mid, hi = lo_mid_hi("price_da", "price_da", 1.0)
