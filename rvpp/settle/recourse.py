@@ -45,7 +45,7 @@ from ..model import add_units
 from ..model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
 from ..data.periods import delivery_periods, period_labels
 from ..solving.problem import Problem, Source, source_columns
-from ..solving.highs import HighsModel, run_highs
+from ..solving.highs import HighsModel, model_lifetime, run_highs
 from ..solving.outcome import Outcome
 from ..uncertainty.bands import realized_values
 
@@ -416,14 +416,16 @@ def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalti
     solution.
     """
     problem = realized_problem(case, real)
-    m = build_recourse_model([problem], penalties, bids)
-    outcome = run_highs(m, case.solver)
-    record = {"day": real.day.isoformat(), "fingerprint": real.fingerprint, "status": outcome.status,
-              "solve_s": outcome.seconds, "mip_gap": outcome.gap}
-    record.update(scenario_record(m.scenario[0], problem.dt_h, outcome.usable))
-    if with_end_state:
-        record["end_state"] = end_state(m.scenario[0], case, problem.dt_h) if outcome.usable else None
-        record["settled_csp"] = csp_dispatch(m.scenario[0], case) if outcome.usable else None
+    with model_lifetime():
+        m = build_recourse_model([problem], penalties, bids)
+        outcome = run_highs(m, case.solver)
+        record = {"day": real.day.isoformat(), "fingerprint": real.fingerprint, "status": outcome.status,
+                  "solve_s": outcome.seconds, "mip_gap": outcome.gap}
+        record.update(scenario_record(m.scenario[0], problem.dt_h, outcome.usable))
+        if with_end_state:
+            record["end_state"] = end_state(m.scenario[0], case, problem.dt_h) if outcome.usable else None
+            record["settled_csp"] = csp_dispatch(m.scenario[0], case) if outcome.usable else None
+        del m
     return record
 
 

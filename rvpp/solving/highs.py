@@ -15,9 +15,11 @@ and a finite bound.
 
 from __future__ import annotations
 
+import gc
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import highspy
@@ -25,6 +27,7 @@ import numpy as np
 import pyomo.environ as pyo
 from pyomo.common.collections import ComponentMap
 from pyomo.common.errors import InfeasibleConstraintException
+from pyomo.common.gc_manager import PauseGC
 from pyomo.core.base.var import VarData
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
@@ -250,6 +253,22 @@ class HighsModel:
             return
         for v, x in zip(self.compiled.columns, self.solution.tolist()):
             v.set_value(x, skip_validation=True)
+
+
+@contextmanager
+def model_lifetime() -> Iterator[None]:
+    """Around the life of a Pyomo model: the cyclic collector paused, the youngest generation
+    collected after.
+
+    A built model is cyclic garbage once its numbers are read (its rules close over it).
+    Collected young, it never reaches the oldest generation, whose full collections scan
+    the whole process (60-90 ms with a case's history loaded, about once every four
+    hourly solves); and the collector does not run over the model while it is built.
+    """
+    with PauseGC():
+        yield
+    if gc.isenabled():
+        gc.collect(0)
 
 
 def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True,

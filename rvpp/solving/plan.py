@@ -6,16 +6,13 @@
 
 from __future__ import annotations
 
-import gc
 import time
 from pathlib import Path
 from collections.abc import Callable
 
-from pyomo.common.gc_manager import PauseGC
-
 from ..data.case import Case
 from .diagnose import explain_infeasibility
-from .highs import HighsModel
+from .highs import HighsModel, model_lifetime
 from .outcome import Outcome, SolveOutcome
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
@@ -37,17 +34,11 @@ def solve(case: Case, progress: Progress | None = None) -> Result:
 def solve_problem(problem: Problem, progress: Progress | None = None, started: float | None = None) -> Result:
     """Solve an already prepared :class:`Problem`.
 
-    The Pyomo model is cyclic garbage once its plan tables are read. Python's cyclic
-    collector is paused while the model lives and its youngest generation is collected
-    afterwards, so the model is freed young instead of reaching the oldest generation,
-    whose full collections scan the whole process (60-90 ms with a case's history
-    loaded, about once every four hourly solves).
+    The Pyomo model lives inside :func:`~rvpp.solving.highs.model_lifetime` (the cyclic
+    collector paused, the model collected young).
     """
-    with PauseGC():
-        result = _solve_problem(problem, progress, started)
-    if gc.isenabled():
-        gc.collect(0)
-    return result
+    with model_lifetime():
+        return _solve_problem(problem, progress, started)
 
 
 def _solve_problem(problem: Problem, progress: Progress | None, started: float | None) -> Result:
