@@ -271,11 +271,11 @@ def model_lifetime() -> Iterator[None]:
         gc.collect(0)
 
 
-def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True,
-              start: Mapping[VarData, float] | None = None) -> SolveOutcome:
-    """Compile ``m``, run HiGHS once and load the incumbent if it is usable.
+def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True, start: Mapping[VarData, float] | None = None,
+              options: Mapping[str, object] | None = None) -> SolveOutcome:
+    """Compile ``m``, run HiGHS once (with extra HiGHS ``options``) and load the incumbent if it is usable.
 
     Safe to call from several threads, which solve side by side (HiGHS releases the
     interpreter lock while it runs).
     """
-    return HighsModel(m).solve(settings, start=start, load=load)
+    return HighsModel(m).solve(settings, start=start, load=load, options=options)
