@@ -10,6 +10,9 @@ ADDRESS ?= 127.0.0.1
 FOLDERS ?= 1
 
 BENCH ?= full
+# Days of the backtest benchmark: a year in full mode, four weeks in quick mode.
+BACKTEST_DAYS_full = 365
+BACKTEST_DAYS_quick = 28
 
 .PHONY: install axe run test bench bench-studies data reproduce clean
 
@@ -37,11 +40,11 @@ run: install
 test: install axe
 	$(BIN)/python -m pytest -n 2
 
-# Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes a few minutes.
+# Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes about ten minutes.
 bench: install
 	$(BIN)/python benchmarks/run.py --mode $(BENCH)
 	$(BIN)/python benchmarks/history.py
-	$(BIN)/python benchmarks/backtest.py
+	$(BIN)/python benchmarks/backtest.py --days $(BACKTEST_DAYS_$(BENCH))
 	$(BIN)/python benchmarks/dashboard.py
 
 bench-studies: install
