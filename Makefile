@@ -40,7 +40,7 @@ run: install
 test: install axe
 	$(BIN)/python -m pytest -n 2
 
-# Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes about ten minutes.
+# Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes under ten minutes.
 bench: install
 	$(BIN)/python benchmarks/run.py --mode $(BENCH)
 	$(BIN)/python benchmarks/history.py
