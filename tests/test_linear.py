@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pyomo.environ as pyo
 import pytest
+import scipy.sparse
 from pyomo.common.errors import InfeasibleConstraintException
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
@@ -117,7 +118,24 @@ def test_a_product_of_variables_is_left_to_pyomo():
         standard_form(m)
 
 
-def test_a_model_it_cannot_read_still_compiles_through_pyomo():
+def test_a_model_it_cannot_read_is_compiled_by_pyomo_instead():
+    """A fixed variable met first as a factor: Pyomo reads it as the number 2, the walker
+    refuses the product, and the model still compiles (through Pyomo)."""
+    m = _small()
+    m.k = pyo.Var()
+    m.k.fix(2.0)
+    m.scaled_by_k = pyo.Constraint(expr=m.k * m.x[2] <= 3)
+    with pytest.raises(Unsupported):
+        standard_form(m)
+    compiled = compile_model(m)
+    row = compiled.lp.num_row_ - 1
+    column = [id(v) for v in compiled.columns].index(id(m.x[2]))
+    a = scipy.sparse.csc_array((compiled.lp.a_matrix_.value_, compiled.lp.a_matrix_.index_,
+                                compiled.lp.a_matrix_.start_), shape=(compiled.lp.num_row_, compiled.lp.num_col_))
+    assert a[row, column] == 2.0 and compiled.lp.row_upper_[row] == 3.0
+
+
+def test_a_model_pyomo_cannot_read_either_is_refused_by_name():
     """A constraint on a variable squared: Pyomo's compiler refuses it by name either way."""
     m = _small()
     m.square = pyo.Constraint(expr=m.x[1] ** 2 <= 3)

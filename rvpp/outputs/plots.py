@@ -478,7 +478,8 @@ def _plan_layout(result: Result, title: str, y_title: str | None, **options) -> 
 def _clock_layout(labels: list[str], dt_h: float, title: str, y_title: str | None, height: int = FIGURE_HEIGHT,
                   grid: dict | None = None, clock_axes: Sequence[str] | None = None, x_title: bool = True) -> dict:
     """Shared look, as a layout: clock-hour categories on x, unit-labelled y, transparent
-    background; on one plot, or on the subplots of ``grid`` (:func:`subplots_layout`).
+    background; on one plot, or on the subplots of ``grid`` (:func:`subplots_layout`),
+    which is filled in and returned (pass a fresh one).
 
     ``clock_axes`` limits the clock to some x axes (``"xaxis3"``; all by default);
     ``x_title=False`` leaves the x titles to the caller (subplots title only their bottom axis).

@@ -428,7 +428,7 @@ def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalti
         if with_end_state:
             record["end_state"] = end_state(m.scenario[0], case, problem.dt_h) if outcome.usable else None
             record["settled_csp"] = csp_dispatch(m.scenario[0], case) if outcome.usable else None
-        del m
+        del m  # garbage from here: collected young as the block ends
     return record
 
 

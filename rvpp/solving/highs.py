@@ -117,7 +117,7 @@ def compile_model(m: pyo.Block) -> CompiledModel:
     row_upper = np.where(sense == -1, INF, rhs)
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = n, len(rhs)
-    lp.col_cost_ = form.cost if n else np.zeros(0)
+    lp.col_cost_ = form.cost
     lp.col_lower_, lp.col_upper_ = lower, upper
     lp.row_lower_, lp.row_upper_ = row_lower, row_upper
     lp.offset_ = form.offset
