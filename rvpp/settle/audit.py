@@ -91,16 +91,16 @@ class AuditDay:
 
 
 def band(case: Case, column: str, scale: float, hours: np.ndarray,
-         window: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+         window: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(lo, mid, hi)`` of one history column per period, the period's clock hour in ``hours``.
 
     MODEL_SPEC §6 (the paper's climatology): over the ``window_days`` whole local days
     before the delivery day, per local clock hour, the ``q_lo`` percentile, the median and
     the ``q_hi`` percentile (numpy's linear interpolation) of ``scale`` x the column. Other
     ways to draw a band (e.g. from a point forecast and its past errors) belong here.
-    ``window``: :func:`climatology_window` of the case, when the caller has it already.
+    ``window``: :func:`climatology_window` of the case (found once per day, shared by its sources).
     """
-    rows, clock = window if window is not None else climatology_window(case)
+    rows, clock = window
     values = case.history.frame[column].to_numpy(float)[rows] * scale
     quantiles = (case.uncertainty.q_lo, 0.5, case.uncertainty.q_hi)
     wanted = sorted(set(hours.tolist()))
@@ -205,7 +205,8 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
             return tuple(bands[(name, stat)].to_numpy(float) for stat in ("lo", "mid", "hi"))
         if case.uncertainty.band_method(name, kind) == "forecast":
             return forecast_band(case, column, scale, forecast, periods)
-        window = window or climatology_window(case)
+        if window is None:
+            window = climatology_window(case)
         return band(case, column, scale, hours, window)
 
     sources = {}
