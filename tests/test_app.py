@@ -219,7 +219,7 @@ def test_portfolio_adds_a_unit_and_switches_the_csp_off(paper_case, paper_solve)
     at.session_state["portfolio_wind_0"] = {
         "edited_rows": {}, "deleted_rows": [],
         "added_rows": [{"name": "WF3", "p_max_mw": 30.0, "ramp_up_mw_per_min": 15.0, "ramp_dn_mw_per_min": 25.0,
-                        "series": "WF2"}]}
+                        "series": "WF2", "scale_with_capacity": True}]}  # the column's default, as the browser sends it
     at.run()
     assert not errors(at)
     assert [u.name for u in case_of(at).wind] == ["WF1", "WF2", "WF3"]
