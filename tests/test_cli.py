@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import sys
 
+import highspy
 import openpyxl
 import pandas as pd
 import pytest
@@ -57,8 +58,15 @@ def test_solve_writes_every_export_with_the_public_columns(tmp_path, capsys):
     assert len(units) == 24 * 11 and set(units["kind"]) == {"wind", "pv", "csp", "ed", "td"}
     book = openpyxl.load_workbook(out / "plan.xlsx", read_only=True)
     assert book.sheetnames == ["summary", "market", "units", "csp", "flexibility"]
-    assert (out / "model.mps").read_text().startswith("*")
     assert audit_export(load_case(PAPER), out) == []
+    # Another reader of the MPS file (HiGHS's own parser, not rvpp's compiler) finds the same optimum.
+    highs = highspy.Highs()
+    highs.setOptionValue("output_flag", False)
+    highs.setOptionValue("mip_rel_gap", 1e-6)
+    assert highs.readModel(str(out / "model.mps")) == highspy.HighsStatus.kOk
+    highs.run()
+    assert highs.getModelStatus() == highspy.HighsModelStatus.kOptimal
+    assert highs.getInfo().objective_function_value == pytest.approx(summary["objective_eur"], rel=2e-4)
     assert "status optimal" in err
 
 
@@ -299,6 +307,26 @@ def test_a_failure_while_writing_leaves_the_earlier_plan_as_it_was(tmp_path, pap
         export.write_plan(paper_solve(strategy="pessimistic"), out)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan"]
+
+
+def test_a_failed_mps_write_leaves_the_earlier_file_as_it_was(tmp_path, monkeypatch):
+    from pyomo.core.base.block import BlockData
+
+    from rvpp.solving.plan import write_mps
+
+    target = tmp_path / "model.mps"
+    target.write_text("earlier model\n")
+
+    def broken(model, filename, **options):
+        with open(filename, "w") as half:
+            half.write("NAME half")
+        raise OSError(28, "No space left on device", filename)
+
+    monkeypatch.setattr(BlockData, "write", broken)
+    with pytest.raises(OSError):
+        write_mps(load_case(PAPER), target)
+    assert target.read_text() == "earlier model\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["model.mps"]
 
 
 def test_a_new_output_folder_appears_complete(tmp_path, paper_solve):

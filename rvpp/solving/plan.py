@@ -84,7 +84,15 @@ def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, prog
 
 
 def write_mps(case: Case, path) -> None:
-    """Write the MILP of ``case`` as an MPS file (readable names) for other solvers."""
+    """Write the MILP of ``case`` as an MPS file (readable names) for other solvers.
+
+    The file is written beside ``path`` and renamed into place, so ``path`` is never seen
+    half-written.
+    """
+    from ..outputs.export import replacing  # outputs build on solving, not the other way round
+
     problem = prepare(case)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    build_model(problem).write(str(path), format="mps", io_options={"symbolic_solver_labels": True})
+    model = build_model(problem)
+    with replacing(path) as temporary:
+        model.write(str(temporary), format="mps", io_options={"symbolic_solver_labels": True})
