@@ -98,6 +98,12 @@ BAD_INPUTS = {
     "minimum up time not a whole number of periods": (
         lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=2.5),
         'csp "CSP1": power_block.min_up_h=2.5 must be a multiple of dt_h=1'),
+    "a start-up shorter than one period": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(startup_duration_h=1e-300),
+        'csp "CSP1": power_block.startup_duration_h=1e-300 must be at least one period, dt_h=1'),
+    "a capacity beyond any plant": (
+        lambda d: unit(d, "wind", "WF1").update(p_max_mw=1e308),
+        'wind "WF1": p_max_mw=1e+308 must be <= 1e+06'),
     "unknown unit kind": (
         lambda d: d["units"].update(battery=[{"name": "B1"}]),
         'units: unknown unit kind "battery"'),

@@ -27,8 +27,12 @@ from .history import PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
 Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
-NonNegative = Annotated[float, Field(ge=0.0)]
-Positive = Annotated[float, Field(gt=0.0)]
+# No quantity of a case comes near 1e6 (a terawatt, a terawatt-hour, a million euros per
+# MWh, a hundred years in hours); a larger number is a typo, and it would wreck the
+# solver's numerics instead of being refused by name.
+MAX_QUANTITY = 1e6
+NonNegative = Annotated[float, Field(ge=0.0, le=MAX_QUANTITY)]
+Positive = Annotated[float, Field(gt=0.0, le=MAX_QUANTITY)]
 UnitName = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,39}$")]
 
 STRATEGIES = ("deterministic", "optimistic", "balanced", "pessimistic")
@@ -607,6 +611,11 @@ class Case(_Frozen):
                 if hours is not None and not _is_multiple(hours, self.dt_h):
                     problems.append(f'csp "{csp.name}": power_block.{field}={hours:g} must be a multiple of '
                                     f"dt_h={self.dt_h:g}")
+            duration = csp.power_block.startup_duration_h
+            if duration is not None and duration < self.dt_h and _is_multiple(duration, self.dt_h):
+                # rounds to no period at all: a start would draw no heat
+                problems.append(f'csp "{csp.name}": power_block.startup_duration_h={duration:g} must be at least '
+                                f"one period, dt_h={self.dt_h:g}")
         if problems:
             raise ValueError("\n".join(problems))
         return self
