@@ -15,7 +15,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .data.case import MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
+from .data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
 from .data.files import excerpt
 from .data.periods import ALLOWED_DT_H
 from .data.variants import describe
@@ -163,10 +163,10 @@ def _parser() -> argparse.ArgumentParser:
                             "the variant as printed, for teaching")
     solve.add_argument("--markets", type=_market_list, help="comma-separated subset of DAM,SRM,HPA (DAM always)")
     solve.add_argument("--no-csp", action="store_true", help="remove every CSP from the portfolio")
-    solve.add_argument("--hpa-flat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
+    solve.add_argument("--hpa-flat", type=Number(0, MAX_QUANTITY, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
                        help="flat HPA tariff for every hour")
     solve.add_argument("--dt", type=choice_of(ALLOWED_DT_H, "h"), help="period length in hours: 1, 0.5 or 0.25")
-    solve.add_argument("--time-limit", type=Number(0, low_open=True, unit="s"), metavar="S",
+    solve.add_argument("--time-limit", type=Number(0, MAX_QUANTITY, low_open=True, unit="s"), metavar="S",
                        help="solver time limit in seconds")
     solve.add_argument("--gap", type=Number(0, 1, high_open=True), help="relative MIP gap in [0, 1) (default 1e-4)")
     solve.add_argument("--threads", type=Number(0, MAX_THREADS, whole=True),

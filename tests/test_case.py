@@ -98,6 +98,9 @@ BAD_INPUTS = {
     "minimum up time not a whole number of periods": (
         lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=2.5),
         'csp "CSP1": power_block.min_up_h=2.5 must be a multiple of dt_h=1'),
+    "a delivery date no history can reach": (
+        lambda d: d.update(delivery_date="9999-12-31"),
+        "delivery_date=9999-12-31 must lie between 1900-01-01 and 2199-12-31"),
     "a start-up shorter than one period": (
         lambda d: d["units"]["csp"][0]["power_block"].update(startup_duration_h=1e-300),
         'csp "CSP1": power_block.startup_duration_h=1e-300 must be at least one period, dt_h=1'),

@@ -99,7 +99,7 @@ def test_no_csp_and_no_hpa_names_the_missing_heat_source(tmp_path, capsys):
     (["--date", "2031-01-01"], "is not covered"),
     (["--date", "18/03/2025"], "delivery_date='18/03/2025' must be a date"),
     (["--case", "does/not/exist"], "no case.yaml found"),
-    (["--hpa-flat", "-5"], "--hpa-flat: '-5' is not allowed; give a number >= 0 [EUR/MWh_th]"),
+    (["--hpa-flat", "-5"], "--hpa-flat: '-5' is not allowed; give a number in [0, 1e+06] [EUR/MWh_th]"),
 ])
 def test_bad_input_ends_with_a_message_not_a_traceback(tmp_path, capsys, args, message):
     code, err = run(capsys, "solve", *args, "--quiet", "--out", str(tmp_path / "o"))
@@ -142,10 +142,10 @@ def _case(tmp_path, case_yaml: str | bytes | None = None, history: bytes | None 
 # (arguments, words the message must hold): every one ends with exit code 1 and "error: ...".
 # A "{case}" argument is replaced by a case folder built from the entry's case.yaml / history.
 SOLVE = [
-    (["--time-limit", "0"], "--time-limit: '0' is not allowed; give a number > 0 [s]"),
-    (["--time-limit", "inf"], "--time-limit: 'inf' is not allowed; give a number > 0 [s]"),
+    (["--time-limit", "0"], "--time-limit: '0' is not allowed; give a number in (0, 1e+06] [s]"),
+    (["--time-limit", "inf"], "--time-limit: 'inf' is not allowed; give a number in (0, 1e+06] [s]"),
     (["--time-limit", "nan"], "--time-limit: 'nan' is not allowed"),
-    (["--time-limit", "ten"], "--time-limit: 'ten' is not a number; give a number > 0 [s]"),
+    (["--time-limit", "ten"], "--time-limit: 'ten' is not a number; give a number in (0, 1e+06] [s]"),
     (["--gap", "-1"], "--gap: '-1' is not allowed; give a number in [0, 1)"),
     (["--gap", "nan"], "--gap: 'nan' is not allowed; give a number in [0, 1)"),
     (["--gap", "1"], "--gap: '1' is not allowed; give a number in [0, 1)"),
@@ -154,8 +154,9 @@ SOLVE = [
     (["--threads", "99999"], "--threads: '99999' is not allowed; give a whole number in [0, 1024]"),
     (["--dt", "2"], "--dt: '2' is not allowed; give one of 1, 0.5, 0.25 [h]"),
     (["--dt", "quarter"], "--dt: 'quarter' is not allowed; give one of 1, 0.5, 0.25 [h]"),
-    (["--hpa-flat", "-10"], "--hpa-flat: '-10' is not allowed; give a number >= 0 [EUR/MWh_th]"),
-    (["--hpa-flat", "nan"], "--hpa-flat: 'nan' is not allowed; give a number >= 0 [EUR/MWh_th]"),
+    (["--hpa-flat", "-10"], "--hpa-flat: '-10' is not allowed; give a number in [0, 1e+06] [EUR/MWh_th]"),
+    (["--hpa-flat", "nan"], "--hpa-flat: 'nan' is not allowed; give a number in [0, 1e+06] [EUR/MWh_th]"),
+    (["--hpa-flat", "1e308"], "--hpa-flat: '1e308' is not allowed; give a number in [0, 1e+06] [EUR/MWh_th]"),
     (["--hpa-flat", "inf"], "--hpa-flat: 'inf' is not allowed"),
     (["--markets", ""], "--markets: markets='' names no market; give a comma-separated subset of DAM,SRM,HPA"),
     (["--markets", ","], "--markets: markets=',' names no market"),
@@ -166,6 +167,7 @@ SOLVE = [
     (["--gamma", "WF1=-2"], "--gamma 'WF1=-2': N=-2 must be >= 0"),
     (["--date", "2025-02-30"], "delivery_date='2025-02-30' must be a date such as 2025-03-18"),
     (["--date", ""], "delivery_date='' must be a date such as 2025-03-18"),
+    (["--date", "9999-12-31"], "delivery_date=9999-12-31 must lie between 1900-01-01 and 2199-12-31"),
     (["--case", ""], "--case: is empty; give a file or folder"),
     (["--out", ""], "--out: is empty; give a file or folder"),
     (["--frobnicate"], "unrecognized arguments: --frobnicate"),

@@ -167,6 +167,10 @@ def test_realization_of_a_day_of_another_length_is_refused(paper):
 def test_penalty_settings_are_validated():
     with pytest.raises(RvppError, match="m_def"):
         Penalties(m_def=-1.0)
+    with pytest.raises(RvppError, match=r"m_def=1e\+308 must be <= 1e\+06"):
+        Penalties(m_def=1e308)
+    with pytest.raises(RvppError, match=r"c_heat_eur_per_mwh=1e\+07 must be <= 1e\+06"):
+        Penalties(c_heat_eur_per_mwh=1e7)
 
 
 def test_kept_commitment_settles_a_day_without_sun(paper):

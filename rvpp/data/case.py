@@ -52,6 +52,7 @@ MAX_CASE_YAML_BYTES = MIB  # a case.yaml of 100 units is about 80 KiB
 MAX_YAML_DEPTH = 32        # nesting levels (a case uses five)
 MAX_YAML_VALUES = 100_000  # values once aliases are expanded (a case of 100 units holds about 10,000)
 HOURS_PER_DAY = 24
+FIRST_DATE, LAST_DATE = dt.date(1900, 1, 1), dt.date(2199, 12, 31)  # delivery dates rvpp plans
 MAX_THREADS = 1024  # HiGHS threads; more is a typo, not a machine
 
 
@@ -323,9 +324,10 @@ class Markets(_Frozen):
             raise ValueError(f"{field} has {len(value)} values; give 24, one per clock hour 00:00 to 23:00")
         numbers = [_as_number(tariff) for tariff in value]
         problems = [f"{field} hour {hour:02d}:00 = {_show(tariff)} "
-                    + (number if isinstance(number, str) else "must be >= 0")
+                    + (number if isinstance(number, str) else
+                       "must be >= 0" if number < 0 else f"must be <= {MAX_QUANTITY:g}")
                     for hour, (tariff, number) in enumerate(zip(value, numbers))
-                    if isinstance(number, str) or number < 0]
+                    if isinstance(number, str) or not 0 <= number <= MAX_QUANTITY]
         if problems:
             raise ValueError("\n".join(problems))
         return tuple(numbers)
@@ -558,6 +560,15 @@ class Case(_Frozen):
         """A date is written as one (``2025-03-18``), never as a number of seconds since 1970."""
         if isinstance(value, (int, float)):
             raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18")
+        return value
+
+    @field_validator("delivery_date")
+    @classmethod
+    def _date_in_range(cls, value: dt.date) -> dt.date:
+        """Dates far outside any market history cannot be placed in local time by pandas; refuse them by name."""
+        if not FIRST_DATE <= value <= LAST_DATE:
+            raise ValueError(f"delivery_date={value.isoformat()} must lie between {FIRST_DATE.isoformat()} and "
+                             f"{LAST_DATE.isoformat()}")
         return value
 
     @field_validator("dt_h")

@@ -38,7 +38,7 @@ import pandas as pd
 import pyomo.environ as pyo
 from pyomo.common.collections import ComponentMap
 
-from ..data.case import Case
+from ..data.case import MAX_QUANTITY, Case
 from ..errors import RvppError, SettlementError
 from ..data.history import PRICE_COLUMNS
 from ..model import add_units
@@ -85,6 +85,8 @@ class Penalties:
             value = getattr(self, name)
             if value is not None and not (isinstance(value, (int, float)) and np.isfinite(value)):
                 raise SettlementError(f"penalties: {name}={value} must be a finite number")
+            if value is not None and value > MAX_QUANTITY:
+                raise SettlementError(f"penalties: {name}={value:g} must be <= {MAX_QUANTITY:g}")
         if not 0.0 <= self.m_sur <= 1.0:
             raise SettlementError(f"penalties: m_sur={self.m_sur:g} must lie in [0, 1]: a surplus is sold at most "
                                   "at the DAM price")
