@@ -230,6 +230,8 @@ STUDY = [
     (["--market-sets", "SRM"], "--market-sets: markets='SRM' must include DAM"),
     (["--hpa-prices", "nan"], "--hpa-prices: 'nan' is not allowed; give a number >= 0 [EUR/MWh_th]"),
     (["--scenarios", "0"], "--scenarios: '0' is not allowed; give a whole number >= 1"),
+    (["--scenarios", "5,1e9"], "scenario_counts: N=1e+09 must be at most 100"),
+    (["--gammas", "0,1e308"], "Γ grid: 1e+308 is outside 0..24"),
     (["--test-days", "0"], "--test-days: '0' is not allowed; give a whole number >= 1"),
     (["--test-days", "nan"], "--test-days: 'nan' is not allowed"),
     (["--seed", "-1"], "--seed: '-1' is not allowed; give a whole number >= 0"),

@@ -192,6 +192,7 @@ def test_bad_study_options_end_with_a_message(tmp_path, capsys):
     ({"hpa_flat_prices": (float("nan"),)}, "hpa_flat_prices: nan must be a finite number >= 0"),
     ({"test_days": 0}, "test_days=0 must be at least 1"),
     ({"scenario_counts": (5, 0)}, "scenario_counts: N=0 must be at least 1"),
+    ({"scenario_counts": (5, 10**9)}, "scenario_counts: N=1e+09 must be at most 100"),
     ({"sp_time_limit_s": 0.0}, "sp_time_limit_s=0.0 must be a number > 0"),
     ({"threads": 0}, "threads=0 must be at least 1"),
 ])

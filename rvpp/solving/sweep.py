@@ -48,7 +48,7 @@ def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None
     base = prepare(with_options(case, gammas={name: min(grid) for name in names}))
     outside = [g for g in grid if not 0 <= g <= base.nt]
     if outside:
-        raise RvppError(f"Γ grid: {outside[0]} is outside 0..{base.nt}, the periods of {case.delivery_date}")
+        raise RvppError(f"Γ grid: {outside[0]:g} is outside 0..{base.nt}, the periods of {case.delivery_date}")
     order = sorted(set(grid))
     if workers is None:
         workers = 1 if case.solver.threads == 1 else min(2, os.cpu_count() or 1)

@@ -28,7 +28,7 @@ def gamma_grid(case: Case, settings: StudySettings) -> list[int]:
     if settings.gammas is not None:
         too_large = [g for g in settings.gammas if not 0 <= g <= nt]
         if too_large:
-            raise RvppError(f"Γ grid: {too_large[0]} is outside 0..{nt}, the periods of {case.delivery_date}")
+            raise RvppError(f"Γ grid: {too_large[0]:g} is outside 0..{nt}, the periods of {case.delivery_date}")
         return sorted(set(settings.gammas))
     return list(range(0, nt + 1, int(round(1.0 / case.dt_h))))
 

@@ -15,6 +15,7 @@ MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # paper Table 10
 MARKET_SETS_WITHOUT_CSP = ("DAM+HPA", "DAM+SRM+HPA")  # paper Table 11 (heat needs the HPA)
 HPA_FLAT_PRICES = (70.0, 60.0, 50.0)  # paper Table 12 [EUR/MWh_th]
 SCENARIO_COUNTS = (5, 10, 15, 20, 25)  # paper Table 14
+MAX_SCENARIOS = 100  # one MILP holds a copy of the day per scenario; 25 take a minute, 100 many hours
 TEST_DAYS = 30
 SEED = 20250318
 SP_TIME_LIMIT_S = 600.0
@@ -84,6 +85,9 @@ class StudySettings:
         if self.test_days < 1:
             problems.append(f"test_days={self.test_days} must be at least 1")
         problems += [f"scenario_counts: N={n} must be at least 1" for n in self.scenario_counts if n < 1]
+        problems += [f"scenario_counts: N={n:g} must be at most {MAX_SCENARIOS} (the stochastic benchmark solves "
+                     "one model with a copy of the day per scenario)" for n in self.scenario_counts
+                     if n > MAX_SCENARIOS]
         if not (math.isfinite(self.sp_time_limit_s) and self.sp_time_limit_s > 0):
             problems.append(f"sp_time_limit_s={self.sp_time_limit_s} must be a number > 0 [s]")
         if self.threads < 1:
