@@ -112,6 +112,10 @@ def test_unwritable_output_is_reported(tmp_path, capsys):
     blocker.write_text("x")
     code, err = run(capsys, "solve", "--quiet", "--out", str(blocker / "sub"))
     assert code == 1 and err.startswith("error:") and "Traceback" not in err
+    code, err = run(capsys, "solve", "--quiet", "--out", str(blocker))
+    assert code == 1
+    assert err == f"error: cannot write: {blocker} (it is a file, not a folder)\n"
+    assert blocker.read_text() == "x" and [p.name for p in tmp_path.iterdir()] == ["file"]
 
 
 def test_data_build_regenerates_the_committed_history(tmp_path, capsys):

@@ -6,6 +6,7 @@ files of one run only (:func:`write_plan`).
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import math
@@ -35,6 +36,8 @@ def write_plan(result: Result, folder: str | Path) -> list[Path]:
     own) are never touched; a failure part-way leaves the earlier run's files as they were.
     """
     folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, "it is a file, not a folder", str(folder))
     folder.parent.mkdir(parents=True, exist_ok=True)
     staging = _sibling(folder, "tmp")
     staging.mkdir()
