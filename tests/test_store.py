@@ -165,6 +165,10 @@ def test_sqlite_store_runs_in_wal_mode(tmp_path):
 def test_a_bad_store_url_is_a_named_error():
     with pytest.raises(StoreError, match="is not a database URL"):
         connect("not a url at all")
+    with pytest.raises(StoreError, match="'mysql://x': the store is kept in SQLite or PostgreSQL, not 'mysql'"):
+        connect("mysql://x")
+    with pytest.raises(StoreError, match=r"postgresql\+nodriver://u@h/x: its database driver is not available"):
+        connect("postgresql+nodriver://u@h/x")
 
 
 def test_the_default_store_lives_in_the_data_folder_from_the_environment(monkeypatch, tmp_path):

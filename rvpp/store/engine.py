@@ -29,6 +29,7 @@ from ..errors import RvppError
 
 URL_VARIABLE = "RVPP_STORE_URL"
 DIR_VARIABLE = "RVPP_DATA_DIR"
+BACKENDS = ("sqlite", "postgresql")  # the store's SQL is tested on these two
 DEFAULT_DIR = "rvpp-data"
 SQLITE_FILE = "rvpp.sqlite3"
 BUSY_TIMEOUT_MS = 30_000  # a writer waits this long for another writer's transaction [ms]
@@ -139,14 +140,20 @@ def connect(url: str | None = None) -> sa.Engine:
     except sa.exc.ArgumentError:
         raise StoreError(f"{URL_VARIABLE}={url!r} is not a database URL such as "
                          "sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp") from None
-    if parsed.get_backend_name() == "sqlite":
-        engine = _sqlite_engine(parsed)
-    else:
-        engine = sa.create_engine(parsed, pool_pre_ping=True)
+    shown = parsed.render_as_string(hide_password=True)
+    if parsed.get_backend_name() not in BACKENDS:
+        raise StoreError(f"{URL_VARIABLE}={shown!r}: the store is kept in SQLite or PostgreSQL, not "
+                         f"{parsed.get_backend_name()!r}; give a URL such as sqlite:///runs.sqlite3 or "
+                         "postgresql+psycopg://user@host/rvpp")
+    try:
+        engine = _sqlite_engine(parsed) if parsed.get_backend_name() == "sqlite" else \
+            sa.create_engine(parsed, pool_pre_ping=True)
+    except (ImportError, sa.exc.NoSuchModuleError, sa.exc.ArgumentError) as exc:
+        raise StoreError(f"cannot open the store at {shown}: its database driver is not available ({exc})") from None
     try:
         metadata.create_all(engine)
     except sa.exc.SQLAlchemyError as exc:
-        raise StoreError(f"cannot open the store at {parsed.render_as_string(hide_password=True)}: "
+        raise StoreError(f"cannot open the store at {shown}: "
                          f"{exc.__class__.__name__}: {getattr(exc, 'orig', exc)}") from None
     return engine
 
