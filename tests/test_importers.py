@@ -167,6 +167,13 @@ def test_entsoe_spring_gap_row_with_a_value_is_refused(tmp_path):
         one([path])
 
 
+def test_entsoe_export_cut_after_its_header_is_refused(tmp_path):
+    path = tmp_path / "forecast.csv"
+    path.write_text((ENTSOE / "wind_solar_forecast_2018-10-28_15min.csv").read_text().splitlines()[0] + "\n")
+    with pytest.raises(DataImportError, match="forecast.csv: has a header but no rows of data"):
+        one([path])
+
+
 def test_entsoe_repeated_hour_given_once_without_marker_is_refused(tmp_path):
     lines = (ENTSOE / "day_ahead_prices_2018-10-28.csv").read_text().splitlines()
     path = tmp_path / "prices.csv"

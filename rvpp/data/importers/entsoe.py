@@ -223,6 +223,8 @@ def _rows(body, columns: list[_Column], time_index: int, clock: str, name: str):
         marker = match.group(7) or match.group(15) or match.group(14)
         values = {c.name: _number(row[c.index] if len(row) > c.index else "", where, c.name) for c in columns}
         parsed.append((where, start, end, marker, values))
+    if not parsed:
+        raise DataImportError(f"{name}: has a header but no rows of data")
     minutes = pd.Series([int((e - s).total_seconds() // 60) for _, s, e, _, _ in parsed]).value_counts()
     step_min = int(minutes.index[0])
     if step_min not in ALLOWED_MTU_MIN:
