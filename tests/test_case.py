@@ -237,6 +237,17 @@ def test_nan_in_a_csv_names_column_and_hour(tmp_path):
         load_case(folder)
 
 
+def test_a_value_beyond_any_plant_in_a_csv_names_column_and_hour(tmp_path):
+    def huge(frame):
+        frame.loc[[100, 101, 102], "price_da"] = [1e300, -2e7, 80.0]
+        return frame
+
+    folder = _write_history_case(tmp_path, huge)
+    with pytest.raises(CaseError, match=r'history.csv: column "price_da" = 1e\+300 at 2024-12-05T04:00:00\+01:00 '
+                                        r"must lie within ±1e\+06 and 1 more hours"):
+        load_case(folder)
+
+
 def test_missing_hours_in_a_csv_are_named(tmp_path):
     folder = _write_history_case(tmp_path, lambda f: f.drop(index=[500, 501, 502]))
     with pytest.raises(CaseError, match=r"history.csv: hour 2024-12-21T20:00:00\+01:00 is missing "

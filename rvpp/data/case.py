@@ -23,14 +23,10 @@ from pydantic import (BaseModel, ConfigDict, Field, ValidationError, field_seria
 
 from ..errors import CaseError, CaseFileError
 from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
-from .history import PRICE_COLUMNS, History
+from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
 Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
-# No quantity of a case comes near 1e6 (a terawatt, a terawatt-hour, a million euros per
-# MWh, a hundred years in hours); a larger number is a typo, and it would wreck the
-# solver's numerics instead of being refused by name.
-MAX_QUANTITY = 1e6
 NonNegative = Annotated[float, Field(ge=0.0, le=MAX_QUANTITY)]
 Positive = Annotated[float, Field(gt=0.0, le=MAX_QUANTITY)]
 UnitName = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,39}$")]

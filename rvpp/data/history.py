@@ -21,6 +21,10 @@ from ..errors import CaseError, CaseFileError, UploadLimitError
 from .files import decode_text, excerpt, excerpt_names, read_file
 
 PRICE_COLUMNS = ("price_da", "price_sr_up", "price_sr_dn")
+# No quantity of a case comes near 1e6 (a terawatt, a terawatt-hour, a million euros per
+# MWh, a hundred years in hours); a larger number is a typo, and it would wreck the
+# solver's numerics instead of being refused by name.
+MAX_QUANTITY = 1e6
 HOUR = pd.Timedelta(hours=1)
 
 
@@ -177,10 +181,16 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
             rows = np.flatnonzero(missing)
             problems.append(f'{source}: column "{excerpt(column)}" is empty (NaN) at {shown[rows[0]].isoformat()}'
                             + (f" and {len(rows) - 1} more hours" if len(rows) > 1 else ""))
-        infinite = np.isinf(values.to_numpy(dtype=float, na_value=0.0))
+        plain = values.to_numpy(dtype=float, na_value=0.0)
+        infinite = np.isinf(plain)
         if infinite.any():
             where = shown[int(np.flatnonzero(infinite)[0])].isoformat()
             problems.append(f'{source}: column "{excerpt(column)}" is infinite at {where}')
+        huge = np.flatnonzero(~infinite & (np.abs(plain) > MAX_QUANTITY))
+        if len(huge):
+            problems.append(f'{source}: column "{excerpt(column)}" = {plain[huge[0]]:g} at '
+                            f"{shown[huge[0]].isoformat()} must lie within ±{MAX_QUANTITY:g}"
+                            + (f" and {len(huge) - 1} more hours" if len(huge) > 1 else ""))
         numeric[column] = values.to_numpy(dtype=float)
     problems += _timeline_problems(stamps, shown, source)
     if problems:
