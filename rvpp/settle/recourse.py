@@ -38,9 +38,9 @@ import pandas as pd
 import pyomo.environ as pyo
 from pyomo.common.collections import ComponentMap
 
-from ..data.case import MAX_QUANTITY, Case
+from ..data.case import Case
 from ..errors import RvppError, SettlementError
-from ..data.history import PRICE_COLUMNS
+from ..data.history import MAX_QUANTITY, PRICE_COLUMNS
 from ..model import add_units
 from ..model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
 from ..data.periods import delivery_periods, period_labels

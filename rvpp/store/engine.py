@@ -148,7 +148,7 @@ def connect(url: str | None = None) -> sa.Engine:
     try:
         engine = _sqlite_engine(parsed) if parsed.get_backend_name() == "sqlite" else \
             sa.create_engine(parsed, pool_pre_ping=True)
-    except (ImportError, sa.exc.NoSuchModuleError, sa.exc.ArgumentError) as exc:
+    except (ImportError, sa.exc.NoSuchModuleError) as exc:
         raise StoreError(f"cannot open the store at {shown}: its database driver is not available ({exc})") from None
     try:
         metadata.create_all(engine)
