@@ -134,15 +134,16 @@ def default_url() -> str:
 
 def connect(url: str | None = None) -> sa.Engine:
     """An engine on ``url`` (default: :func:`default_url`) with the schema created."""
+    given = "store URL " if url else f"{URL_VARIABLE}="  # named as the user gave it
     url = url or default_url()
     try:
         parsed = sa.make_url(url)
     except sa.exc.ArgumentError:
-        raise StoreError(f"{URL_VARIABLE}={url!r} is not a database URL such as "
+        raise StoreError(f"{given}{url!r} is not a database URL such as "
                          "sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp") from None
     shown = parsed.render_as_string(hide_password=True)
     if parsed.get_backend_name() not in BACKENDS:
-        raise StoreError(f"{URL_VARIABLE}={shown!r}: the store is kept in SQLite or PostgreSQL, not "
+        raise StoreError(f"{given}{shown!r}: the store is kept in SQLite or PostgreSQL, not "
                          f"{parsed.get_backend_name()!r}; give a URL such as sqlite:///runs.sqlite3 or "
                          "postgresql+psycopg://user@host/rvpp")
     try:
