@@ -141,14 +141,15 @@ def connect(url: str | None = None) -> sa.Engine:
     except sa.exc.ArgumentError:
         raise StoreError(f"{given}{url!r} is not a database URL such as "
                          "sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp") from None
-    shown = parsed.render_as_string(hide_password=True)
-    if parsed.get_backend_name() not in BACKENDS:
-        raise StoreError(f"{given}{shown!r}: the store is kept in SQLite or PostgreSQL, not "
-                         f"{parsed.get_backend_name()!r}; give a URL such as sqlite:///runs.sqlite3 or "
-                         "postgresql+psycopg://user@host/rvpp")
+    shown, backend = parsed.render_as_string(hide_password=True), parsed.get_backend_name()
+    if backend not in BACKENDS:
+        raise StoreError(f"{given}{shown!r}: the store is kept in SQLite or PostgreSQL, not {backend!r}; give a URL "
+                         "such as sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp")
     try:
-        engine = _sqlite_engine(parsed) if parsed.get_backend_name() == "sqlite" else \
-            sa.create_engine(parsed, pool_pre_ping=True)
+        if backend == "sqlite":
+            engine = _sqlite_engine(parsed)
+        else:
+            engine = sa.create_engine(parsed, pool_pre_ping=True)
     except (ImportError, sa.exc.NoSuchModuleError) as exc:
         raise StoreError(f"cannot open the store at {shown}: its database driver is not available ({exc})") from None
     try:
