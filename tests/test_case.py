@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import datetime as dt
 import gzip
 import shutil
 
@@ -168,6 +169,9 @@ EXACT = {
     "a delivery date written as a number": (
         lambda d: d.update(delivery_date=0),
         ["delivery_date=0 must be a date such as 2025-03-18"]),
+    "a delivery date with a time of day": (
+        lambda d: d.update(delivery_date=dt.datetime(2025, 5, 5)),
+        ["delivery_date=2025-05-05 00:00:00 must be a date such as 2025-03-18, without a time of day"]),
     "a huge number is shown cut short": (
         lambda d: unit(d, "wind", "WF1").update(ramp_up_mw_per_min="9" * 400),
         ['wind "WF1": ramp_up_mw_per_min=\'' + "9" * 39 + '…\' must be a finite number']),

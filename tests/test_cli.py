@@ -172,6 +172,9 @@ SOLVE = [
     (["--date", "2025-02-30"], "delivery_date='2025-02-30' must be a date such as 2025-03-18"),
     (["--date", ""], "delivery_date='' must be a date such as 2025-03-18"),
     (["--date", "9999-12-31"], "delivery_date=9999-12-31 must lie between 1900-01-01 and 2199-12-31"),
+    (["--date", "2025-05-05T00:00"], "delivery_date='2025-05-05T00:00' must be a date such as 2025-03-18, "
+                                     "without a time of day"),
+    (["--date", "20250505"], "delivery_date='20250505' must be a date such as 2025-03-18"),
     (["--case", ""], "--case: is empty; give a file or folder"),
     (["--out", ""], "--out: is empty; give a file or folder"),
     (["--frobnicate"], "unrecognized arguments: --frobnicate"),

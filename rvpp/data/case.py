@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path, PurePosixPath
 from typing import Annotated, Any, Literal
@@ -49,6 +50,8 @@ MAX_YAML_DEPTH = 32        # nesting levels (a case uses five)
 MAX_YAML_VALUES = 100_000  # values once aliases are expanded (a case of 100 units holds about 10,000)
 HOURS_PER_DAY = 24
 FIRST_DATE, LAST_DATE = dt.date(1900, 1, 1), dt.date(2199, 12, 31)  # delivery dates rvpp plans
+_ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
+_ISO_TIME = re.compile(r"\d{4}-\d{2}-\d{2}[Tt ]\d")  # a date followed by a time of day
 MAX_THREADS = 1024  # HiGHS threads; more is a typo, not a machine
 
 
@@ -553,8 +556,11 @@ class Case(_Frozen):
     @field_validator("delivery_date", mode="before")
     @classmethod
     def _date_as_written(cls, value: Any) -> Any:
-        """A date is written as one (``2025-03-18``), never as a number of seconds since 1970."""
-        if isinstance(value, (int, float)):
+        """A date is written as one (``2025-03-18``): never as a number of seconds since 1970,
+        nor with a time of day, even midnight (a plan covers a whole delivery day)."""
+        if isinstance(value, dt.datetime) or (isinstance(value, str) and _ISO_TIME.match(value)):
+            raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18, without a time of day")
+        if isinstance(value, (int, float)) or (isinstance(value, str) and not _ISO_DATE.fullmatch(value)):
             raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18")
         return value
 
