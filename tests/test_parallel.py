@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -64,3 +65,15 @@ def test_serial_scheduler_has_no_executor_and_workers_are_checked():
     with pytest.raises(RvppError, match="workers"):
         with open_executor("processes", workers=-1):
             pass
+
+
+def _pid_after_a_while(_: int) -> int:
+    time.sleep(0.3)
+    return os.getpid()
+
+
+def test_a_local_pool_has_at_most_one_worker_per_core():
+    cores = len(os.sched_getaffinity(0))
+    with open_executor("processes", workers=10 ** 6) as executor:
+        pids = set(executor.map(_pid_after_a_while, range(3 * cores + 2)))
+    assert 1 <= len(pids) <= cores

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from ..cli import Number, listed, path_option
-from ..data.case import STRATEGIES, load_case
+from ..data.case import MAX_THREADS, STRATEGIES, load_case
 from ..data.files import excerpt
 from ..settle.recourse import Penalties
 from ..studies.cli import add_settlement_options, scheduler_option
@@ -81,8 +81,9 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scheduler", type=scheduler_option, default="processes",
                         help="processes (default: local process pool), serial, local (a local Dask cluster) or "
                              "the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    parser.add_argument("--workers", type=Number(1, whole=True),
-                        help="worker processes of a local pool or cluster (default: cores)")
+    parser.add_argument("--workers", type=Number(1, MAX_THREADS, whole=True),
+                        help="worker processes of a local pool or cluster (default: cores; a local pool uses "
+                            "at most one per core)")
     parser.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
     parser.add_argument("--label", default="", help="a name for the backtest in the store")
     parser.add_argument("--out", type=path_option, help="also export records, aggregates and inputs to this folder")

@@ -33,10 +33,15 @@ def default_workers() -> int:
 
 @contextmanager
 def open_executor(scheduler: str = "processes", workers: int | None = None) -> Iterator[Executor | None]:
-    """The executor for ``scheduler`` (see the module docstring), closed on exit."""
+    """The executor for ``scheduler`` (see the module docstring), closed on exit.
+
+    A local pool (``processes``, ``local``) has at most one worker per core: more would
+    only share the cores, each holding a model in memory.
+    """
     workers = workers or default_workers()
     if workers < 1:
         raise RvppError(f"--workers={workers} must be at least 1")
+    workers = min(workers, default_workers())
     if scheduler == "serial":
         yield None
     elif scheduler == "processes":

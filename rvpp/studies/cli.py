@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..cli import Number, choice_of, listed, path_option
-from ..data.case import STRATEGIES, load_case, parse_markets, with_options
+from ..data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
 from ..data.files import excerpt
 from ..data.periods import ALLOWED_DT_H
 from ..errors import RvppError
@@ -38,8 +38,9 @@ def add_study_commands(commands) -> None:
     study.add_argument("--scheduler", type=scheduler_option, default="processes",
                        help="processes (default: local process pool), serial, local (a local Dask cluster) "
                             "or the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    study.add_argument("--workers", type=Number(1, whole=True),
-                       help="worker processes of a local pool or cluster (default: cores)")
+    study.add_argument("--workers", type=Number(1, MAX_THREADS, whole=True),
+                       help="worker processes of a local pool or cluster (default: cores; a local pool uses "
+                            "at most one per core)")
     study.add_argument("--strategies", type=listed(_choice(STRATEGIES), "a comma-separated subset of "
                                                    + ",".join(STRATEGIES)),
                        help="comma-separated subset of " + ",".join(STRATEGIES))
@@ -50,7 +51,8 @@ def add_study_commands(commands) -> None:
                             "(default: all sources at once)")
     study.add_argument("--market-sets", type=listed(_market_set, "market sets such as DAM,DAM+SRM+HPA"),
                        help=f"market sets of Table 10, e.g. DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
-    study.add_argument("--hpa-prices", type=listed(Number(0, unit="EUR/MWh_th"), "tariffs >= 0 such as 70,60,50"),
+    tariff = Number(0, MAX_QUANTITY, unit="EUR/MWh_th")
+    study.add_argument("--hpa-prices", type=listed(tariff, "tariffs >= 0 such as 70,60,50"),
                        help=f"flat HPA tariffs [EUR/MWh_th] (default {','.join(f'{p:g}' for p in HPA_FLAT_PRICES)})")
     study.add_argument("--test-days", type=Number(1, whole=True), default=TEST_DAYS,
                        help=f"out-of-sample days (default {TEST_DAYS})")
@@ -59,9 +61,10 @@ def add_study_commands(commands) -> None:
                             f"{','.join(map(str, SCENARIO_COUNTS))})")
     study.add_argument("--seed", type=Number(0, whole=True), default=SEED,
                        help=f"seed of the scenario sampling, >= 0 (default {SEED})")
-    study.add_argument("--sp-time-limit", type=Number(0, low_open=True, unit="s"), default=SP_TIME_LIMIT_S,
-                       metavar="S", help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
-    study.add_argument("--time-limit", type=Number(0, low_open=True, unit="s"), metavar="S",
+    seconds = Number(0, MAX_QUANTITY, low_open=True, unit="s")
+    study.add_argument("--sp-time-limit", type=seconds, default=SP_TIME_LIMIT_S, metavar="S",
+                       help=f"time limit of each stochastic solve [s] (default {SP_TIME_LIMIT_S:g})")
+    study.add_argument("--time-limit", type=seconds, metavar="S",
                        help="time limit of every other solve [s]")
     add_settlement_options(study)
     study.add_argument("--backtest-train", type=_period, metavar="D1:D2",
@@ -83,12 +86,12 @@ def add_settlement_options(parser: argparse.ArgumentParser) -> None:
     """The options of the settlement of realized days: penalty multipliers, the price of
     unserved heat and the turbine schedule (shared by the studies and the backtest)."""
     penalties = Penalties()
-    multiplier = Number(0)
+    multiplier = Number(0, MAX_QUANTITY)
     parser.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
     parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
     parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
                         help="reserve shortfall price multiplier, >= 0")
-    parser.add_argument("--c-heat", type=Number(0, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
+    parser.add_argument("--c-heat", type=Number(0, MAX_QUANTITY, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
                         help="price of unserved heat (default: twice the highest HPA tariff)")
     parser.add_argument("--fix-commitment", action="store_true",
                         help="settle with the plan's CSP turbine schedule: no start where the plan is off")
