@@ -5,7 +5,8 @@ The grid is sorted and each part of it walked by a
 smallest Γ, and every further Γ only changes the mutable budgets and the fixed χ of
 the robust layer, recompiles the matrix and re-solves, starting HiGHS from the
 commitment, storage modes and curve segments of the neighbouring Γ. On two cores two
-threads walk the two halves of the grid (HiGHS runs side by side). Each point is the same plain :class:`~rvpp.solving.results.Result` that
+threads walk the two halves of the grid (HiGHS runs side by side). Each point is the
+same plain :class:`~rvpp.solving.results.Result` that
 ``rvpp.solve(with_options(case, gammas=...))`` returns for it.
 """
 
@@ -20,12 +21,21 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..data.case import Case, with_options
+from ..data.periods import delivery_periods
 from ..errors import RvppError
 from .persistent import DayModel
 from .problem import Problem, prepare, strategy_budgets
 from .results import Result
 
 Progress = Callable[[int, int], None]
+
+
+def check_gamma_grid(grid: Iterable[float], case: Case) -> None:
+    """Refuse a Γ outside 0..NT, the periods of the case's delivery day, by value."""
+    nt = len(delivery_periods(case.delivery_date, case.timezone, case.dt_h))
+    outside = [g for g in grid if not 0 <= g <= nt]
+    if outside:
+        raise RvppError(f"Γ grid: {outside[0]:g} is outside 0..{nt}, the periods of {case.delivery_date}")
 
 
 def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None = None,
@@ -45,10 +55,8 @@ def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None
     unknown = [n for n in names if n not in case.sources()]
     if unknown:
         raise RvppError(f"sources: unknown source {unknown[0]!r}; choose from {', '.join(case.sources())}")
+    check_gamma_grid(grid, case)
     base = prepare(with_options(case, gammas={name: min(grid) for name in names}))
-    outside = [g for g in grid if not 0 <= g <= base.nt]
-    if outside:
-        raise RvppError(f"Γ grid: {outside[0]:g} is outside 0..{base.nt}, the periods of {case.delivery_date}")
     order = sorted(set(grid))
     if workers is None:
         workers = 1 if case.solver.threads == 1 else min(2, os.cpu_count() or 1)

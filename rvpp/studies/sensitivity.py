@@ -14,6 +14,7 @@ from ..data.case import Case
 from ..errors import RvppError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods
+from ..solving.sweep import check_gamma_grid
 from . import figures
 from .runner import Config, Progress, StudyOutput, plan_table, solve_configs
 from .settings import StudySettings
@@ -24,12 +25,10 @@ ALL = "all"
 
 def gamma_grid(case: Case, settings: StudySettings) -> list[int]:
     """Γ values [periods]: the settings' grid, or 0..NT in steps of one hour."""
-    nt = len(delivery_periods(case.delivery_date, case.timezone, case.dt_h))
     if settings.gammas is not None:
-        too_large = [g for g in settings.gammas if not 0 <= g <= nt]
-        if too_large:
-            raise RvppError(f"Γ grid: {too_large[0]:g} is outside 0..{nt}, the periods of {case.delivery_date}")
+        check_gamma_grid(settings.gammas, case)
         return sorted(set(settings.gammas))
+    nt = len(delivery_periods(case.delivery_date, case.timezone, case.dt_h))
     return list(range(0, nt + 1, int(round(1.0 / case.dt_h))))
 
 
