@@ -570,7 +570,7 @@ def recourse_start(m: pyo.ConcreteModel, case: Case, problems: Sequence[Problem]
             single = build_recourse_model([problem], penalties, bids)
             block = single.scenario[0]
             recourse = HighsModel(single)
-            if not recourse.solve(settings, load=False).usable:
+            if not recourse.solve(settings, load=False, options=SETTLE_OPTIONS).usable:
                 return ComponentMap()
             source = recourse.values()
         # Every scenario block comes from add_scenario, so their variables are created in the same order.
