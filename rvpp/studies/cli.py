@@ -87,10 +87,12 @@ def add_settlement_options(parser: argparse.ArgumentParser) -> None:
     unserved heat and the turbine schedule (shared by the studies and the backtest)."""
     penalties = Penalties()
     multiplier = Number(0, MAX_QUANTITY)
-    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def, help="deficit price multiplier, >= 0")
-    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur, help="surplus price multiplier, >= 0")
+    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def,
+                        help=f"deficit price multiplier, 0 to {MAX_QUANTITY:g} (default {penalties.m_def:g})")
+    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur,
+                        help=f"surplus price multiplier, 0 to {MAX_QUANTITY:g} (default {penalties.m_sur:g})")
     parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
-                        help="reserve shortfall price multiplier, >= 0")
+                        help=f"reserve shortfall price multiplier, 0 to {MAX_QUANTITY:g} (default {penalties.m_sr:g})")
     parser.add_argument("--c-heat", type=Number(0, MAX_QUANTITY, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
                         help="price of unserved heat (default: twice the highest HPA tariff)")
     parser.add_argument("--fix-commitment", action="store_true",
