@@ -114,6 +114,8 @@ def test_build_refuses_what_it_cannot_build(tmp_path):
         build_case([no_prices], tmp_path / "a", template=PAPER)
     with pytest.raises(RvppError, match="--date 2021-05-20 must lie in 2021-06-07 to 2021-06-14"):
         build_case([source], tmp_path / "b", template=PAPER, options=BuildOptions(date="2021-05-20"))
+    with pytest.raises(RvppError, match=r"the data cover 5 whole day\(s\), 2021-06-10 to 2021-06-14; a case needs 38"):
+        build_case([source], tmp_path / "b", template=PAPER, options=BuildOptions(start="2021-06-10"))
     with pytest.raises(RvppError, match="--errors-scale K=-1 must be"):
         BuildOptions(errors_scale=-1.0)
     build_case([source], tmp_path / "c", template=PAPER)

@@ -265,7 +265,12 @@ def _longest_complete_run(frame: pd.DataFrame, timezone: str) -> tuple[dt.date, 
 
 def _delivery_date(value, first: dt.date, last: dt.date, case: Case) -> dt.date:
     day = _day(value, "--date") or last
-    earliest = first + dt.timedelta(days=case.uncertainty.window_days + PRICE_LAG_DAYS)
+    needed = case.uncertainty.window_days + PRICE_LAG_DAYS
+    earliest = first + dt.timedelta(days=needed)
+    if earliest > last:
+        raise RvppError(f"the data cover {(last - first).days + 1} whole day(s), {first} to {last}; a case needs "
+                        f"{needed + 1} (its {case.uncertainty.window_days}-day window and a week more for price "
+                        "forecasts before the delivery date): import a longer span")
     if not earliest <= day <= last:
         raise RvppError(f"--date {day} must lie in {earliest} to {last}: the history needs the "
                         f"{case.uncertainty.window_days}-day window (and a week more for price forecasts) "
