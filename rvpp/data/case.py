@@ -52,7 +52,7 @@ HOURS_PER_DAY = 24
 FIRST_DATE, LAST_DATE = dt.date(1900, 1, 1), dt.date(2199, 12, 31)  # delivery dates rvpp plans
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
 _ISO_TIME = re.compile(r"\d{4}-\d{2}-\d{2}[Tt ]\d")  # a date followed by a time of day
-MAX_THREADS = 1024  # HiGHS threads; more is a typo, not a machine
+MAX_THREADS = 1024  # HiGHS threads or worker processes; more is a typo, not a machine
 
 
 class _Frozen(BaseModel):
