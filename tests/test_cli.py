@@ -352,3 +352,35 @@ def test_a_new_output_folder_appears_complete(tmp_path, paper_solve):
     assert [p.name for p in written] == [*(f"{t}.csv" for t in ("market", "units", "csp", "flexibility")),
                                          "plan.xlsx", "summary.json"]
     assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["plan"]
+
+
+OMIE_DAY = str(PAPER.parent.parent.parent / "tests" / "data" / "omie" / "marginalpdbc_20180325.1")
+NOT_OURS = b"root:x:0:0:root:/root:/bin/bash\n"  # a file rvpp did not write, e.g. /etc/passwd
+
+
+@pytest.mark.parametrize("args, option, kind", [
+    (["data", "build"], "--out", "a history CSV, whose first line starts with 'timestamp,'"),
+    (["solve", "--quiet", "--out", "{tmp}/plan"], "--write-mps", "an MPS file, whose first line starts with '*'"),
+    (["data", "import", OMIE_DAY], "--out", "a table rvpp wrote, whose first line starts with 'time_utc,'"),
+], ids=["data build", "solve --write-mps", "data import"])
+def test_an_output_path_naming_a_file_rvpp_did_not_write_leaves_it_untouched(tmp_path, capsys, args, option, kind):
+    victim = tmp_path / "passwd"
+    victim.write_bytes(NOT_OURS)
+    code, err = run(capsys, *(a.format(tmp=tmp_path) for a in args), option, str(victim))
+    assert code == 1
+    assert _one_error(err)[0].startswith(f"error: cannot write: {victim} (it exists and is not {kind}")
+    assert "root:x" not in err
+    assert victim.read_bytes() == NOT_OURS
+    assert [p.name for p in tmp_path.iterdir()] == ["passwd"]  # nothing else written either
+    code, err = run(capsys, *(a.format(tmp=tmp_path) for a in args), option, str(tmp_path))
+    assert code == 1 and _one_error(err)[0] == f"error: cannot write: {tmp_path} (it is a folder, not a file)"
+
+
+def test_an_imported_table_replaces_the_one_written_before(tmp_path, capsys):
+    table = tmp_path / "prices.csv"
+    for _ in range(2):
+        code, err = run(capsys, "data", "import", OMIE_DAY, "--out", str(table))
+        assert code == 0, err
+    frame = pd.read_csv(table)
+    assert list(frame.columns) == ["time_utc", "time_local", "price_da"] and len(frame) == 23  # 25 March 2018: DST
+    assert [p.name for p in tmp_path.iterdir()] == ["prices.csv"]  # no temporary left

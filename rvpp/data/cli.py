@@ -81,8 +81,11 @@ def add_data_commands(commands) -> None:
 
 
 def _run_import(args: argparse.Namespace) -> int:
-    from .importers import hourly_table, import_files, write_table
+    from ..outputs.export import check_replaceable
+    from .importers import TABLE_HEADER, hourly_table, import_files, write_table
 
+    if args.out:
+        check_replaceable(args.out, (TABLE_HEADER,), "a table rvpp wrote, whose first line starts with 'time_utc,'")
     imports = import_files(args.files, args.zone)
     for item in imports:
         print("\n".join(item.report.lines()))

@@ -781,15 +781,22 @@ def build_history(seed: int = DEFAULT_SEED, start: str = "2024-12-01",
     return frame
 
 
+HISTORY_HEADER = b"timestamp,"  # how a history CSV begins
+
+
 def write_history(path, seed: int = DEFAULT_SEED) -> pd.DataFrame:
     """Write the default-span history as CSV and return it as written, rounded to 3 decimals.
 
-    Timestamps are ISO 8601 local times with their UTC offset.
+    Timestamps are ISO 8601 local times with their UTC offset. The file is written beside
+    ``path`` and renamed into place, so ``path`` is never seen half-written.
     """
+    from ..outputs.export import replacing  # outputs build on data, not the other way round
+
     frame = build_history(seed)
     frame[list(COLUMNS)] = frame[list(COLUMNS)].round(3)
     text = frame.assign(timestamp=frame["timestamp"].map(pd.Timestamp.isoformat))
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text.to_csv(path, index=False)
+    with replacing(path) as temporary:
+        text.to_csv(temporary, index=False)
     return frame

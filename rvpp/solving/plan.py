@@ -83,6 +83,9 @@ def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, prog
                   lp_iterations=outcome.lp_iterations, **tables)
 
 
+MPS_HEADERS = (b"*", b"NAME")  # how an MPS file begins: comment lines, then its NAME
+
+
 def write_mps(case: Case, path) -> None:
     """Write the MILP of ``case`` as an MPS file (readable names) for other solvers.
 

@@ -148,6 +148,9 @@ def fill_gaps(table: pd.DataFrame, max_hours: int) -> tuple[pd.DataFrame, list[s
     return out, filled
 
 
+TABLE_HEADER = b"time_utc,time_local"  # how the normalised CSV of write_table begins
+
+
 def write_table(table: pd.DataFrame, path: str | Path, timezone: str = "Europe/Madrid") -> Path:
     """Write an hourly table as rvpp's normalised CSV (``time_utc, time_local, series...``),
     atomically (a temporary file renamed into place)."""
