@@ -229,7 +229,7 @@ def _run_solve(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"rvpp: case {case.name}, {case.delivery_date}, {describe(case)}", file=sys.stderr)
     if args.write_mps:
-        check_replaceable(args.write_mps, MPS_HEADERS, "an MPS file, whose first line starts with '*' or 'NAME'")
+        check_replaceable(args.write_mps, MPS_HEADERS, "an MPS file")
         write_mps(case, args.write_mps)
         say(f"wrote {args.write_mps}")
     result = solve(case, progress=say)
@@ -255,7 +255,7 @@ def _run_data_build(args: argparse.Namespace) -> int:
     from .outputs.export import check_replaceable
 
     seed = synth.DEFAULT_SEED if args.seed is None else args.seed
-    check_replaceable(args.out, (synth.HISTORY_HEADER,), "a history CSV, whose first line starts with 'timestamp,'")
+    check_replaceable(args.out, (synth.HISTORY_HEADER,), "a history CSV")
     frame = synth.write_history(args.out, seed=seed)
     print(f"wrote {len(frame)} hours to {args.out} (seed {seed})", file=sys.stderr)
     return 0

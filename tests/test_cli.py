@@ -361,7 +361,7 @@ NOT_OURS = b"root:x:0:0:root:/root:/bin/bash\n"  # a file rvpp did not write, e.
 @pytest.mark.parametrize("args, option, kind", [
     (["data", "build"], "--out", "a history CSV, whose first line starts with 'timestamp,'"),
     (["solve", "--quiet", "--out", "{tmp}/plan"], "--write-mps", "an MPS file, whose first line starts with '*'"),
-    (["data", "import", OMIE_DAY], "--out", "a table rvpp wrote, whose first line starts with 'time_utc,'"),
+    (["data", "import", OMIE_DAY], "--out", "a table rvpp wrote, whose first line starts with 'time_utc,time_local'"),
 ], ids=["data build", "solve --write-mps", "data import"])
 def test_an_output_path_naming_a_file_rvpp_did_not_write_leaves_it_untouched(tmp_path, capsys, args, option, kind):
     victim = tmp_path / "passwd"

@@ -85,7 +85,7 @@ def _run_import(args: argparse.Namespace) -> int:
     from .importers import TABLE_HEADER, hourly_table, import_files, write_table
 
     if args.out:
-        check_replaceable(args.out, (TABLE_HEADER,), "a table rvpp wrote, whose first line starts with 'time_utc,'")
+        check_replaceable(args.out, (TABLE_HEADER,), "a table rvpp wrote")
     imports = import_files(args.files, args.zone)
     for item in imports:
         print("\n".join(item.report.lines()))

@@ -87,8 +87,9 @@ def check_replaceable(path: str | Path, headers: tuple[bytes, ...], kind: str) -
 
     A missing ``path`` is fine, and so is a file starting with one of ``headers``, as the
     files of that kind that rvpp writes do; a folder, a device, a dangling link or any
-    other file raises :class:`OSError` naming ``path``, so a mistyped output path cannot
-    destroy an unrelated file. Only the first bytes are read, and they are never shown.
+    other file raises :class:`OSError` naming ``path`` and the headers expected, so a
+    mistyped output path cannot destroy an unrelated file. Only the first bytes are read,
+    and they are never shown.
     """
     path = Path(path)
     if not os.path.lexists(path):
@@ -100,8 +101,9 @@ def check_replaceable(path: str | Path, headers: tuple[bytes, ...], kind: str) -
     with path.open("rb") as handle:
         start = handle.read(max(len(header) for header in headers))
     if not start.startswith(headers):
-        raise FileExistsError(errno.EEXIST, f"it exists and is not {kind}; remove it first or choose another path",
-                              str(path))
+        expected = " or ".join(repr(header.decode()) for header in headers)
+        raise FileExistsError(errno.EEXIST, f"it exists and is not {kind}, whose first line starts with {expected}; "
+                              "remove it first or choose another path", str(path))
 
 
 def _sibling(path: Path, tag: str) -> Path:

@@ -38,10 +38,11 @@ def open_executor(scheduler: str = "processes", workers: int | None = None) -> I
     A local pool (``processes``, ``local``) has at most one worker per core: more would
     only share the cores, each holding a model in memory.
     """
-    workers = workers or default_workers()
+    cores = default_workers()
+    workers = workers or cores
     if workers < 1:
         raise RvppError(f"--workers={workers} must be at least 1")
-    workers = min(workers, default_workers())
+    workers = min(workers, cores)
     if scheduler == "serial":
         yield None
     elif scheduler == "processes":
