@@ -9,7 +9,7 @@ import pyomo.environ as pyo
 import pytest
 
 from rvpp.data.case import SolverSettings
-from rvpp.solving.highs import run_highs
+from rvpp.solving.highs import HighsModel, objective_scale, run_highs
 from rvpp.solving.outcome import Outcome, SolveOutcome
 
 
@@ -107,3 +107,27 @@ def test_a_linear_program_reports_its_objective_as_bound():
     outcome = _solve(m)
     assert outcome.status is Outcome.OPTIMAL and outcome.nodes is None
     assert outcome.objective == pytest.approx(6.0) and outcome.bound == pytest.approx(6.0)
+
+
+@pytest.mark.parametrize("scale", [-12, 0, 3])
+def test_a_scaled_objective_reports_in_the_models_units(scale):
+    # min 3x + 2y + 7 with x + y ≥ 1.5 on integers: y = 2 gives 11 (x = y = 1 gives 12, x = 2 gives 13).
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(domain=pyo.NonNegativeIntegers, bounds=(0, 5))
+    m.y = pyo.Var(domain=pyo.NonNegativeIntegers, bounds=(0, 5))
+    m.c = pyo.Constraint(expr=m.x + m.y >= 1.5)
+    m.obj = pyo.Objective(expr=3 * m.x + 2 * m.y + 7)
+    outcome = HighsModel(m).solve(SolverSettings(rel_gap=0.0, time_limit_s=30), scale=scale)
+    assert outcome.status is Outcome.OPTIMAL
+    assert outcome.objective == pytest.approx(11.0) and outcome.bound == pytest.approx(11.0)
+    assert (pyo.value(m.x), pyo.value(m.y)) == pytest.approx((0.0, 2.0))
+    # The same with a continuous y: the LP optimum y = 1.5 gives 10, its own bound.
+    m.y.domain = pyo.NonNegativeReals
+    m.x.domain = pyo.NonNegativeReals
+    outcome = HighsModel(m).solve(SolverSettings(rel_gap=0.0, time_limit_s=30), scale=scale)
+    assert outcome.objective == pytest.approx(10.0) and outcome.bound == pytest.approx(10.0)
+
+
+def test_sub_hourly_days_scale_their_objective_and_hourly_days_do_not():
+    assert objective_scale(1.0) == 0
+    assert objective_scale(0.5) == objective_scale(0.25) < 0

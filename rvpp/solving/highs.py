@@ -16,6 +16,7 @@ and a finite bound.
 from __future__ import annotations
 
 import gc
+import math
 import threading
 import time
 from collections.abc import Iterator, Mapping
@@ -38,6 +39,17 @@ from .outcome import Outcome, SolveOutcome
 # The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models;
 # restarting the root after presolving again costs more cut rounds than it saves.
 HIGHS_OPTIONS = {"mip_heuristic_run_rins": False, "mip_heuristic_run_rens": False, "mip_allow_restart": False}
+# Bidding days of periods shorter than an hour: the objective HiGHS receives is scaled by 2^-12
+# (a power of two, so exactly) and what it reports is scaled back. Measured on 30- and 15-minute
+# days: 13-19 % less solver time and fewer LP iterations; hourly days keep their path, where their
+# slowest days got slower. (HiGHS's own option for this, user_objective_scale, reports the dual
+# bound still scaled in 1.15.1.)
+SUBHOURLY_OBJECTIVE_SCALE = -12
+
+
+def objective_scale(dt_h: float) -> int:
+    """The power of two by which a bidding day's objective is scaled inside HiGHS, for ``dt_h``-hour periods."""
+    return SUBHOURLY_OBJECTIVE_SCALE if dt_h < 1.0 else 0
 
 # HiGHS creates one task scheduler per process at its first run; that first run is
 # serialized, later runs in threads of one process go side by side (HiGHS releases the
@@ -172,11 +184,12 @@ class HighsModel:
             self.compiled, self.infeasible_reason = None, str(exc)
 
     def solve(self, settings, *, start: Mapping[VarData, float] | None = None, load: bool = True,
-              options: Mapping[str, object] | None = None) -> SolveOutcome:
+              options: Mapping[str, object] | None = None, scale: int = 0) -> SolveOutcome:
         """Run HiGHS with ``settings`` (time limit, gap, threads) and extra ``options``.
 
         ``start`` gives values of some or all variables as a MIP start; HiGHS completes a
-        partial start itself and ignores one it cannot complete.
+        partial start itself and ignores one it cannot complete. HiGHS minimizes the
+        objective times ``2**scale``; the objective and bound returned are in the model's units.
         """
         if self.compiled is None:
             return SolveOutcome.of(Outcome.INFEASIBLE, "trivially infeasible", None, None, 0.0,
@@ -190,6 +203,10 @@ class HighsModel:
         try:
             t0 = time.perf_counter()
             h.passModel(self.compiled.lp)
+            if scale:
+                lp, factor = self.compiled.lp, math.ldexp(1.0, scale)
+                h.changeColsCost(lp.num_col_, np.arange(lp.num_col_, dtype=np.int32), np.asarray(lp.col_cost_) * factor)
+                h.changeObjectiveOffset(lp.offset_ * factor)
             if start:
                 self._set_start(h, start)
             if _scheduler_ready.is_set():
@@ -201,7 +218,7 @@ class HighsModel:
             seconds = time.perf_counter() - t0
         except Exception as exc:  # the solver library failed; report, do not crash the caller
             return SolveOutcome.of(Outcome.ERROR, type(exc).__name__, None, None, 0.0, f"HiGHS failed: {exc}")
-        outcome = self._outcome(h, seconds, note)
+        outcome = self._outcome(h, seconds, note, scale)
         self.solution = np.asarray(h.getSolution().col_value, dtype=float) if outcome.usable else None
         if outcome.usable and load:
             self.load()
@@ -219,7 +236,7 @@ class HighsModel:
         value[integer] = np.round(value[integer])
         h.setSolution(len(index), index, value)
 
-    def _outcome(self, h: highspy.Highs, seconds: float, note: str) -> SolveOutcome:
+    def _outcome(self, h: highspy.Highs, seconds: float, note: str, scale: int) -> SolveOutcome:
         model_status = h.getModelStatus()
         info = h.getInfo()
         status = _OUTCOMES.get(model_status, Outcome.ERROR)
@@ -229,10 +246,13 @@ class HighsModel:
         termination = h.modelStatusToString(model_status)
         if status is Outcome.ERROR:
             note = "; ".join(part for part in (f"HiGHS stopped: {termination}", note) if part)
-        objective = info.objective_function_value if has_point else None
+        objective = math.ldexp(info.objective_function_value, -scale) if has_point else None
         if model_status == _STATUS.kModelEmpty:
             objective = self.compiled.lp.offset_
-        bound = info.mip_dual_bound if self.compiled.is_mip else (objective if status is Outcome.OPTIMAL else None)
+        if self.compiled.is_mip:
+            bound = math.ldexp(info.mip_dual_bound, -scale)
+        else:
+            bound = objective if status is Outcome.OPTIMAL else None
         nodes = int(info.mip_node_count) if self.compiled.is_mip else None
         return SolveOutcome.of(status, termination, objective, bound, seconds, note, nodes,
                                int(info.simplex_iteration_count))

@@ -25,7 +25,7 @@ from pyomo.common.collections import ComponentMap
 
 from ..model import build_model
 from ..model.csp import identical_csp_pairs
-from .highs import HighsModel
+from .highs import HighsModel, objective_scale
 from .plan import not_solved, plan_result
 from .problem import Problem, infeasibility_reasons
 from .results import Result
@@ -63,7 +63,7 @@ class DayModel:
                 self._start = self._by_name(self._start)
         self.problem = problem
         build_s = time.perf_counter() - started
-        outcome = self.highs.solve(problem.case.solver, start=self._start)
+        outcome = self.highs.solve(problem.case.solver, start=self._start, scale=objective_scale(problem.dt_h))
         if outcome.usable:
             self._start = self.highs.values(integer_only=True)
         with _PYOMO:

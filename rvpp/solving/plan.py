@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from ..data.case import Case
 from .diagnose import explain_infeasibility
-from .highs import HighsModel, model_lifetime
+from .highs import HighsModel, model_lifetime, objective_scale
 from .outcome import Outcome, SolveOutcome
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
@@ -51,7 +51,7 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     m = build_model(problem)
     build_s = time.perf_counter() - started
     say("solving with HiGHS")
-    outcome = HighsModel(m).solve(problem.case.solver)
+    outcome = HighsModel(m).solve(problem.case.solver, scale=objective_scale(problem.dt_h))
     return plan_result(problem, m, outcome, build_s, say)
 
 
