@@ -121,7 +121,7 @@ def test_a_scaled_objective_reports_in_the_models_units(scale):
     assert outcome.status is Outcome.OPTIMAL
     assert outcome.objective == pytest.approx(11.0) and outcome.bound == pytest.approx(11.0)
     assert (pyo.value(m.x), pyo.value(m.y)) == pytest.approx((0.0, 2.0))
-    # The same with a continuous y: the LP optimum y = 1.5 gives 10, its own bound.
+    # The same with continuous x and y: the LP optimum y = 1.5 gives 10, its own bound.
     m.y.domain = pyo.NonNegativeReals
     m.x.domain = pyo.NonNegativeReals
     outcome = HighsModel(m).solve(SolverSettings(rel_gap=0.0, time_limit_s=30), scale=scale)

@@ -51,6 +51,7 @@ def objective_scale(dt_h: float) -> int:
     """The power of two by which a bidding day's objective is scaled inside HiGHS, for ``dt_h``-hour periods."""
     return SUBHOURLY_OBJECTIVE_SCALE if dt_h < 1.0 else 0
 
+
 # HiGHS creates one task scheduler per process at its first run; that first run is
 # serialized, later runs in threads of one process go side by side (HiGHS releases the
 # interpreter lock while it solves).
