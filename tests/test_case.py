@@ -178,6 +178,15 @@ EXACT = {
     "threads beyond any machine": (
         lambda d: d["solver"].update(threads=10 ** 30),
         ["solver: threads=" + "1" + "0" * 30 + " must be <= 1024"]),
+    "a MIP start written as one name": (
+        lambda d: d["solver"].update(mip_start="csp[CSP1].online[3]"),
+        ["solver: mip_start='csp[CSP1].online[3]' must be a list"]),
+    "a MIP start with a number among its names": (
+        lambda d: d["solver"].update(mip_start=["csp[CSP1].online[3]", 7]),
+        ["solver: mip_start item 2=7 must be text (put it in quotes if it looks like a number or a date)"]),
+    "a MIP start name of a whole page": (
+        lambda d: d["solver"].update(mip_start=["x" * 5000]),
+        ["solver: mip_start item 1='" + "x" * 39 + "…' must have at most 200 characters"]),
 }
 
 
@@ -284,6 +293,15 @@ def test_a_case_round_trips_through_its_folder(paper_case, tmp_path):
     assert again == edited
     assert hash(again) == hash(edited)
     assert again.history.fingerprint == paper_case.history.fingerprint
+
+
+def test_a_mip_start_is_written_only_when_a_case_carries_one(paper_case, tmp_path):
+    started = paper_case.replace(solver={"mip_start": ("csp[CSP1].online[12]", "csp[CSP1].startup[12]")})
+    save_case(started, tmp_path / "started")
+    assert load_case(tmp_path / "started") == started
+    save_case(paper_case, tmp_path / "plain")
+    assert "mip_start" not in (tmp_path / "plain" / "case.yaml").read_text(encoding="utf-8")
+    assert load_case(tmp_path / "plain").solver.mip_start == ()
 
 
 def test_cases_are_immutable_and_hash_by_content(paper_case):

@@ -13,6 +13,7 @@ with the cyclic thermal storage the paper case had then, so the cases here keep 
 from __future__ import annotations
 
 import json
+import datetime as dt
 from pathlib import Path
 
 import pytest
@@ -29,9 +30,14 @@ def _cases(dt_h: float) -> list[dict]:
     return [c for c in REFERENCE["cases"] if c["dt_h"] == dt_h]
 
 
-def _check(paper_case, ref: dict) -> None:
-    case = with_options(cyclic_storage(paper_case), date=ref["date"], strategy=ref["strategy"], dt_h=ref["dt_h"], rel_gap=REL_GAP)
-    result = solve(case)
+def _case(paper_case, ref: dict, date: str | None = None):
+    return with_options(cyclic_storage(paper_case), date=date or ref["date"], strategy=ref["strategy"], dt_h=ref["dt_h"],
+                        rel_gap=REL_GAP)
+
+
+def _check(paper_case, ref: dict, start: tuple[str, ...] = ()) -> None:
+    case = _case(paper_case, ref)
+    result = solve(case.replace(solver={"mip_start": start}) if start else case)
     assert result.status == "optimal", result.message
     tol = REL_GAP * abs(ref["objective_eur"]) + ABS_TOL
     assert result.objective_eur == pytest.approx(ref["objective_eur"], abs=tol)
@@ -56,3 +62,17 @@ def test_hourly_optimum_is_unchanged(paper_case, ref):
 @pytest.mark.parametrize("ref", _cases(0.25), ids=lambda c: f"{c['date']}-{c['strategy']}-15min")
 def test_quarter_hour_optimum_is_unchanged(paper_case, ref):
     _check(paper_case, ref)
+
+
+STARTED = [c for c in REFERENCE["cases"] if c["strategy"] in ("deterministic", "optimistic")
+           and (c["dt_h"] == 1.0 or c["strategy"] == "optimistic")]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("ref", STARTED, ids=lambda c: f"{c['date']}-{c['strategy']}-{c['dt_h']:g}h")
+def test_a_plan_started_from_the_day_befores_keeps_the_optimum(paper_case, ref):
+    """As a backtest plans: HiGHS starts from the day before's plan (its integer variables at one)."""
+    before = (dt.date.fromisoformat(ref["date"]) - dt.timedelta(days=1)).isoformat()
+    start = solve(_case(paper_case, ref, before)).integer_ones
+    assert start, "the day before's plan has no integer variable at one: nothing to start from"
+    _check(paper_case, ref, start)

@@ -131,3 +131,49 @@ def test_a_scaled_objective_reports_in_the_models_units(scale):
 def test_sub_hourly_days_scale_their_objective_and_hourly_days_do_not():
     assert objective_scale(1.0) == 0
     assert objective_scale(0.5) == objective_scale(0.25) < 0
+
+
+def _knapsack() -> pyo.ConcreteModel:
+    """Three items of value 5, 4, 3 and weight 3, 3, 2 in a sack of 4: only the first fits with
+    anything of value (optimum 5); the relaxation takes it and half of the third (6.5)."""
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var([1, 2, 3], domain=pyo.Binary)
+    m.spare = pyo.Var(bounds=(0, 4))
+    m.sack = pyo.Constraint(expr=3 * m.x[1] + 3 * m.x[2] + 2 * m.x[3] + m.spare == 4)
+    m.obj = pyo.Objective(expr=5 * m.x[1] + 4 * m.x[2] + 3 * m.x[3], sense=pyo.maximize)
+    return m
+
+
+def test_a_start_sets_the_named_integer_variables_to_one_and_every_other_to_zero():
+    m = _knapsack()
+    start = HighsModel(m).start_at_ones(["x[3]", "x[9]", "spare", "csp[CSP1].online[1]"])
+    assert {v.name: value for v, value in start.items()} == {"x[1]": 0.0, "x[2]": 0.0, "x[3]": 1.0}
+
+
+def test_the_integer_variables_at_one_are_named_after_a_solve_and_none_before():
+    m = _knapsack()
+    highs = HighsModel(m)
+    assert highs.integer_ones() == ()
+    outcome = highs.solve(SolverSettings(rel_gap=0.0, time_limit_s=30))
+    assert outcome.objective == pytest.approx(5.0)
+    assert highs.integer_ones() == ("x[1]",)
+
+
+def test_a_start_reaches_highs_as_a_full_integer_point(monkeypatch):
+    import highspy
+
+    passed = []
+
+    class Spy(highspy.Highs):
+        def setSolution(self, *args):
+            passed.append([list(map(float, a)) if hasattr(a, "__len__") else a for a in args])
+            return super().setSolution(*args)
+
+    monkeypatch.setattr(highspy, "Highs", Spy)
+    m = _knapsack()
+    highs = HighsModel(m)
+    outcome = highs.solve(SolverSettings(rel_gap=0.0, time_limit_s=30), start=highs.start_at_ones(["x[2]"]))
+    assert outcome.objective == pytest.approx(5.0), "a start that is not optimal must not change the optimum"
+    (count, index, value), = passed
+    columns = [highs.compiled.columns[int(j)].name for j in index]
+    assert count == 3 and dict(zip(columns, value)) == {"x[1]": 0.0, "x[2]": 1.0, "x[3]": 0.0}

@@ -14,6 +14,7 @@ sheet          content
 =============  ==================================================================
 ``case``       name, description, delivery date, time zone, period length and the
                ``markets.``, ``uncertainty.``, ``budgets.`` and ``solver.`` settings
+               (not ``solver.mip_start``, a start from an earlier plan)
 ``hpa_tariff`` ``hour`` 0..23, ``tariff_eur_per_mwh``
 ``budgets``    ``source``, ``gamma`` [periods]: per-source overrides of the strategy
 ``wind`` ...   one sheet per unit kind (``wind``, ``pv``, ``csp``, ``ed``, ``td``)
@@ -189,7 +190,7 @@ def write_case_workbook(case: Case, target: str | Path | io.BytesIO) -> str | Pa
         for key, value in data[section].items():
             if isinstance(value, Mapping):  # band methods, imbalance price columns
                 settings.update(flatten(value, f"{section}.{key}."))
-            elif key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam") and value is not None:
+            elif key not in ("hpa_tariff_eur_per_mwh", "overrides", "dam", "mip_start") and value is not None:
                 settings[f"{section}.{key}"] = value
     settings.update(flatten({"provenance": data["provenance"]}))
     tariff = pd.DataFrame({"hour": range(HOURS_PER_DAY),

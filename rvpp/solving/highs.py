@@ -19,7 +19,7 @@ import gc
 import math
 import threading
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -267,6 +267,25 @@ class HighsModel:
                 if is_int or not integer_only:
                     values[v] = x
         return values
+
+    def integer_ones(self) -> tuple[str, ...]:
+        """Names of the integer variables at one in the last usable solution (every integer variable
+        rvpp builds is binary): the solver settings' ``mip_start`` for a neighbouring day."""
+        if self.solution is None:
+            return ()
+        ones = np.flatnonzero(self.compiled.integer & (self.solution > 0.5))
+        return tuple(self.compiled.columns[j].name for j in ones)
+
+    def start_at_ones(self, names: Iterable[str]) -> ComponentMap:
+        """A MIP start: the integer variables named in ``names`` at one, every other one at zero.
+        Names this model does not have are ignored; no name is parsed or looked up in the model."""
+        wanted = set(names)
+        start = ComponentMap()
+        if self.compiled is not None:
+            for v, is_int in zip(self.compiled.columns, self.compiled.integer.tolist()):
+                if is_int:
+                    start[v] = 1.0 if v.name in wanted else 0.0
+        return start
 
     def load(self) -> None:
         """Write the last usable solution into the Pyomo variables."""

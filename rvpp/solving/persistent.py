@@ -11,8 +11,8 @@
   the new data;
 
 and every solve starts HiGHS from the integer part of the previous plan (commitment,
-storage modes, curve segments): the neighbouring Γ of a sweep, yesterday's plan in a
-backtest. HiGHS checks the start and ignores it when it does not fit the new data, so
+storage modes, curve segments), the neighbouring Γ of a sweep; the first from the solver
+settings' ``mip_start`` when the case has one. HiGHS checks the start and ignores it when it does not fit the new data, so
 a start never changes the optimum, only the time to reach it.
 """
 
@@ -63,11 +63,13 @@ class DayModel:
                 self._start = self._by_name(self._start)
         self.problem = problem
         build_s = time.perf_counter() - started
-        outcome = self.highs.solve(problem.case.solver, start=self._start, scale=objective_scale(problem.dt_h))
+        ones = problem.case.solver.mip_start
+        start = self._start or (self.highs.start_at_ones(ones) if ones else None)
+        outcome = self.highs.solve(problem.case.solver, start=start, scale=objective_scale(problem.dt_h))
         if outcome.usable:
             self._start = self.highs.values(integer_only=True)
         with _PYOMO:
-            return plan_result(problem, self.model, outcome, build_s)
+            return plan_result(problem, self.model, outcome, build_s, integer_ones=self.highs.integer_ones())
 
     def _budgets_only(self, problem: Problem) -> bool:
         """True when ``problem`` differs from the built one in its budgets alone, and no solar

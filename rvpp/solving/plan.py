@@ -51,8 +51,11 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     m = build_model(problem)
     build_s = time.perf_counter() - started
     say("solving with HiGHS")
-    outcome = HighsModel(m).solve(problem.case.solver, scale=objective_scale(problem.dt_h))
-    return plan_result(problem, m, outcome, build_s, say)
+    highs = HighsModel(m)
+    ones = problem.case.solver.mip_start
+    outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(ones) if ones else None,
+                          scale=objective_scale(problem.dt_h))
+    return plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
 
 
 def not_solved(problem: Problem, reasons: list[str], build_s: float) -> Result:
@@ -61,8 +64,10 @@ def not_solved(problem: Problem, reasons: list[str], build_s: float) -> Result:
                   message="; ".join(reasons), build_s=build_s)
 
 
-def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, progress: Progress | None = None) -> Result:
-    """Plain tables of a solved model, or the explanation of an infeasible day."""
+def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, progress: Progress | None = None,
+                integer_ones: tuple[str, ...] = ()) -> Result:
+    """Plain tables of a solved model, or the explanation of an infeasible day (``integer_ones``: see
+    :attr:`Result.integer_ones`)."""
     say = progress or (lambda _msg: None)
     tables, extract_s, message = {}, 0.0, outcome.message
     if outcome.usable:
@@ -80,7 +85,7 @@ def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, prog
     return Result(problem=problem, status=outcome.status, termination=outcome.termination, message=message,
                   objective_eur=outcome.objective, bound_eur=outcome.bound, mip_gap=outcome.gap, build_s=build_s,
                   solve_s=outcome.seconds, extract_s=extract_s, nodes=outcome.nodes,
-                  lp_iterations=outcome.lp_iterations, **tables)
+                  lp_iterations=outcome.lp_iterations, integer_ones=integer_ones if tables else (), **tables)
 
 
 MPS_HEADERS = (b"*", b"NAME")  # how an MPS file begins: comment lines, then its NAME

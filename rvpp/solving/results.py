@@ -40,6 +40,8 @@ class Result:
     extract_s: float = 0.0
     nodes: int | None = None
     lp_iterations: int | None = None
+    # The plan's integer variables at one, by name: the solver settings' ``mip_start`` for the next day.
+    integer_ones: tuple[str, ...] = field(default=(), repr=False)
     parts: dict[str, float] = field(default_factory=dict)
     protection_eur: dict[str, float] = field(default_factory=dict)
     market: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
