@@ -10,7 +10,8 @@ and the cost of resuming: rerunning a finished backtest (every day skipped). Wri
 JSON document to ``benchmarks/results/backtest.json`` (and prints it): wall times,
 seconds per record, the CPU seconds the workers spent per record (and the wall time
 they imply on otherwise idle cores: total CPU / workers), the load average before and
-after, the mean plan and settlement solve times from the records, and whether each
+after, the mean plan and settlement solve times and the plans' LP iterations and nodes (which
+do not depend on the load) from the records, and whether each
 target was met by the measured wall time. ``--days 28`` gives a quick look; the targets are for a
 year. Timings on a shared machine are noisy: repeat and compare.
 """
@@ -67,6 +68,8 @@ def measure(name: str, case, settings: BacktestSettings, workers: int, folder: P
             "load_average_before_after": [load_before, round(os.getloadavg()[0], 2)],
             "mean_plan_solve_s": round(float(records["plan_solve_s"].mean()), 3),
             "mean_settle_solve_s": round(float(records["settle_solve_s"].mean()), 3),
+            "plan_lp_iterations": int(records["plan_lp_iterations"].fillna(0).sum()),
+            "plan_nodes": int(records["plan_nodes"].fillna(0).sum()),
             "mean_record_wall_s": round(float(records["wall_s"].mean()), 3),
             "days_not_settled": int((~metrics.daily(records)["settled"]).sum()),
             "reconcile_problems": int(len(metrics.reconcile(records))),

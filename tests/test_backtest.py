@@ -75,7 +75,8 @@ def test_the_plan_of_a_day_starts_from_the_settled_end_of_the_day_before(week, s
     chain = records[records["strategy"] == "deterministic"].sort_values("day").to_dict("records")
     before, after = chain[2], chain[3]
     case = day_case(stocked.replace(solver={"threads": 1}), dt.date.fromisoformat(after["day"]),
-                    BacktestVariant("deterministic"), before["end_state"], settings.storage_end)
+                    BacktestVariant("deterministic"), before["end_state"], settings.storage_end,
+                    tuple(before["plan_integer_ones"]))
     result = solve(case)
     assert result.status == "optimal"
     assert result.objective_eur == pytest.approx(after["plan_objective_eur"], rel=1e-9)
@@ -86,6 +87,31 @@ def test_the_plan_of_a_day_starts_from_the_settled_end_of_the_day_before(week, s
     end = before["end_state"]["CSP1"]
     if end["online"] and end["status_h"] is not None and end["status_h"] < 6:
         assert online[: int(6 - end["status_h"])].all()
+
+
+@pytest.mark.slow
+def test_each_plan_starts_from_the_plan_of_the_day_before_and_keeps_its_optimum(week, stocked, monkeypatch,
+                                                                                  tmp_path):
+    store, ident, settings = week
+    records = store.records(ident)
+    chain = records[records["strategy"] == "deterministic"].sort_values("day").to_dict("records")
+    for record in chain:
+        assert record["plan_integer_ones"] and all(isinstance(name, str) for name in record["plan_integer_ones"])
+        assert record["plan_lp_iterations"] >= 0 and record["plan_nodes"] >= 0
+    # The chain hands each day the plan of the day before as its MIP start.
+    seen = []
+    monkeypatch.setattr("rvpp.backtest.engine.plan", lambda case: seen.append(case.solver.mip_start) or solve(case))
+    three_days = BacktestSettings(WEEK[0], WEEK[0] + dt.timedelta(days=2), variants_of(["deterministic"], [], perfect=False),
+                                  storage_end=settings.storage_end)
+    run_backtest(stocked, three_days, BacktestStore(f"sqlite:///{tmp_path / 'again.sqlite3'}"))
+    assert seen[0] == () and seen[1:] == [tuple(r["plan_integer_ones"]) for r in chain[:2]]
+    # Without the start, the day's plan is the same optimum within the gap.
+    before, after = chain[4], chain[5]
+    cold = solve(day_case(stocked.replace(solver={"threads": 1}), dt.date.fromisoformat(after["day"]),
+                          BacktestVariant("deterministic"), before["end_state"], settings.storage_end))
+    tolerance = 1e-4 * abs(cold.objective_eur) + 0.01
+    assert after["plan_objective_eur"] <= cold.bound_eur + 0.01 and cold.objective_eur <= after["plan_bound_eur"] + 0.01
+    assert after["plan_objective_eur"] == pytest.approx(cold.objective_eur, abs=tolerance)
 
 
 @pytest.mark.slow

@@ -6,7 +6,8 @@ day ``D`` of the period, one pure step (:func:`run_day`):
 1. **plan**: the case of day ``D`` starting from the state the settlement of ``D − 1``
    left (storage energy, turbine status and time in it), bands from the history before
    ``D`` (:func:`rvpp.solving.problem.prepare` reads nothing of ``D`` itself), solved by
-   :func:`plan`;
+   :func:`plan` with ``D − 1``'s plan as MIP start (its integer variables at one,
+   ``plan_integer_ones`` in the record);
 2. **settle**: the plan's first-stage bids re-dispatched against ``D``'s own observations
    by the recourse model (:func:`rvpp.settle.recourse.evaluate`), which also reports the
    state at the end of the day;
@@ -70,6 +71,7 @@ class DayTask:
     variant: BacktestVariant
     state: State
     settings: BacktestSettings
+    start: tuple[str, ...] = ()  # the day before's plan_integer_ones: the MIP start of this day's plan
 
     @property
     def key(self) -> RecordKey:
@@ -96,9 +98,13 @@ def day_history(case: Case, day: dt.date, margin_days: int = HISTORY_MARGIN_DAYS
     return case.replace(history=History(frame, source=case.history.source))
 
 
-def day_case(base: Case, day: dt.date, variant: BacktestVariant, state: State, storage_end: str | float) -> Case:
-    """The case a day is planned and settled with: its date, its variant's budgets, its start state."""
-    return with_state(variant.case(base, delivery_date=day), state, storage_end)
+def day_case(base: Case, day: dt.date, variant: BacktestVariant, state: State, storage_end: str | float,
+             start: tuple[str, ...] = ()) -> Case:
+    """The case a day is planned and settled with: its date, its variant's budgets, its start state and,
+    given ``start``, the day before's plan as MIP start (it shortens the solve; any optimum within the
+    gap may come out, so a day is planned again from the same start to give the same plan)."""
+    case = with_state(variant.case(base, delivery_date=day), state, storage_end)
+    return case.replace(solver={"mip_start": start}) if start else case
 
 
 def run_day(task: DayTask) -> dict[str, Any]:
@@ -115,13 +121,14 @@ def run_day(task: DayTask) -> dict[str, Any]:
                               "gamma": task.variant.gamma, "label": task.variant.label,
                               "fraction": task.variant.fraction, "start_state": task.state}
     try:
-        case = day_case(task.case, task.day, task.variant, task.state, settings.storage_end)
+        case = day_case(task.case, task.day, task.variant, task.state, settings.storage_end, task.start)
         real = realization(case, task.day)
         result = perfect_plan(case, real) if task.variant.is_perfect else plan(case)
     except RvppError as exc:
         return _finish({**record, "status": "error", "plan_status": "error", "message": str(exc),
                         "end_state": task.state, "state_source": "start (the day could not be prepared)"}, started)
     record.update(plan_numbers(result))
+    record["plan_integer_ones"] = list(result.integer_ones)
     bids = first_stage(result, settings.fix_commitment) if result.has_plan else no_bids(result.problem.nt)
     record["bids"] = {name: getattr(bids, name.removesuffix("_mw")).tolist() for name in BIDS}
     record.update(trade_numbers(bids, case.dt_h))
@@ -146,15 +153,20 @@ def run_day(task: DayTask) -> dict[str, Any]:
 
 
 def reopen_case(store: BacktestStore, ident: str, key: RecordKey) -> Case:
-    """The case one recorded day was planned with: its date, its variant's budgets and its recorded
-    start state, solved on one thread (``plan`` of it gives the recorded plan again)."""
+    """The case one recorded day was planned with: its date, its variant's budgets, its recorded
+    start state and the day before's plan as MIP start, solved on one thread (``plan`` of it gives
+    the recorded plan again)."""
     case, stored = store.load(ident)
     settings = BacktestSettings.from_stored(stored)
-    record = store.record_map(ident).get(key)
+    records = store.record_map(ident)
+    record = records.get(key)
     if record is None:
         raise RvppError(f"backtest {ident} has no record of {key.day}, {key.strategy}, {key.gamma}")
     variant, day = BacktestVariant(key.strategy, key.gamma), dt.date.fromisoformat(key.day)
-    return day_case(one_thread(case), day, variant, record["start_state"], settings.storage_end)
+    before = records.get(RecordKey((day - dt.timedelta(days=1)).isoformat(), key.strategy, key.gamma)) \
+        if day > settings.first_day else None
+    return day_case(one_thread(case), day, variant, record["start_state"], settings.storage_end,
+                    plan_start(before))
 
 
 def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
@@ -171,8 +183,15 @@ def plan_numbers(result: Result) -> dict[str, Any]:
     return {"plan_status": str(result.status), "message": result.message, "periods": result.problem.nt,
             "plan_objective_eur": result.objective_eur, "plan_bound_eur": result.bound_eur,
             "plan_mip_gap": result.mip_gap, "plan_build_s": result.build_s, "plan_solve_s": result.solve_s,
+            "plan_nodes": result.nodes, "plan_lp_iterations": result.lp_iterations,
             "plan_protection_eur": sum(result.protection_eur.values()) if result.protection_eur else None,
             "budgets": result.problem.budgets}
+
+
+def plan_start(record: dict[str, Any] | None) -> tuple[str, ...]:
+    """The MIP start a recorded day hands to the next day's plan (none from a day without a plan, or
+    from a record written before plans were started from the day before)."""
+    return tuple((record or {}).get("plan_integer_ones") or ())
 
 
 def no_bids(nt: int) -> FirstStage:
@@ -227,6 +246,7 @@ class _Chain:
     variant: BacktestVariant
     position: int
     state: State
+    start: tuple[str, ...] = ()
 
 
 def run_backtest(case: Case, settings: BacktestSettings, store: BacktestStore | None = None,
@@ -266,8 +286,8 @@ def run_backtest(case: Case, settings: BacktestSettings, store: BacktestStore | 
             day = days[chain.position]
             key = RecordKey(day.isoformat(), chain.variant.strategy, chain.variant.gamma)
             if key not in recorded:
-                return DayTask(task_case(day), day, chain.variant, chain.state, settings)
-            chain.state = recorded[key]["end_state"]
+                return DayTask(task_case(day), day, chain.variant, chain.state, settings, chain.start)
+            chain.state, chain.start = recorded[key]["end_state"], plan_start(recorded[key])
             chain.position += 1
         return None
 
@@ -295,7 +315,8 @@ def run_backtest(case: Case, settings: BacktestSettings, store: BacktestStore | 
                 clock.tick()
                 store.set_progress(ident, "running", clock.done, clock.total, clock.eta_s)
                 report(clock.done, clock.total, clock.eta_s)
-                chain.state, chain.position = record["end_state"], chain.position + 1
+                chain.state, chain.start = record["end_state"], plan_start(record)
+                chain.position += 1
                 submit(chain)
     except BaseException as exc:
         for future in running:

@@ -38,7 +38,7 @@ from . import metrics
 from .engine import BIDS
 
 ROOT = Path(__file__).resolve().parents[2]
-NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp")
+NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp", "plan_integer_ones")
 
 
 def records_table(records: pd.DataFrame) -> pd.DataFrame:
