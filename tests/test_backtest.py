@@ -417,3 +417,12 @@ def test_a_task_carries_only_the_history_its_day_needs_and_computes_the_same_rec
                                         settings)) for case in (paper_case, small))
         assert {k: v for k, v in full.items() if k not in timings} == {k: v for k, v in sliced.items()
                                                                        if k not in timings}
+
+
+def test_only_days_of_hourly_periods_start_from_the_plan_of_the_day_before(paper_case):
+    day, start = dt.date(2025, 5, 5), ("csp[CSP1].online[12]",)
+    variant, state = BacktestVariant("balanced"), initial_state(paper_case)
+    hourly = day_case(paper_case, day, variant, state, "carry", start)
+    quarter = day_case(paper_case.replace(dt_h=0.25), day, variant, state, "carry", start)
+    assert hourly.solver.mip_start == start and quarter.solver.mip_start == ()
+    assert day_case(paper_case, day, variant, state, "carry").solver.mip_start == ()

@@ -6,8 +6,8 @@ day ``D`` of the period, one pure step (:func:`run_day`):
 1. **plan**: the case of day ``D`` starting from the state the settlement of ``D − 1``
    left (storage energy, turbine status and time in it), bands from the history before
    ``D`` (:func:`rvpp.solving.problem.prepare` reads nothing of ``D`` itself), solved by
-   :func:`plan` with ``D − 1``'s plan as MIP start (its integer variables at one,
-   ``plan_integer_ones`` in the record);
+   :func:`plan`, on hourly days with ``D − 1``'s plan as MIP start (its integer variables
+   at one, ``plan_integer_ones`` in the record);
 2. **settle**: the plan's first-stage bids re-dispatched against ``D``'s own observations
    by the recourse model (:func:`rvpp.settle.recourse.evaluate`), which also reports the
    state at the end of the day;
@@ -50,6 +50,9 @@ TRADES = {"sold_mwh": ("p_da_mw", 1), "bought_mwh": ("p_da_mw", -1), "sr_up_mwh"
           "sr_dn_mwh": ("r_sr_dn_mw", 1), "heat_bought_mwh": ("h_hpa_mw", 1)}
 BIDS = ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw", "h_hpa_mw")
 HISTORY_MARGIN_DAYS = 8  # days of history kept before a task's band window (e.g. a price a week before)
+# Days of shorter periods are planned cold: at 15 minutes the day before's plan as start shortened 24
+# solves in all but made one 4.5 times slower (docs/performance.md), and the tail is what counts there.
+STARTED_PERIOD_MIN_H = 1.0
 
 
 def plan(case: Case) -> Result:
@@ -101,10 +104,11 @@ def day_history(case: Case, day: dt.date, margin_days: int = HISTORY_MARGIN_DAYS
 def day_case(base: Case, day: dt.date, variant: BacktestVariant, state: State, storage_end: str | float,
              start: tuple[str, ...] = ()) -> Case:
     """The case a day is planned and settled with: its date, its variant's budgets, its start state and,
-    given ``start``, the day before's plan as MIP start (it shortens the solve; any optimum within the
-    gap may come out, so a day is planned again from the same start to give the same plan)."""
+    given ``start`` on a day of hourly periods, the day before's plan as MIP start (it shortens the
+    solve; any optimum within the gap may come out, so a day is planned again from the same start to
+    give the same plan)."""
     case = with_state(variant.case(base, delivery_date=day), state, storage_end)
-    return case.replace(solver={"mip_start": start}) if start else case
+    return case.replace(solver={"mip_start": start}) if start and case.dt_h >= STARTED_PERIOD_MIN_H else case
 
 
 def run_day(task: DayTask) -> dict[str, Any]:
