@@ -12,8 +12,8 @@ with the cyclic thermal storage the paper case had then, so the cases here keep 
 
 from __future__ import annotations
 
-import json
 import datetime as dt
+import json
 from pathlib import Path
 
 import pytest

@@ -148,6 +148,7 @@ def test_a_start_sets_the_named_integer_variables_to_one_and_every_other_to_zero
     m = _knapsack()
     start = HighsModel(m).start_at_ones(["x[3]", "x[9]", "spare", "csp[CSP1].online[1]"])
     assert {v.name: value for v, value in start.items()} == {"x[1]": 0.0, "x[2]": 0.0, "x[3]": 1.0}
+    assert len(HighsModel(m).start_at_ones(())) == 0, "no names is no start, not every variable at zero"
 
 
 def test_the_integer_variables_at_one_are_named_after_a_solve_and_none_before():

@@ -277,11 +277,12 @@ class HighsModel:
         return tuple(self.compiled.columns[j].name for j in ones)
 
     def start_at_ones(self, names: Iterable[str]) -> ComponentMap:
-        """A MIP start: the integer variables named in ``names`` at one, every other one at zero.
-        Names this model does not have are ignored; no name is parsed or looked up in the model."""
+        """A MIP start: the integer variables named in ``names`` at one, every other one at zero; no
+        start (an empty map) without names. Names this model does not have are ignored; no name is
+        parsed or looked up in the model."""
         wanted = set(names)
         start = ComponentMap()
-        if self.compiled is not None:
+        if wanted and self.compiled is not None:
             for v, is_int in zip(self.compiled.columns, self.compiled.integer.tolist()):
                 if is_int:
                     start[v] = 1.0 if v.name in wanted else 0.0

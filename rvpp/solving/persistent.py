@@ -12,8 +12,9 @@
 
 and every solve starts HiGHS from the integer part of the previous plan (commitment,
 storage modes, curve segments), the neighbouring Γ of a sweep; the first from the solver
-settings' ``mip_start`` when the case has one. HiGHS checks the start and ignores it when it does not fit the new data, so
-a start never changes the optimum, only the time to reach it.
+settings' ``mip_start`` when the case has one. HiGHS checks the start and ignores it when
+it does not fit the new data, so a start never changes the optimum, only the time to
+reach it.
 """
 
 from __future__ import annotations
@@ -63,8 +64,7 @@ class DayModel:
                 self._start = self._by_name(self._start)
         self.problem = problem
         build_s = time.perf_counter() - started
-        ones = problem.case.solver.mip_start
-        start = self._start or (self.highs.start_at_ones(ones) if ones else None)
+        start = self._start or self.highs.start_at_ones(problem.case.solver.mip_start)
         outcome = self.highs.solve(problem.case.solver, start=start, scale=objective_scale(problem.dt_h))
         if outcome.usable:
             self._start = self.highs.values(integer_only=True)

@@ -52,8 +52,7 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     build_s = time.perf_counter() - started
     say("solving with HiGHS")
     highs = HighsModel(m)
-    ones = problem.case.solver.mip_start
-    outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(ones) if ones else None,
+    outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(problem.case.solver.mip_start),
                           scale=objective_scale(problem.dt_h))
     return plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
 
@@ -85,7 +84,7 @@ def plan_result(problem: Problem, m, outcome: SolveOutcome, build_s: float, prog
     return Result(problem=problem, status=outcome.status, termination=outcome.termination, message=message,
                   objective_eur=outcome.objective, bound_eur=outcome.bound, mip_gap=outcome.gap, build_s=build_s,
                   solve_s=outcome.seconds, extract_s=extract_s, nodes=outcome.nodes,
-                  lp_iterations=outcome.lp_iterations, integer_ones=integer_ones if tables else (), **tables)
+                  lp_iterations=outcome.lp_iterations, integer_ones=integer_ones, **tables)
 
 
 MPS_HEADERS = (b"*", b"NAME")  # how an MPS file begins: comment lines, then its NAME
