@@ -23,6 +23,10 @@
 * ``gamma_slider_redraw_*``: once the sweep is warm, from pressing an arrow key on the
   Γ slider (Learn, Compare) until the plan chart titled with the new Γ is drawn;
   ``GAMMA_MOVES`` moves each, their median in ``gamma_slider_redraw_s`` (both pages).
+  A press the slider has not taken within ``KEY_TAKEN_MS`` is made again and timed from
+  the press that moved it; ``gamma_slider_lost_presses`` counts the lost ones. A step that
+  fails (``gamma_slider_error``) leaves the other timings in the file, a screenshot of the
+  page in ``dashboard-failure.png``, and the benchmark's exit status non-zero.
 * ``revisit_s``: back to Results after another page (the plan is kept).
 * ``library_*``: a run library of ``LIBRARY_RUNS`` saved runs: listing it in this
   process, and opening the Saved runs page in the browser until its table is drawn.
@@ -49,6 +53,8 @@ import urllib.request
 from datetime import datetime, timedelta
 from pathlib import Path
 
+from playwright.sync_api import TimeoutError as PlaywrightTimeoutError, sync_playwright
+
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
@@ -59,12 +65,15 @@ CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 RESULTS = ROOT / "benchmarks" / "results" / "dashboard.json"
+FAILURE_SCREENSHOT = RESULTS.with_name("dashboard-failure.png")
 WAIT_MS = 180_000
 CHARTS_ON_RESULTS = 6
 LIBRARY_RUNS = 200
 REPEAT = 3
 WARM_STRATEGIES = ("Pessimistic", "Optimistic", "Deterministic")  # later solves: strategies not solved before
 GAMMA_MOVES = 6
+KEY_TAKEN_MS = 5_000  # a key press the Γ slider has not taken by then is taken as lost
+KEY_PRESSES = 3
 FIRST_CLICK_DELAY_MS = 3000  # a user reading Home before the first click
 PERIODS = {60: 1.0, 15: 0.25}
 
@@ -154,6 +163,10 @@ def fill_library(folder: Path, case: rvpp.Case) -> dict:
     return {"library_save_each_s": round(save_s, 4), "library_list_s": median(listed)}
 
 
+class BenchmarkStepFailed(Exception):
+    """A browser step that did not reach the state it waits for."""
+
+
 def free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
@@ -235,12 +248,14 @@ def gamma_slider(page, title: str, chart_title: str, timings: dict) -> list[floa
         # Up to new plans (their figures are built on the way), then back to plans already drawn.
         key, gamma = ("ArrowRight", gamma + 1) if i < GAMMA_MOVES // 2 else ("ArrowLeft", gamma - 1)
         wanted = chart_title.format(gamma=gamma)
-        wait_idle(page)
-        page.evaluate("() => { window.__titles = {}; }")
-        thumb.focus()
-        pressed = time.time()
-        page.keyboard.press(key)
-        page.locator(".gtitle", has_text=wanted).first.wait_for()
+        pressed, lost = press_until_moved(page, thumb, key, gamma)
+        timings["gamma_slider_lost_presses"] = timings.get("gamma_slider_lost_presses", 0) + lost
+        try:
+            page.locator(".gtitle", has_text=wanted).first.wait_for()
+        except PlaywrightTimeoutError:
+            on_show = [title.text_content() for title in page.locator(".gtitle").all()]
+            raise BenchmarkStepFailed(f"the Γ slider shows {thumb.get_attribute('aria-valuetext')}, but no chart "
+                                      f"titled {wanted!r} came in {WAIT_MS / 1000:.0f} s; titles on show: {on_show}")
         shown = page.evaluate("(wanted) => Object.entries(window.__titles).find(([t]) => t.includes(wanted))[1]",
                               wanted)
         moves.append(round(shown / 1000 - pressed, 3))
@@ -248,13 +263,35 @@ def gamma_slider(page, title: str, chart_title: str, timings: dict) -> list[floa
     return moves
 
 
+def press_until_moved(page, thumb, key: str, gamma: int) -> tuple[float, int]:
+    """Press ``key`` on the Γ slider's ``thumb`` until it shows ``gamma``: the time of the press that
+    moved it (epoch seconds) and the number of presses lost before it.
+
+    A press that lands while the page replaces the slider reaches no slider, and the chart
+    of the new Γ would never come; such a press is counted and made again, not timed.
+    """
+    before = thumb.get_attribute("aria-valuetext")
+    for lost in range(KEY_PRESSES):
+        wait_idle(page)
+        page.evaluate("() => { window.__titles = {}; }")
+        thumb.focus()
+        pressed = time.time()
+        page.keyboard.press(key)
+        try:
+            thumb.and_(page.locator(f'[aria-valuetext="{gamma}"]')).wait_for(timeout=KEY_TAKEN_MS)
+            return pressed, lost
+        except PlaywrightTimeoutError:
+            now = thumb.get_attribute("aria-valuetext")
+            if now != before:
+                raise BenchmarkStepFailed(f"{key} moved the Γ slider from {before} to {now}, not to {gamma}")
+    raise BenchmarkStepFailed(f"{KEY_PRESSES} presses of {key} left the Γ slider at {before}, not {gamma}")
+
+
 def nav(page, name: str) -> None:
     page.get_by_test_id("stSidebarNav").get_by_role("link", name=name, exact=True).click()
 
 
 def browser_timings(data_dir: Path) -> dict:
-    from playwright.sync_api import sync_playwright
-
     port = free_port()
     url = f"http://127.0.0.1:{port}"
     env = {**os.environ, "RVPP_DATA_DIR": str(data_dir)}
@@ -289,13 +326,19 @@ def browser_timings(data_dir: Path) -> dict:
             page.get_by_role("button", name="Solve", exact=True).wait_for()
             page.wait_for_timeout(FIRST_CLICK_DELAY_MS)
             timings.update(solve_to_charts(page, "first"))
-            learn = gamma_slider(page, "Robust bidding explained", "Bids at Γ = {gamma}:", timings)
-            compare = gamma_slider(page, "Compare strategies", "Bids at Γ = {gamma}:", timings)
-            timings["gamma_slider_redraw_learn_s"] = learn
-            timings["gamma_slider_redraw_learn_median_s"] = median(learn)
-            timings["gamma_slider_redraw_compare_s"] = compare
-            timings["gamma_slider_redraw_compare_median_s"] = median(compare)
-            timings["gamma_slider_redraw_s"] = median(learn + compare)
+            try:
+                learn = gamma_slider(page, "Robust bidding explained", "Bids at Γ = {gamma}:", timings)
+                compare = gamma_slider(page, "Compare strategies", "Bids at Γ = {gamma}:", timings)
+            except (BenchmarkStepFailed, PlaywrightTimeoutError) as failure:
+                # The other timings are still worth having; the failure is reported and fails the run.
+                timings["gamma_slider_error"] = str(failure).splitlines()[0]
+                page.screenshot(path=FAILURE_SCREENSHOT, full_page=True)
+            else:
+                timings["gamma_slider_redraw_learn_s"] = learn
+                timings["gamma_slider_redraw_learn_median_s"] = median(learn)
+                timings["gamma_slider_redraw_compare_s"] = compare
+                timings["gamma_slider_redraw_compare_median_s"] = median(compare)
+                timings["gamma_slider_redraw_s"] = median(learn + compare)
             warm = []
             for strategy in WARM_STRATEGIES[:REPEAT]:
                 nav(page, "Uncertainty")
@@ -350,6 +393,10 @@ def main() -> None:
     partial.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     partial.replace(RESULTS)
     print(json.dumps(report, indent=2))
+    failed = {key: value for key, value in report.items() if key.endswith("_error")}
+    if failed:
+        sys.exit(f"dashboard benchmark: {len(failed)} step(s) failed ({', '.join(failed)}); the other timings "
+                 f"are in {RESULTS.name}, a screenshot of the page in {FAILURE_SCREENSHOT.name}")
 
 
 if __name__ == "__main__":
