@@ -77,16 +77,24 @@ def header(name: str, mode: str) -> dict:
             "git_commit": git_commit(), "machine": machine(), "load_average_before": load_average()}
 
 
-def write_result(document: dict) -> Path:
-    """Write ``document`` to ``benchmarks/results/<benchmark>.json`` and return the path."""
+def write_result(document: dict, path: Path | None = None) -> Path:
+    """Write ``document`` to ``path`` (default ``benchmarks/results/<benchmark>.json``) beside it
+    first, then renamed into place, and return the path."""
     document["load_average_after"] = load_average()
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    path = RESULTS / f"{document['benchmark']}.json"
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(document, indent=1) + "\n")
+    path = Path(path) if path is not None else RESULTS / f"{document['benchmark']}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
     os.replace(tmp, path)
-    print(f"wrote {path.relative_to(ROOT)}", file=sys.stderr)
+    print(f"wrote {_shown(path)}", file=sys.stderr)
     return path
+
+
+def _shown(path: Path) -> str:
+    try:
+        return str(path.resolve().relative_to(ROOT))
+    except ValueError:
+        return str(path)
 
 
 def summary(values: list[float]) -> dict:

@@ -40,7 +40,6 @@ browser timings: ``python benchmarks/dashboard.py``.
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import socket
@@ -59,6 +58,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import rvpp  # noqa: E402
+from benchmarks.common import header, write_result  # noqa: E402
 from rvpp.data.case import STRATEGIES  # noqa: E402
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -375,9 +375,33 @@ def browser_timings(data_dir: Path) -> dict:
         server.wait()
 
 
+# (label, key in the report, target [s] or None) of the short table.
+TABLE = (("solver's answer -> six charts, a server's first solve", "drawn_after_solve_first_s", 0.5),
+         ("solver's answer -> six charts, later solves (median)", "drawn_after_solve_warm_s", 0.5),
+         ("Γ slider: key press -> plan drawn (median, Learn and Compare)", "gamma_slider_redraw_s", 1.0),
+         ("Γ sweep behind the slider: button -> curve drawn", "gamma_sweep_warmup_s", None),
+         ("Home's first chart, a fresh server", "first_chart_cold_s", None),
+         ("Home's first chart, a later session (median)", "first_chart_warm_median_s", None),
+         ("back to Results after another page (median)", "revisit_median_s", None),
+         (f"Saved runs with {LIBRARY_RUNS} runs: page -> table (median)", f"library_{LIBRARY_RUNS}_open_median_s", None))
+
+
+def print_table(report: dict) -> None:
+    print(f"dashboard, {report['case']} case; load average {report['load_average_before']} before, "
+          f"{report['load_average_after']} after")
+    for label, key, target in TABLE:
+        value = report.get(key)
+        shown = "not measured" if value is None else f"{value:.2f} s"
+        verdict = "" if target is None or value is None else f"  target <= {target:g} s{'' if value <= target else ' (missed)'}"
+        print(f"  {label:66s} {shown:>12s}{verdict}")
+    for key, value in report.items():
+        if key.endswith("_error") or key == "browser":
+            print(f"  {key}: {value}")
+
+
 def main() -> None:
     case = rvpp.load_case(ROOT / "data" / "cases" / "paper")
-    report = {"case": case.name, "load_average_before": os.getloadavg()[0]}
+    report = {**header("dashboard", "full"), "case": case.name}
     report["solve_s_by_case"] = solve_times(case)
     report["sweep_s_by_case"] = sweep_times(case)
     report.update(draw_times(case))
@@ -387,12 +411,8 @@ def main() -> None:
             report.update(browser_timings(Path(folder)))
         else:
             report["browser"] = f"skipped: no Chromium at {CHROMIUM}"
-    report["load_average_after"] = os.getloadavg()[0]
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    partial = RESULTS.with_suffix(".json.tmp")
-    partial.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
-    partial.replace(RESULTS)
-    print(json.dumps(report, indent=2))
+    write_result(report, RESULTS)
+    print_table(report)
     failed = {key: value for key, value in report.items() if key.endswith("_error")}
     if failed:
         sys.exit(f"dashboard benchmark: {len(failed)} step(s) failed ({', '.join(failed)}); the other timings "
