@@ -1,6 +1,7 @@
 """Wall time of the many-solve studies, serial against a local process pool; RO vs SP solve times.
 
-Prints one JSON document on standard output:
+Writes ``benchmarks/results/studies.json`` (with the machine, package versions, date and git
+commit every benchmark records, ``benchmarks/common.py``) and prints it:
 
 * ``sensitivity`` (Γ = 0..NT, every source at once) and ``markets`` (Tables 10-12):
   wall time serial and on the process pool, and the speed-up;
@@ -26,6 +27,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import pandas as pd  # noqa: E402
 
 import rvpp  # noqa: E402
+from benchmarks.common import header, write_result  # noqa: E402
+from rvpp.cli import Number  # noqa: E402
 from rvpp.solving.parallel import default_workers, open_executor  # noqa: E402
 from rvpp.studies import markets, out_of_sample, sensitivity, stochastic  # noqa: E402
 from rvpp.studies.settings import SCENARIO_COUNTS, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings  # noqa: E402
@@ -51,17 +54,23 @@ def serial_vs_pool(study, case, settings, workers: int) -> dict:
             "speedup": round(serial_s / pool_s, 2)}
 
 
+def scenario_counts(text: str) -> tuple[int, ...]:
+    """``--scenarios``: whole numbers from 1 to 100 separated by commas, or nothing."""
+    return tuple(Number(1, 100, whole=True)(item.strip()) for item in text.split(",") if item.strip())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", default=",".join(map(str, SCENARIO_COUNTS)))
-    parser.add_argument("--test-days", type=int, default=TEST_DAYS)
-    parser.add_argument("--sp-time-limit", type=float, default=SP_TIME_LIMIT_S)
-    parser.add_argument("--workers", type=int, default=default_workers())
+    parser.add_argument("--scenarios", type=scenario_counts, default=SCENARIO_COUNTS,
+                        help="scenario counts of the stochastic benchmark, e.g. 5,10 (\"\" skips it)")
+    parser.add_argument("--test-days", type=Number(1, 366, whole=True), default=TEST_DAYS)
+    parser.add_argument("--sp-time-limit", type=Number(0, 1e6, low_open=True, unit="s"), default=SP_TIME_LIMIT_S)
+    parser.add_argument("--workers", type=Number(1, 64, whole=True), default=default_workers())
     args = parser.parse_args()
     case = rvpp.load_case(CASE_DIR)
     settings = StudySettings(test_days=args.test_days, sp_time_limit_s=args.sp_time_limit, png=False,
-                             scenario_counts=tuple(int(n) for n in args.scenarios.split(",") if n.strip()))
-    report = {"case": case.name, "date": case.delivery_date.isoformat(), "cores": default_workers(),
+                             scenario_counts=args.scenarios)
+    report = {**header("studies", "full"), "case": case.name, "delivery_date": case.delivery_date.isoformat(),
               "sensitivity": serial_vs_pool(sensitivity.run, case, settings, args.workers),
               "markets": serial_vs_pool(markets.run, case, settings, args.workers)}
     oos_s, oos = timed(out_of_sample.run, case, settings, "processes", args.workers)
@@ -80,6 +89,7 @@ def main() -> None:
                                  "paper_solve_s": PAPER_SP_S.get(int(r.n_scenarios)),
                                  "avg_net_cost_keur": round(r.avg_net_cost_keur, 2)}
             for r in sp.tables["table14_stochastic"].itertuples()}}
+    write_result(report)
     print(json.dumps(report, indent=2))
 
 
