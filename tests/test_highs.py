@@ -128,9 +128,10 @@ def test_a_scaled_objective_reports_in_the_models_units(scale):
     assert outcome.objective == pytest.approx(10.0) and outcome.bound == pytest.approx(10.0)
 
 
-def test_sub_hourly_days_scale_their_objective_and_hourly_days_do_not():
-    assert objective_scale(1.0) == 0
-    assert objective_scale(0.5) == objective_scale(0.25) < 0
+def test_days_scale_their_objective_except_hourly_days_where_the_solver_places_budgets():
+    assert objective_scale(1.0) == objective_scale(0.5) == objective_scale(0.25) < 0
+    assert objective_scale(0.5, budget_choices=True) == objective_scale(0.25, budget_choices=True) < 0
+    assert objective_scale(1.0, budget_choices=True) == 0
 
 
 def _knapsack() -> pyo.ConcreteModel:

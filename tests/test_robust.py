@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 from rvpp import solve_problem
 from rvpp.settle.audit import audit_result, protection_exact
 from rvpp.data.case import SolverSettings
-from rvpp.solving.robust import add_price_protection
+from rvpp.model import build_model
+from rvpp.solving.robust import add_price_protection, budget_choices
 from rvpp.solving.highs import run_highs
 from rvpp.solving.outcome import Outcome
 
@@ -124,3 +125,16 @@ def test_binary_encoding_puts_chi_on_the_largest_deviations():
     chosen = set(np.flatnonzero(chi) + 1)
     # Deviations 9 (t=2, 15) and 8 (t=9), then one of the two tied 7s (t=4, 5).
     assert chi.sum() == 4 and {2, 9, 15} <= chosen and len(chosen & {4, 5}) == 1
+
+
+def test_budget_choices_are_the_tied_deviations_at_the_gamma_boundary_and_the_variants_without_the_fast_path():
+    # Γ = 4 on deviations 9, 9, 8, then 7 twice: the fourth largest is one of the two 7s, so the
+    # solver places that one; with Γ = 3 or 5 the data decide every period.
+    dev = np.array([3, 9, 1, 7, 7, 2, 0, 5, 8, 6, 4, 2, 1, 3, 9, 0, 2, 2, 5, 6, 1, 0, 4, 3], float)
+    bands = _small_bands(dev, np.zeros(NT), np.zeros(NT), np.zeros(NT))
+
+    def choices(gamma, encoding="top_gamma", mode="paper"):
+        return budget_choices(build_model(tiny_problem(_small_case({"W": gamma}, encoding, mode), **bands)))
+
+    assert choices(4) and not choices(3) and not choices(5)
+    assert choices(3, encoding="binary") and choices(3, mode="planner_chosen")

@@ -39,17 +39,20 @@ from .outcome import Outcome, SolveOutcome
 # The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models;
 # restarting the root after presolving again costs more cut rounds than it saves.
 HIGHS_OPTIONS = {"mip_heuristic_run_rins": False, "mip_heuristic_run_rens": False, "mip_allow_restart": False}
-# Bidding days of periods shorter than an hour: the objective HiGHS receives is scaled by 2^-12
-# (a power of two, so exactly) and what it reports is scaled back. Measured on 30- and 15-minute
-# days: 13-19 % less solver time and fewer LP iterations; hourly days keep their path, where their
-# slowest days got slower. (HiGHS's own option for this, user_objective_scale, reports the dual
-# bound still scaled in 1.15.1.)
-SUBHOURLY_OBJECTIVE_SCALE = -12
+# The objective HiGHS receives is scaled by 2^-12 (a power of two, so exactly) and what it reports
+# is scaled back. Measured (docs/performance.md): 30- and 15-minute days 13-19 % less solver time;
+# hourly days 11-13 % less and their slowest days faster, except days where the solver itself
+# places some budgeted deviations (tied deviations at the Γ boundary, or the budget variants
+# without the top-Γ fast path), the slowest hourly days, which got slower and keep their path.
+# (HiGHS's own option for this, user_objective_scale, reports the dual bound still scaled in 1.15.1.)
+OBJECTIVE_SCALE = -12
 
 
-def objective_scale(dt_h: float) -> int:
-    """The power of two by which a bidding day's objective is scaled inside HiGHS, for ``dt_h``-hour periods."""
-    return SUBHOURLY_OBJECTIVE_SCALE if dt_h < 1.0 else 0
+def objective_scale(dt_h: float, budget_choices: bool = False) -> int:
+    """The power of two by which a bidding day's objective is scaled inside HiGHS, for ``dt_h``-hour
+    periods; ``budget_choices``: the solver places some budgeted deviations
+    (:func:`rvpp.solving.robust.budget_choices`)."""
+    return OBJECTIVE_SCALE if dt_h < 1.0 or not budget_choices else 0
 
 
 # HiGHS creates one task scheduler per process at its first run; that first run is

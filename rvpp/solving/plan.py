@@ -16,6 +16,7 @@ from .highs import HighsModel, model_lifetime, objective_scale
 from .outcome import Outcome, SolveOutcome
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
+from .robust import budget_choices
 from .extract import extract
 from .results import Result
 
@@ -53,7 +54,7 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     say("solving with HiGHS")
     highs = HighsModel(m)
     outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(problem.case.solver.mip_start),
-                          scale=objective_scale(problem.dt_h))
+                          scale=objective_scale(problem.dt_h, budget_choices(m)))
     return plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
 
 

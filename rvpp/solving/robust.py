@@ -141,6 +141,12 @@ def set_budgets(m: pyo.ConcreteModel, problem: Problem) -> None:
             _fix_chi(block, top_gamma_choice(source.deviation, int(source.gamma)))
 
 
+def budget_choices(m: pyo.ConcreteModel) -> bool:
+    """True when the solver places some budgeted deviation of ``m`` itself: a χ left free (tied
+    deviations at the Γ boundary under the top-Γ encoding, or every χ of the other variants)."""
+    return any(not v.fixed for block in m.robust.values() if hasattr(block, "chi") for v in block.chi.values())
+
+
 def _fix_chi(block, chi: np.ndarray) -> None:
     """Fix χ where the data decide it; leave it free (NaN) among ties at the Γ boundary."""
     for var, value in zip(block.chi.values(), chi.tolist()):
