@@ -26,11 +26,11 @@ from pyomo.common.collections import ComponentMap
 
 from ..model import build_model
 from ..model.csp import identical_csp_pairs
-from .highs import HighsModel, objective_scale
-from .plan import not_solved, plan_result
+from .highs import HighsModel
+from .plan import day_scale, not_solved, plan_result
 from .problem import Problem, infeasibility_reasons
 from .results import Result
-from .robust import budget_choices, set_budgets
+from .robust import set_budgets
 
 # Model building and extraction are Python work and Pyomo keeps some shared state; only
 # HiGHS runs of day models in different threads go side by side.
@@ -65,8 +65,7 @@ class DayModel:
         self.problem = problem
         build_s = time.perf_counter() - started
         start = self._start or self.highs.start_at_ones(problem.case.solver.mip_start)
-        outcome = self.highs.solve(problem.case.solver, start=start,
-                                   scale=objective_scale(problem.dt_h, budget_choices(self.model)))
+        outcome = self.highs.solve(problem.case.solver, start=start, scale=day_scale(problem, self.model))
         if outcome.usable:
             self._start = self.highs.values(integer_only=True)
         with _PYOMO:

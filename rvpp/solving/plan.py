@@ -54,8 +54,14 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     say("solving with HiGHS")
     highs = HighsModel(m)
     outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(problem.case.solver.mip_start),
-                          scale=objective_scale(problem.dt_h, budget_choices(m)))
+                          scale=day_scale(problem, m))
     return plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
+
+
+def day_scale(problem: Problem, m) -> int:
+    """The objective scale HiGHS solves ``m``, the model of ``problem``, with
+    (:func:`~rvpp.solving.highs.objective_scale`)."""
+    return objective_scale(problem.dt_h, budget_choices(m))
 
 
 def not_solved(problem: Problem, reasons: list[str], build_s: float) -> Result:
