@@ -40,6 +40,9 @@ CONFIGS = {
     "15 min": {"dt_h": 0.25, "date": "2025-04-15"},
     "non-default parameters": {"strategy": "deterministic", "date": "2025-05-05"},
     "forecast bands": {"date": "2025-05-05"},
+    # CSP1's field deviates by the same 300 MW_th in five noon hours and Γ = 4 takes four:
+    # both models choose which (test_the_tie_day_leaves_the_choice_of_hours_to_the_models).
+    "tie day": {"strategy": "balanced", "date": "2025-04-06"},
 }
 
 
@@ -123,6 +126,14 @@ def test_plan_tables_carry_the_bands_the_reference_derives(solved, name):
         np.testing.assert_allclose(rows[f"{prefix}nominal_mw"], src.nominal, rtol=1e-9, atol=1e-9, err_msg=name_)
         np.testing.assert_allclose(rows[f"{prefix}deviation_mw"], src.deviation, rtol=1e-9, atol=1e-9, err_msg=name_)
         assert result.summary()["budgets"][name_] == src.gamma
+
+
+def test_the_tie_day_leaves_the_choice_of_hours_to_the_models(solved):
+    case, _ = solved("tie day")
+    field = day_data(case).uncertain[case.csp[0].name]
+    largest = np.sort(field.deviation)[::-1][field.gamma - 1]
+    tied = np.flatnonzero(field.deviation == largest)
+    assert largest == pytest.approx(300.0) and field.gamma == 4 and len(tied) == 5
 
 
 def tied_wind(paper_case, odd_day_value_at_13: float):
