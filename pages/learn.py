@@ -93,7 +93,9 @@ st.markdown(
     "they are missing, and then the optimiser itself picks the Γ periods — naturally those where a "
     "deviation hurts least (**planner-chosen**). Both solve the same day; compare where χ lands and what "
     "the plan is worth.")
-variants = {mode: run.replace(budgets={"mode": mode}) for mode in ("paper", "planner_chosen")}
+# Planner-chosen hours have no ties to break: that variant takes the default rule.
+variants = {"paper": run.replace(budgets={"mode": "paper"}),
+            "planner_chosen": run.replace(budgets={"mode": "planner_chosen", "ties": "choose"})}
 if all(state.is_requested(c) for c in variants.values()) or st.button(
         "Solve both variants", key="learn_modes", icon=":material/play_arrow:"):
     for case in variants.values():

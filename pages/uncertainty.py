@@ -30,6 +30,8 @@ GROUPS = {"Prices": ("price",), "Wind": ("wind",), "PV": ("pv",), "CSP": ("csp",
 PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
 MODES = {"paper": "Paper: each source deviates in its Γ largest-deviation periods",
          "planner_chosen": "Planner-chosen periods (teaching only; see Learn)"}
+TIES = {"choose": "The model chooses among them (as the binary formulation)",
+        "earliest": "The earliest of them deviate"}
 
 
 def apply(**changes) -> None:
@@ -47,6 +49,11 @@ def from_widget(section: str | None, field: str, key: str) -> None:
 
 def set_forecast_bands(key: str) -> None:
     apply(uncertainty={"bands": {"default": "climatology", **{s: "forecast" for s in st.session_state[key]}}})
+
+
+def set_mode(key: str) -> None:
+    mode = st.session_state[key]
+    apply(budgets={"mode": mode} if mode == "paper" else {"mode": mode, "ties": "choose"})
 
 
 def set_strategy(key: str) -> None:
@@ -171,12 +178,20 @@ with left:
     )
 with right:
     st.radio("Budget variant", list(MODES), format_func=MODES.get, index=list(MODES).index(case.budgets.mode),
-             key="uncertainty_mode", on_change=from_widget, args=("budgets", "mode", "uncertainty_mode"))
+             key="uncertainty_mode", on_change=set_mode, args=("uncertainty_mode",))
     st.caption("Paper mode is the published method and the default. In the planner-chosen variant the "
                "optimiser may pick the Γ periods where a deviation hurts least: useful to show why the "
                "published constraints matter, not for bidding.")
     st.caption("Prices deviate where the plan loses most (exact); units deviate in their largest-deviation "
                "periods (paper mode). Neither searches the hours that hurt the profit most.")
+    paper_fast_path = case.budgets.mode == "paper" and case.solver.budget_encoding == "top_gamma"
+    st.radio("Equal deviations at the Γ boundary", list(TIES), format_func=TIES.get,
+             index=list(TIES).index(case.budgets.ties), key="uncertainty_ties", disabled=not paper_fast_path,
+             on_change=from_widget, args=("budgets", "ties", "uncertainty_ties"),
+             help="When more periods share the Γ-th largest deviation than the budget has left (a solar "
+                  "field at its ceiling with a band down to zero, for instance), the model either chooses which "
+                  "of them deviate, in the plan's favour, or takes the earliest. The earliest is one fixed "
+                  "pattern: faster on such days, and a plan protected against other periods. Paper mode only.")
 
 st.subheader("Where each source deviates")
 run = state.run_case()

@@ -161,6 +161,10 @@ def _parser() -> argparse.ArgumentParser:
     solve.add_argument("--budget-mode", choices=("paper", "planner_chosen"),
                        help="paper (default): deviations in the largest-deviation periods; planner_chosen: "
                             "the variant as printed, for teaching")
+    solve.add_argument("--ties", choices=("choose", "earliest"),
+                       help="paper mode, where equal deviations straddle Γ: choose (default): the model picks "
+                            "which deviate, as the binary formulation does; earliest: the earliest of them "
+                            "deviate (one fixed pattern, faster on such days)")
     solve.add_argument("--markets", type=_market_list, help="comma-separated subset of DAM,SRM,HPA (DAM always)")
     solve.add_argument("--no-csp", action="store_true", help="remove every CSP from the portfolio")
     solve.add_argument("--hpa-flat", type=Number(0, MAX_QUANTITY, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
@@ -224,7 +228,7 @@ def _run_solve(args: argparse.Namespace) -> int:
     case = with_options(case, date=args.date, strategy=args.strategy, gamma_fraction=args.gamma_fraction,
                         gammas=_parse_gammas(args.gamma),
                         markets=args.markets, csp=not args.no_csp, hpa_flat=args.hpa_flat, dt_h=args.dt,
-                        budget_mode=args.budget_mode, time_limit_s=args.time_limit, rel_gap=args.gap,
+                        budget_mode=args.budget_mode, ties=args.ties, time_limit_s=args.time_limit, rel_gap=args.gap,
                         threads=args.threads)
     if not args.quiet:
         print(f"rvpp: case {case.name}, {case.delivery_date}, {describe(case)}", file=sys.stderr)

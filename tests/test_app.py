@@ -290,6 +290,17 @@ def test_uncertainty_presets_budgets_and_deviating_periods(paper_case, paper_sol
     assert trace(wf1_spec, "Deviates (χ = 1) in 2 periods")
 
 
+def test_uncertainty_tie_rule_goes_into_the_case_and_leaves_with_paper_mode():
+    at = open_app("uncertainty")
+    assert case_of(at).budgets.ties == "choose" and not at.radio(key="uncertainty_ties").disabled
+    at.radio(key="uncertainty_ties").set_value("earliest").run()
+    assert not at.exception and case_of(at).budgets.ties == "earliest"
+    at.radio(key="uncertainty_mode").set_value("planner_chosen").run()
+    assert not at.exception and not errors(at)
+    assert (case_of(at).budgets.mode, case_of(at).budgets.ties) == ("planner_chosen", "choose")
+    assert at.radio(key="uncertainty_ties").disabled
+
+
 # ----------------------------------------------------------------------------- Results
 
 

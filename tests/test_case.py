@@ -217,6 +217,18 @@ def test_every_problem_is_reported_at_once(raw, paper_case):
     assert len(problems) == 2
 
 
+def test_earliest_ties_are_refused_where_the_model_chooses_the_periods_and_written_only_when_set(paper_case, tmp_path):
+    for changes, words in (({"budget_mode": "planner_chosen"}, "here planner_chosen and top_gamma"),
+                           ({"budget_encoding": "binary"}, "here paper and binary")):
+        with pytest.raises(CaseError, match=rf"budgets.ties=earliest needs budgets.mode=paper and "
+                                            rf"solver.budget_encoding=top_gamma \({words}\)"):
+            with_options(paper_case, ties="earliest", **changes)
+    assert "ties" not in (save_case(paper_case, tmp_path / "choose") / "case.yaml").read_text()
+    folder = save_case(with_options(paper_case, ties="earliest"), tmp_path / "earliest")
+    assert "ties: earliest" in (folder / "case.yaml").read_text()
+    assert load_case(folder).budgets.ties == "earliest"
+
+
 def test_budget_above_the_number_of_periods_is_refused(paper_case):
     with pytest.raises(CaseError, match=r"Γ for 'WF1'=30 exceeds the 24 periods of 2025-05-05"):
         prepare(with_options(paper_case, gammas={"WF1": 30}))

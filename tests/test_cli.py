@@ -82,6 +82,23 @@ def test_quarter_hours_without_srm_on_a_short_day(tmp_path, capsys):
     assert audit_export(load_case(PAPER), out) == []
 
 
+def test_earliest_ties_are_exported_and_audited(tmp_path, capsys):
+    # 6 April, balanced: CSP1's field deviates by 300 MW_th at 11-13 h and 16-17 h and Γ = 4.
+    out = tmp_path / "e"
+    code, err = run(capsys, "solve", "--date", "2025-04-06", "--strategy", "balanced", "--ties", "earliest",
+                    "--out", str(out))
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "optimal" and summary["budget_ties"] == "earliest"
+    csp = pd.read_csv(out / "csp.csv")
+    assert list(csp.loc[csp["chi"] == 1, "t"]) == [11, 12, 13, 16]
+    assert audit_export(load_case(PAPER), out) == []
+    csp.loc[csp["t"] == 16, ["chi", "sf_bound_mw"]] = [0, csp.loc[csp["t"] == 16, "sf_nominal_mw"].item()]
+    csp.loc[csp["t"] == 17, ["chi", "sf_bound_mw"]] = [1, 0.0]
+    csp.to_csv(out / "csp.csv", index=False)
+    assert "budget.earliest_ties" in {v.check for v in audit_export(load_case(PAPER), out)}
+
+
 def test_no_csp_and_no_hpa_names_the_missing_heat_source(tmp_path, capsys):
     code, err = run(capsys, "solve", "--no-csp", "--markets", "DAM,SRM", "--out", str(tmp_path / "x"))
     assert code == 1
@@ -100,6 +117,8 @@ def test_no_csp_and_no_hpa_names_the_missing_heat_source(tmp_path, capsys):
     (["--date", "18/03/2025"], "delivery_date='18/03/2025' must be a date"),
     (["--case", "does/not/exist"], "no case.yaml found"),
     (["--hpa-flat", "-5"], "--hpa-flat: '-5' is not allowed; give a number in [0, 1e+06] [EUR/MWh_th]"),
+    (["--ties", "earliest", "--budget-mode", "planner_chosen"],
+     "budgets.ties=earliest needs budgets.mode=paper and solver.budget_encoding=top_gamma (here planner_chosen"),
 ])
 def test_bad_input_ends_with_a_message_not_a_traceback(tmp_path, capsys, args, message):
     code, err = run(capsys, "solve", *args, "--quiet", "--out", str(tmp_path / "o"))

@@ -40,6 +40,22 @@ def test_budgets_re_solve_in_place_and_new_data_rebuild(paper_case):
     assert problems[2].case.csp[0].storage.e_init_mwh_th == 400.0
 
 
+def test_another_tie_rule_rebuilds_the_model(paper_case):
+    """Under ``ties: earliest`` the storage's charging limit is tightened in the earliest tied periods,
+    which the other rule may leave at their nominal field: a kept model must not be re-solved
+    across the two rules."""
+    chosen = prepare(with_options(paper_case, strategy="balanced", date="2025-04-06"))
+    earliest = prepare(with_options(chosen.case, ties="earliest"))
+    kept = DayModel()
+    results = [kept.solve(problem) for problem in (chosen, earliest, chosen)]
+    assert kept.rebuilds == 3
+    for result, problem in zip(results, (chosen, earliest, chosen)):
+        alone = solve_problem(problem)
+        assert result.status == alone.status == "optimal" and audit_result(result) == []
+        assert result.objective_eur == pytest.approx(alone.objective_eur, abs=1e-4 * abs(alone.objective_eur) + 0.01)
+    assert results[1].objective_eur < results[0].objective_eur - 1e-3 * abs(results[0].objective_eur)
+
+
 @pytest.mark.slow
 def test_a_budget_that_parts_identical_csps_rebuilds_without_their_order(paper_case):
     """Two interchangeable CSPs are ordered by hours online (rvpp.model.csp.add_csp_symmetry);

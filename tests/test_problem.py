@@ -86,3 +86,10 @@ def test_budget_split_names_sure_and_tied_periods():
     assert list(sure) == [True, False, False] and not tied.any() and count == 0
     assert budget_split(np.array([1.0, 2.0]), 0)[0].sum() == 0
     assert list(budget_split(np.array([1.0, 0.0]), 5)[0]) == [True, False]
+
+
+def test_budget_split_under_earliest_ties_makes_the_earliest_tied_periods_sure():
+    sure, tied, count = budget_split(np.array([9.0, 7.0, 7.0, 7.0, 2.0, 0.0]), 3, "earliest")
+    assert list(sure) == [True, True, True, False, False, False] and not tied.any() and count == 0
+    sure, tied, count = budget_split(np.array([7.0, 9.0, 7.0, 7.0]), 2, "earliest")
+    assert list(sure) == [True, True, False, False] and count == 0

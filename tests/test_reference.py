@@ -11,12 +11,14 @@ is feasible and its value is not overstated.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from rvpp import solve, with_options
 from tests.factories import cyclic_storage, with_storage
-from tests.reference_model import ReferenceNotOptimal, day_data, reference_optimum
+from tests.reference_model import ReferenceModel, ReferenceNotOptimal, day_data, reference_optimum
 
 GAP = 1e-7
 REL_TOL = 1e-6
@@ -134,6 +136,26 @@ def test_the_tie_day_leaves_the_choice_of_hours_to_the_models(solved):
     largest = np.sort(field.deviation)[::-1][field.gamma - 1]
     tied = np.flatnonzero(field.deviation == largest)
     assert largest == pytest.approx(300.0) and field.gamma == 4 and len(tied) == 5
+
+
+def test_earliest_ties_match_the_reference_with_those_periods_deviating(solved):
+    """``ties: earliest`` on the tie day: the reference, given the same day with the one tied hour
+    the rule leaves out (17 h) nudged below the tie, has no choice left and deviates at 11-13 h and
+    16 h; both optima agree, and they lie below the optimum where the models choose."""
+    case, chosen = solved("tie day")
+    earliest = solve(with_options(case, ties="earliest"))
+    assert earliest.status == "optimal", earliest.message
+    csp = earliest.csp[earliest.csp["unit"] == case.csp[0].name]
+    assert list(csp.loc[csp["chi"] == 1, "t"]) == [11, 12, 13, 16]
+    data = day_data(case)
+    field = data.uncertain[case.csp[0].name]
+    deviation = field.deviation.copy()
+    deviation[16] -= 1e-3  # 17:00, the last of the five tied hours
+    nudged = dataclasses.replace(data, uncertain={**data.uncertain,
+                                                  case.csp[0].name: dataclasses.replace(field, deviation=deviation)})
+    reference = ReferenceModel(case, nudged).solve()
+    assert relative_difference(earliest.objective_eur, reference) <= REL_TOL, (earliest.objective_eur, reference)
+    assert earliest.objective_eur < chosen.objective_eur - 1e-3 * abs(chosen.objective_eur)
 
 
 def tied_wind(paper_case, odd_day_value_at_13: float):

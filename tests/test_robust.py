@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rvpp import solve_problem
-from rvpp.settle.audit import audit_result, protection_exact
+from rvpp.settle.audit import audit_day, audit_result, audit_tables, protection_exact
 from rvpp.data.case import SolverSettings
 from rvpp.model import build_model
 from rvpp.solving.robust import add_price_protection, budget_choices
@@ -125,6 +125,30 @@ def test_binary_encoding_puts_chi_on_the_largest_deviations():
     chosen = set(np.flatnonzero(chi) + 1)
     # Deviations 9 (t=2, 15) and 8 (t=9), then one of the two tied 7s (t=4, 5).
     assert chi.sum() == 4 and {2, 9, 15} <= chosen and len(chosen & {4, 5}) == 1
+
+
+def test_earliest_ties_put_chi_on_the_earlier_of_two_tied_deviations_and_the_audit_checks_it():
+    dev = np.array([3, 9, 1, 7, 7, 2, 0, 5, 8, 6, 4, 2, 1, 3, 9, 0, 2, 2, 5, 6, 1, 0, 4, 3], float)
+    bands = _small_bands(dev, np.zeros(NT), np.zeros(NT), np.zeros(NT))
+    case = _small_case({"W": 4}).replace(budgets={"ties": "earliest"})
+    problem = tiny_problem(case, **bands)
+    assert not budget_choices(build_model(problem))
+    result = solve_problem(problem)
+    assert result.status == "optimal"
+    rows = result.units.query("unit == 'W'")
+    # Deviations 9 (t=2, 15) and 8 (t=9), then the earlier of the two tied 7s: t=4, not t=5.
+    assert set(rows.loc[rows["chi"] == 1, "t"]) == {2, 4, 9, 15}
+    assert audit_result(result, bands=problem.bands) == []
+    units = result.units.copy()
+    units.loc[(units["unit"] == "W") & (units["t"] == 4), "chi"] = 0
+    units.loc[(units["unit"] == "W") & (units["t"] == 5), "chi"] = 1
+    units.loc[(units["unit"] == "W") & (units["t"].isin([4, 5])), "bound_mw"] = [30.0, 30.0 - 3.5]
+    day = audit_day(result.case, bands=problem.bands)
+    later = {v.check for v in audit_tables(day, result.market, units, result.csp, result.summary())}
+    assert "budget.earliest_ties" in later
+    chosen = audit_day(result.case.replace(budgets={"ties": "choose"}), bands=problem.bands)
+    assert "budget.earliest_ties" not in {v.check for v in audit_tables(chosen, result.market, units, result.csp,
+                                                                          result.summary())}
 
 
 def test_budget_choices_are_the_tied_deviations_at_the_gamma_boundary_and_the_variants_without_the_fast_path():

@@ -399,12 +399,18 @@ class Budgets(_Frozen):
     ``fraction`` (a fraction of the day in [0, 1]), when set, replaces the preset: every
     source gets ``Γ = ⌊fraction·NT + ½⌋`` periods (e.g. 0.25 → 6 of 24 hours); overrides
     still apply on top.
+
+    ``ties`` (paper mode): where equal deviations straddle the Γ boundary, ``choose`` lets
+    the model pick which of them deviate, as the binary formulation of MODEL_SPEC §5 does
+    (in the plan's favour); ``earliest`` makes the earliest of them deviate, one fixed
+    pattern that the solver need not search.
     """
 
     strategy: Strategy = "balanced"
     overrides: tuple[tuple[str, Annotated[int, Field(ge=0)]], ...] = ()
     mode: Literal["paper", "planner_chosen"] = "paper"
     fraction: Fraction | None = None
+    ties: Literal["choose", "earliest"] = "choose"
 
     @property
     def label(self) -> str:
@@ -556,6 +562,8 @@ class Case(_Frozen):
         dump = self.model_dump(mode="python", exclude={"history"})
         units = {kind: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
         dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
+        if dump["budgets"]["ties"] == "choose":
+            del dump["budgets"]["ties"]  # written only when set: cases and their digests stay as they were
         dump["provenance"] = dict(dump["provenance"])
         return {**dump, "units": units}
 
@@ -624,6 +632,11 @@ class Case(_Frozen):
             if price not in columns:
                 problems.append(f"{self.history.source}: price column {price!r} is missing")
         problems += self._band_problems(known, columns)
+        if self.budgets.ties == "earliest" and (self.budgets.mode != "paper"
+                                                or self.solver.budget_encoding != "top_gamma"):
+            problems.append(f"budgets.ties=earliest needs budgets.mode=paper and solver.budget_encoding=top_gamma "
+                            f"(here {self.budgets.mode} and {self.solver.budget_encoding}): the other variants "
+                            "choose the deviating periods in the model")
         for csp in self.csp:
             for field in ("min_up_h", "min_down_h", "startup_duration_h", "initial_status_h"):
                 hours = getattr(csp.power_block, field)
@@ -1117,6 +1130,7 @@ def with_options(
     hpa_flat: float | None = None,
     dt_h: float | None = None,
     budget_mode: str | None = None,
+    ties: str | None = None,
     time_limit_s: float | None = None,
     rel_gap: float | None = None,
     threads: int | None = None,
@@ -1138,6 +1152,8 @@ def with_options(
         changes["delivery_date"] = date
     if budget_mode is not None:
         changes["budgets"] = {**changes.get("budgets", {}), "mode": budget_mode}
+    if ties is not None:
+        changes["budgets"] = {**changes.get("budgets", {}), "ties": ties}
     solver = {k: v for k, v in {"time_limit_s": time_limit_s, "rel_gap": rel_gap, "threads": threads,
                                 "budget_encoding": budget_encoding, "pwl_encoding": pwl_encoding}.items()
               if v is not None}

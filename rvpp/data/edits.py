@@ -82,6 +82,7 @@ SETTINGS: dict[str, tuple[str, str]] = {
     "uncertainty.q_hi": ("Upper percentile", ""),
     "budgets.strategy": ("Strategy preset", ""),
     "budgets.mode": ("Budget variant", ""),
+    "budgets.ties": ("Tied deviations", ""),
     "budgets.overrides": ("Γ", "periods"),
     "solver.time_limit_s": ("Solver time limit", "s"),
     "solver.rel_gap": ("Solver relative gap", "-"),
@@ -251,6 +252,8 @@ def _budget_edits(origin: Case, edited: Case) -> list[str]:
     words = []
     if edited.budgets.mode != origin.budgets.mode:
         words.append("planner-chosen Γ" if edited.budgets.mode == "planner_chosen" else "paper-mode Γ")
+    if edited.budgets.ties != origin.budgets.ties:
+        words.append("earliest tied periods" if edited.budgets.ties == "earliest" else "tied periods chosen")
     new, old = edited.budgets.override_map, origin.budgets.override_map
     for source in sorted(set(new) | set(old)):
         if new.get(source) != old.get(source):

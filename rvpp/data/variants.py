@@ -111,4 +111,6 @@ def describe(case: Case) -> str:
         parts.append(f"{case.dt_h * 60:g}-min periods")
     if case.budgets.mode != "paper":
         parts.append("planner-chosen hours")
+    if case.budgets.ties == "earliest":
+        parts.append("earliest tied periods")
     return SEPARATOR.join(parts)

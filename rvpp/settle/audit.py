@@ -302,7 +302,7 @@ def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list
         delivery_date=summary["date"], dt_h=summary["dt_h"], markets=settings["markets"],
         uncertainty=settings["uncertainty"], csp=[c for c in case.csp if c.name in kept],
         budgets={"strategy": summary["strategy"], "mode": summary["budget_mode"],
-                 "overrides": summary["budgets"]})
+                 "ties": summary.get("budget_ties", "choose"), "overrides": summary["budgets"]})
     tables = {name: _read_table(folder / f"{name}.csv") for name in ("market", "units", "csp")}
     return audit_tables(audit_day(run), tables["market"], tables["units"], tables["csp"], summary, tol)
 
@@ -531,8 +531,10 @@ def _audit_commitment(a: _Auditor, day: AuditDay, unit, u, v_su, v_sd) -> None:
 
 
 def _audit_budgets(a: _Auditor, day: AuditDay, by_unit: dict, by_csp: dict) -> None:
-    """χ sums to Γ, lands on the largest deviations (paper mode), and bounds follow."""
+    """χ sums to Γ, lands on the largest deviations (paper mode; among tied ones on the earliest
+    under ``budgets.ties: earliest``), and bounds follow."""
     paper = day.case.budgets.mode == "paper"
+    earliest = paper and day.case.budgets.ties == "earliest"
     for name, src in day.sources.items():
         if src.is_price:
             continue
@@ -551,6 +553,14 @@ def _audit_budgets(a: _Auditor, day: AuditDay, by_unit: dict, by_csp: dict) -> N
         if paper and 0 < chi.sum() < len(chi):
             chosen, other = deviation[chi > 0.5], deviation[chi < 0.5]
             a.leq("budget.largest_deviations", other.max(), chosen.min(), name)
+            boundary = np.flatnonzero(deviation == chosen.min())
+            if earliest and chosen.min() > 0 and (chi[boundary] > 0.5).any() and (chi[boundary] < 0.5).any():
+                last_chosen = boundary[chi[boundary] > 0.5].max()
+                first_skipped = boundary[chi[boundary] < 0.5].min()
+                if last_chosen > first_skipped:
+                    a.fail("budget.earliest_ties", f"a tied deviation of {chosen.min():g} deviates at period "
+                           f"{last_chosen + 1} but not at the earlier period {first_skipped + 1}", name,
+                           t=int(last_chosen) + 1)
 
 
 def protection_exact(exposure: np.ndarray, gamma: int) -> float:

@@ -86,8 +86,9 @@ class DayModel:
         if identical_csp_pairs(problem) != identical_csp_pairs(built):
             return False  # the order of interchangeable CSPs holds only among equal budgets
         strip = lambda case: {k: v for k, v in case.to_data().items() if k != "budgets"}  # noqa: E731
-        return strip(built.case) == strip(problem.case) and \
-            built.case.budgets.mode == problem.case.budgets.mode
+        same_variant = (built.case.budgets.mode, built.case.budgets.ties) == \
+            (problem.case.budgets.mode, problem.case.budgets.ties)
+        return strip(built.case) == strip(problem.case) and same_variant
 
     def _by_name(self, values: ComponentMap) -> ComponentMap:
         """Values of another model's variables moved to the current model's variables of the same name."""

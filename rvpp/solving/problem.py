@@ -164,15 +164,26 @@ def top_gamma_deviation(deviation: np.ndarray, gamma: int) -> np.ndarray:
     return y
 
 
-def budget_split(deviation: np.ndarray, gamma: int) -> tuple[np.ndarray, np.ndarray, int]:
+def budget_split(deviation: np.ndarray, gamma: int, ties: str = "choose") -> tuple[np.ndarray, np.ndarray, int]:
     """Where paper mode may put Γ deviations (MODEL_SPEC §5): ``(sure, tied, count)``.
 
     ``sure`` marks the periods that deviate under every tie-break (deviation above the
     Γ-th largest); ``count`` more deviate among the periods marked ``tied`` (deviation
     equal to the Γ-th largest), and the model may choose which. Nothing is tied when
-    that deviation is 0 (a zero deviation changes no bound).
+    that deviation is 0 (a zero deviation changes no bound). Under ``ties="earliest"``
+    (``budgets.ties``) the earliest ``count`` tied periods are sure and nothing is left
+    to choose.
     """
-    dev = np.asarray(deviation, dtype=float)
+    sure, tied, count = _split(np.asarray(deviation, dtype=float), gamma)
+    if ties == "earliest" and count:
+        sure = sure.copy()
+        sure[np.flatnonzero(tied)[:count]] = True
+        return sure, np.zeros_like(tied), 0
+    return sure, tied, count
+
+
+def _split(dev: np.ndarray, gamma: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`budget_split` with the tied periods left to the model."""
     nothing = np.zeros(len(dev), dtype=bool)
     if gamma <= 0:
         return nothing, nothing, 0
@@ -210,7 +221,7 @@ def infeasibility_reasons(problem: Problem) -> list[str]:
         (``sign``: +1 for consumptions, −1 for availabilities) only makes a bound worse.
         """
         src = problem.sources[name]
-        sure, tied, count = budget_split(src.deviation, src.gamma if paper else 0)
+        sure, tied, count = budget_split(src.deviation, src.gamma if paper else 0, case.budgets.ties)
         deviated = src.nominal + sign * src.deviation
         bound = np.where(sure, deviated, src.nominal)
         if (broken := breaks(bound)).any():

@@ -85,6 +85,7 @@ class Result:
             "strategy": case.budgets.strategy,
             "budget_fraction": case.budgets.fraction,
             "budget_mode": case.budgets.mode,
+            "budget_ties": case.budgets.ties,
             "budgets": self.problem.budgets,
             "markets": case.markets.label,
             "csp": [c.name for c in case.csp],

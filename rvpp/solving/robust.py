@@ -115,7 +115,7 @@ def add_budgeted_deviation(block, source: Source, problem: Problem) -> dict:
         return {t: float(dev[t - 1]) * block.chi[t] for t in periods}
     if encoding == "binary":
         return _paper_binary(block, dev, periods)
-    _fix_chi(block, top_gamma_choice(dev, int(source.gamma)))
+    _fix_chi(block, top_gamma_choice(dev, int(source.gamma), problem.case.budgets.ties))
     return {t: float(dev[t - 1]) * block.chi[t] for t in periods}
 
 
@@ -138,7 +138,7 @@ def set_budgets(m: pyo.ConcreteModel, problem: Problem) -> None:
         block = m.robust[name]
         block.gamma.set_value(int(source.gamma))
         if not source.is_price and (top_gamma or not hasattr(block, "budget")):
-            _fix_chi(block, top_gamma_choice(source.deviation, int(source.gamma)))
+            _fix_chi(block, top_gamma_choice(source.deviation, int(source.gamma), problem.case.budgets.ties))
 
 
 def budget_choices(m: pyo.ConcreteModel) -> bool:
@@ -170,16 +170,17 @@ def _paper_binary(block, dev: np.ndarray, periods) -> dict:
     return {t: block.y[t] for t in periods}
 
 
-def top_gamma_choice(dev: np.ndarray, gamma: int) -> np.ndarray:
+def top_gamma_choice(dev: np.ndarray, gamma: int, ties: str = "choose") -> np.ndarray:
     """Paper-mode χ decided by the data: 1 on the Γ largest deviations, 0 elsewhere, NaN where
-    tied deviations straddle the Γ boundary (the solver chooses among them).
+    tied deviations straddle the Γ boundary (the solver chooses among them) unless ``ties`` is
+    ``"earliest"`` (``budgets.ties``: the earliest of them deviate).
 
     The periods come from :func:`~rvpp.solving.problem.budget_split`; where fewer than Γ
     periods have a positive deviation, χ is completed with the earliest remaining
     periods (their deviation is 0, so they change no bound) to keep ``Σχ = Γ``.
     """
     dev = np.asarray(dev, dtype=float)
-    sure, tied, count = budget_split(dev, gamma)
+    sure, tied, count = budget_split(dev, gamma, ties)
     chi = sure.astype(float)
     if count and int(tied.sum()) > count:
         chi[tied] = np.nan
@@ -199,4 +200,4 @@ def surely_deviating(problem: Problem, name: str) -> np.ndarray:
     source = problem.sources[name]
     if problem.case.budgets.mode != "paper" or problem.case.solver.budget_encoding != "top_gamma":
         return np.zeros(problem.nt, dtype=bool)
-    return top_gamma_choice(source.deviation, int(source.gamma)) == 1.0
+    return top_gamma_choice(source.deviation, int(source.gamma), problem.case.budgets.ties) == 1.0
