@@ -27,14 +27,12 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import CASE, DAYS, QUICK_DAYS, STRATEGIES, header, summary, write_result  # noqa: E402
 from rvpp import load_case, solve, with_options  # noqa: E402
-from rvpp.solving.problem import prepare  # noqa: E402
-from rvpp.solving.robust import top_gamma_choice  # noqa: E402
+from rvpp.solving.problem import prepare, tied_budgets  # noqa: E402
 
 # Targets [s] of build + solve + extract per strategy: median and worst day.
 TARGETS = {1.0: {"median": 0.3, "max": 1.0}, 0.25: {"median": 2.0, "max": 5.0}}
@@ -68,12 +66,8 @@ def tie_days(base, dt_h: float, pairs: list[tuple[str, str]]) -> list[tuple[str,
     deviations straddle the Γ boundary of a source (paper mode, top-Γ). Read from the bands,
     as :func:`rvpp.solving.robust.budget_choices` reads it from a built model, without building
     a model for each of the year's pairs."""
-    def tied(day: str, strategy: str) -> bool:
-        problem = prepare(with_options(base, strategy=strategy, dt_h=dt_h, date=day))
-        return any(np.isnan(top_gamma_choice(source.deviation, int(source.gamma))).any()
-                   for source in problem.sources.values() if not source.is_price)
-
-    return [pair for pair in pairs if tied(*pair)]
+    return [(day, strategy) for day, strategy in pairs
+            if tied_budgets(prepare(with_options(base, strategy=strategy, dt_h=dt_h, date=day)))]
 
 
 def optimum_below(row: dict, default: dict) -> float | None:

@@ -48,6 +48,7 @@ import streamlit as st
 
 import rvpp
 from rvpp import Case, CaseError, Problem, Result
+from rvpp.solving.problem import tied_budgets
 
 from . import widgets, worker
 from .state import REQUESTED, ROOT, case_key
@@ -303,6 +304,11 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
             with st.expander(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", icon=icon):
                 st.caption(f"The solver's answer came back at {answered(jobs[0])} (server clock); what follows "
                            "is drawing.")
+                if result.has_plan and (ties := tied_budgets(result.problem)):
+                    st.caption("The model chose which of the tied deviations count (the exact rule, which makes "
+                               f"such days slower to solve): {'; '.join(ties)}. On the Uncertainty page, "
+                               "*The earliest of them deviate* fixes them instead: faster, and a more cautious "
+                               "plan.")
     return [found[case_key(c)] for c in cases]
 
 

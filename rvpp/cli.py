@@ -222,6 +222,7 @@ def _parse_gammas(items: list[str]) -> dict[str, int]:
 def _run_solve(args: argparse.Namespace) -> int:
     from .outputs.export import check_replaceable, write_plan
     from .solving.plan import MPS_HEADERS, solve, write_mps
+    from .solving.problem import tied_budgets
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(f"  {m}", file=sys.stderr))
     case = load_case(args.case)
@@ -241,6 +242,9 @@ def _run_solve(args: argparse.Namespace) -> int:
     if not args.quiet:
         if result.has_plan:
             print(_describe(result), file=sys.stderr)
+            for phrase in tied_budgets(result.problem):
+                print(f"  tied deviations, the model chose: {phrase} (--ties earliest fixes the earliest)",
+                      file=sys.stderr)
         print(f"wrote {', '.join(p.name for p in written)} to {args.out}", file=sys.stderr)
     if not result.has_plan:
         print(f"error: {result.status}: {result.message}", file=sys.stderr)

@@ -304,6 +304,17 @@ def test_uncertainty_tie_rule_goes_into_the_case_and_leaves_with_paper_mode():
 # ----------------------------------------------------------------------------- Results
 
 
+def test_results_says_when_the_model_chose_among_tied_deviations(paper_case):
+    at = open_app()
+    at.session_state["case"] = rvpp.with_options(paper_case, date="2025-04-06", strategy="balanced")
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    assert not at.exception
+    said = " ".join(c.value for c in at.caption)
+    assert "The model chose which of the tied deviations count" in said
+    assert "CSP1: 4 of the 5 periods tied at a deviation of 300 MW_th" in said
+
+
 def test_results_charts_and_kpis_match_the_library(paper_solve):
     at = open_app("results")
     assert not at.get("plotly_chart")

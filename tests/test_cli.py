@@ -84,12 +84,16 @@ def test_quarter_hours_without_srm_on_a_short_day(tmp_path, capsys):
 
 def test_earliest_ties_are_exported_and_audited(tmp_path, capsys):
     # 6 April, balanced: CSP1's field deviates by 300 MW_th at 11-13 h and 16-17 h and Γ = 4.
+    code, err = run(capsys, "solve", "--date", "2025-04-06", "--strategy", "balanced", "--out", str(tmp_path / "c"))
+    assert code == 0, err
+    assert "tied deviations, the model chose: CSP1: 4 of the 5 periods tied at a deviation of 300 MW_th" in err
     out = tmp_path / "e"
     code, err = run(capsys, "solve", "--date", "2025-04-06", "--strategy", "balanced", "--ties", "earliest",
                     "--out", str(out))
     assert code == 0, err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "optimal" and summary["budget_ties"] == "earliest"
+    assert "tied deviations" not in err
     csp = pd.read_csv(out / "csp.csv")
     assert list(csp.loc[csp["chi"] == 1, "t"]) == [11, 12, 13, 16]
     assert audit_export(load_case(PAPER), out) == []

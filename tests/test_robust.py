@@ -12,6 +12,7 @@ from rvpp import solve_problem
 from rvpp.settle.audit import audit_day, audit_result, audit_tables, protection_exact
 from rvpp.data.case import SolverSettings
 from rvpp.model import build_model
+from rvpp.solving.problem import tied_budgets
 from rvpp.solving.robust import add_price_protection, budget_choices
 from rvpp.solving.highs import run_highs
 from rvpp.solving.outcome import Outcome
@@ -149,6 +150,16 @@ def test_earliest_ties_put_chi_on_the_earlier_of_two_tied_deviations_and_the_aud
     chosen = audit_day(result.case.replace(budgets={"ties": "choose"}), bands=problem.bands)
     assert "budget.earliest_ties" not in {v.check for v in audit_tables(chosen, result.market, units, result.csp,
                                                                           result.summary())}
+
+
+def test_tied_budgets_name_the_source_the_count_and_the_tied_deviation():
+    # W deviates by half the given values: 4.5 at t=2 and 15, 4 at t=9, 3.5 at t=4 and 5.
+    dev = np.array([3, 9, 1, 7, 7, 2, 0, 5, 8, 6, 4, 2, 1, 3, 9, 0, 2, 2, 5, 6, 1, 0, 4, 3], float)
+    bands = _small_bands(dev, np.zeros(NT), np.zeros(NT), np.zeros(NT))
+    assert tied_budgets(tiny_problem(_small_case({"W": 4}), **bands)) == [
+        "W: 1 of the 2 periods tied at a deviation of 3.5 MW"]
+    assert tied_budgets(tiny_problem(_small_case({"W": 3}), **bands)) == []
+    assert tied_budgets(tiny_problem(_small_case({"W": 4}).replace(budgets={"ties": "earliest"}), **bands)) == []
 
 
 def test_budget_choices_are_the_tied_deviations_at_the_gamma_boundary_and_the_variants_without_the_fast_path():

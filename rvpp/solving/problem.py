@@ -182,6 +182,27 @@ def budget_split(deviation: np.ndarray, gamma: int, ties: str = "choose") -> tup
     return sure, tied, count
 
 
+def tied_budgets(problem: Problem) -> list[str]:
+    """The sources whose Γ the model places among tied deviations, one phrase each, e.g.
+    ``CSP1: 4 of the 5 periods tied at a deviation of 300 MW_th`` (empty when the data decide
+    every period: no such tie, another budget variant, or ``budgets.ties: earliest``).
+
+    These are the days the solver has to search (docs/performance.md, the tie days)."""
+    budgets = problem.case.budgets
+    if budgets.mode != "paper" or budgets.ties != "choose":
+        return []
+    phrases = []
+    for name, source in problem.sources.items():
+        if source.is_price:
+            continue
+        _, tied, count = budget_split(source.deviation, int(source.gamma))
+        if count and int(tied.sum()) > count:
+            unit = "MW_th" if source.unit_kind in ("csp", "td") else "MW"
+            phrases.append(f"{name}: {count} of the {int(tied.sum())} periods tied at a deviation of "
+                           f"{float(source.deviation[tied][0]):g} {unit}")
+    return phrases
+
+
 def _split(dev: np.ndarray, gamma: int) -> tuple[np.ndarray, np.ndarray, int]:
     """:func:`budget_split` with the tied periods left to the model."""
     nothing = np.zeros(len(dev), dtype=bool)
