@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import gc
+
 import pytest
 
 from rvpp import audit_result, prepare, solve_problem, with_options
@@ -38,6 +40,24 @@ def test_budgets_re_solve_in_place_and_new_data_rebuild(paper_case):
         assert result.problem is problem and audit_result(result) == []
     assert rebuilds == [1, 1, 2, 3]
     assert problems[2].case.csp[0].storage.e_init_mwh_th == 400.0
+
+
+def test_a_rebuild_moves_the_start_even_when_the_old_model_is_collected_meanwhile(paper_case, monkeypatch):
+    """The start of a rebuilt model comes from the old model's variables, read by name; a garbage
+    collection just before must not detach them (it once could, at random)."""
+    kept = DayModel()
+    kept.solve(prepare(with_options(paper_case, strategy="deterministic", date="2025-04-15")))
+    moved = DayModel._by_name
+
+    def collected_first(self, values):
+        gc.collect()
+        return moved(self, values)
+
+    monkeypatch.setattr(DayModel, "_by_name", collected_first)
+    next_day = prepare(with_options(paper_case, strategy="deterministic", date="2025-04-16"))
+    result = kept.solve(next_day)
+    assert kept.rebuilds == 2 and result.status == "optimal" and audit_result(result) == []
+    assert len(kept._start) > 0, "the previous plan's integer values start the next solve"
 
 
 def test_another_tie_rule_rebuilds_the_model(paper_case):

@@ -58,10 +58,15 @@ class DayModel:
                 set_budgets(self.model, problem)
                 self.highs.refresh()
             else:
+                # The start's variables belong to the model being replaced and are found again by
+                # their names; that model is cyclic garbage once replaced, and a collection would
+                # detach its variables from their names, so it is kept until they are read.
+                previous = self.model
                 self.model = build_model(problem)
                 self.highs = HighsModel(self.model)
                 self.rebuilds += 1
                 self._start = self._by_name(self._start)
+                del previous
         self.problem = problem
         build_s = time.perf_counter() - started
         start = self._start or self.highs.start_at_ones(problem.case.solver.mip_start)
