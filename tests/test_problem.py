@@ -49,11 +49,12 @@ def test_a_case_refused_before_solving_is_infeasible_for_the_solver(per_hour, wi
     assert outcome.status in (Outcome.INFEASIBLE, Outcome.INFEASIBLE_OR_UNBOUNDED), infeasibility_reasons(problem)
 
 
-def quarter_hour_wind(top_first_hour: float, p_min: float, gamma: int, encoding: str = "binary"):
+def quarter_hour_wind(top_first_hour: float, p_min: float, gamma: int, encoding: str = "binary",
+                      ties: str = "choose"):
     """Wind whose band repeats in the quarter-hours of each hour: 96 periods tied at a deviation of 5 MW."""
     top = np.repeat(np.r_[top_first_hour, np.full(HOURS - 1, 20.0)], 4)
     case = tiny_case([wind(p_min_mw=p_min)], ed_units=[demand(p_max=50)], overrides={"W": gamma},
-                     encoding=encoding, dt_h=0.25)
+                     encoding=encoding, dt_h=0.25).replace(budgets={"ties": ties})
     return tiny_problem(case, W=(top - 5.0, top, top), D=(10, 10, 10), price_da=(40, 50, 60))
 
 
@@ -67,6 +68,15 @@ def test_gamma_splitting_a_tie_is_not_refused_when_some_choice_is_feasible(encod
     assert result.status is Outcome.OPTIMAL, result.message
     chi = result.units.query("unit == 'W'")["chi"].to_numpy()
     assert chi.sum() == 2 and not chi[:4].any()
+
+
+def test_under_earliest_ties_the_earliest_tied_periods_decide_feasibility():
+    # The same day as above: the earliest two tied periods, which this rule makes deviate,
+    # leave 10 − 5 = 5 MW < p_min = 6, so it is refused before solving, and the solver agrees.
+    problem = quarter_hour_wind(top_first_hour=10.0, p_min=6.0, gamma=2, encoding="top_gamma", ties="earliest")
+    assert infeasibility_reasons(problem) == ['wind "W": available power 5.00 MW at 00:00 is below p_min_mw=6']
+    outcome = run_highs(build_model(problem), problem.case.solver, load=False)
+    assert outcome.status in (Outcome.INFEASIBLE, Outcome.INFEASIBLE_OR_UNBOUNDED)
 
 
 def test_a_tie_broken_in_every_choice_is_refused_and_explained():
