@@ -27,7 +27,6 @@ import sys
 import time
 from pathlib import Path
 
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import CASE, DAYS, QUICK_DAYS, STRATEGIES, header, summary, write_result  # noqa: E402

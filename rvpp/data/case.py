@@ -689,6 +689,11 @@ _TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "hist
                *_SECTIONS}
 
 
+def power_unit(kind: str) -> str:
+    """The unit of a unit kind's power: thermal for the CSP's field and the thermal demands."""
+    return "MW_th" if kind in ("csp", "td") else "MW"
+
+
 def _plain(kind: str, unit: Any) -> dict[str, Any]:
     if isinstance(unit, BaseModel):
         return _unit_data(kind, unit.model_dump(mode="python"))

@@ -21,7 +21,7 @@ import re
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from .case import UNIT_KINDS, Case
+from .case import UNIT_KINDS, Case, power_unit
 
 # field -> (name, unit, help); the form shows "name [unit]".
 FIELDS: dict[str, tuple[str, str, str]] = {
@@ -268,7 +268,7 @@ def _unit_edits(origin: Case, edited: Case) -> list[str]:
         after = {u.name: u for u in getattr(edited, kind)}
         for name in after:
             if name not in before:
-                words.append(f"{name} added ({capacity(kind, after[name]):g} {_capacity_unit(kind)})")
+                words.append(f"{name} added ({capacity(kind, after[name]):g} {power_unit(kind)})")
                 continue
             words += _field_edits(kind, before[name], after[name])
         words += [f"{name} removed" for name in before if name not in after]
@@ -281,7 +281,7 @@ def _field_edits(kind: str, old: Any, new: Any) -> list[str]:
     ratio = capacity(kind, new) / capacity(kind, old) if capacity(kind, old) else 1.0
     words = []
     if flat_new[cap_field] != flat_old[cap_field]:
-        words.append(f"{new.name} {flat_new[cap_field]:g} {_capacity_unit(kind)}")
+        words.append(f"{new.name} {flat_new[cap_field]:g} {power_unit(kind)}")
     for path, value in flat_new.items():
         before = flat_old.get(path)
         if path in (cap_field, "kind") or value == before:
@@ -296,10 +296,6 @@ def _field_edits(kind: str, old: Any, new: Any) -> list[str]:
         shown = "empty" if value is None else (f"{value:g}" if isinstance(value, float) else str(value))
         words.append(f"{new.name} {name} {shown}{f' {unit}' if unit and unit != '-' and value is not None else ''}")
     return words
-
-
-def _capacity_unit(kind: str) -> str:
-    return "MW_th" if kind in ("csp", "td") else "MW"
 
 
 def flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..data.case import STRATEGY_BUDGETS_H, Case
+from ..data.case import STRATEGY_BUDGETS_H, Case, power_unit
 from ..errors import CaseError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods, period_labels
@@ -197,9 +197,8 @@ def tied_budgets(problem: Problem) -> list[str]:
             continue
         _, tied, count = budget_split(source.deviation, int(source.gamma))
         if count and int(tied.sum()) > count:
-            unit = "MW_th" if source.unit_kind in ("csp", "td") else "MW"
             phrases.append(f"{name}: {count} of the {int(tied.sum())} periods tied at a deviation of "
-                           f"{float(source.deviation[tied][0]):g} {unit}")
+                           f"{float(source.deviation[tied][0]):g} {power_unit(source.unit_kind)}")
     return phrases
 
 
