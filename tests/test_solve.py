@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import importlib
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +20,7 @@ TABLE7 = {"deterministic": dict(price=0, wind=0, pv=0, csp=0, ed=0, td=0),
           "optimistic": dict(price=3, wind=3, pv=2, csp=2, ed=3, td=3),
           "balanced": dict(price=6, wind=6, pv=4, csp=4, ed=6, td=6),
           "pessimistic": dict(price=9, wind=9, pv=6, csp=6, ed=9, td=9)}
+ROOT = Path(__file__).resolve().parents[1]
 STRATEGIES = tuple(TABLE7)
 
 
@@ -167,10 +172,51 @@ def test_a_conflicting_thread_count_is_reported_not_fatal(monkeypatch):
     solve_module = importlib.import_module("rvpp.solving.highs")
 
     monkeypatch.setattr(solve_module, "_pool_threads", [1])
-    assert solve_module._thread_option(1) == ({"threads": 1}, "")
+    assert solve_module._thread_option(1) == ({}, "")
     assert solve_module._thread_option(0) == ({}, "")
     options, note = solve_module._thread_option(2)
     assert options == {} and "already runs this process with 1 thread" in note
+    monkeypatch.setattr(solve_module, "_pool_threads", [])
+    assert solve_module._thread_option(3) == ({"threads": 3}, "")
+
+
+# A fresh process: HiGHS sizes its pool at the process's first run and fails a later run naming
+# another size. Half the logical processors is HiGHS's documented default.
+THREAD_SEQUENCE = """
+import os, sys
+import highspy
+from rvpp import load_case, solve, with_options
+case = load_case(sys.argv[1])
+if sys.argv[2] == "outside":  # something else in the process runs HiGHS first, on two threads
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    h.setOptionValue("threads", 2)
+    h.addVars(1, [0.0], [1.0])
+    h.run()
+for threads in map(int, sys.argv[3:]):
+    result = solve(with_options(case, threads=threads))
+    print(result.status, result.objective_eur, "|", result.message)
+"""
+
+
+@pytest.mark.parametrize("first, counts", [("rvpp", (0, 2, 1)), ("outside", (1, 0))])
+def test_any_thread_count_after_any_first_run_solves(first, counts):
+    command = [sys.executable, "-c", THREAD_SEQUENCE, str(ROOT / "data" / "cases" / "paper"), first, *map(str, counts)]
+    run = subprocess.run(command, capture_output=True, text=True, cwd=ROOT, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = [line.split("|", 1) for line in run.stdout.strip().splitlines()]
+    assert len(lines) == len(counts)
+    assert {line[0].split()[0] for line in lines} == {"optimal"}, run.stdout
+    objectives = [float(line[0].split()[1]) for line in lines]
+    assert max(objectives) - min(objectives) <= 1e-4 * abs(objectives[0]), objectives
+    if first == "rvpp":
+        pool = max(1, (os.cpu_count() or 1) // 2)
+        for count, (_, message) in zip(counts, lines):
+            expected = "" if count in (0, pool) else f"threads={count} ignored: HiGHS already runs this process with {pool} thread(s)"
+            assert message.strip() == expected, (count, message)
+    else:
+        assert "threads=1 ignored: HiGHS already runs this process with another thread count" in lines[0][1]
+        assert lines[1][1].strip() == ""
 
 
 def test_an_infeasible_day_is_explained(paper_solve):

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import gc
 import math
+import os
 import threading
 import time
 from collections.abc import Iterable, Iterator, Mapping
@@ -64,9 +65,16 @@ _scheduler_ready = threading.Event()
 # the interpreter lock anyway).
 _compile_lock = threading.Lock()
 
-# HiGHS sizes one thread pool per process at its first solve and refuses a
-# different "threads" value afterwards; the first explicit value is kept here.
+# HiGHS sizes one thread pool per process at its first run and fails any later run that names
+# another size; the size of the first run rvpp makes is kept here (0: sized outside rvpp).
 _pool_threads: list[int] = []
+
+
+def default_threads() -> int:
+    """The thread count rvpp gives HiGHS when a case leaves ``solver.threads`` at 0: HiGHS's own
+    documented default, half the machine's logical processors (at least one)."""
+    return max(1, (os.cpu_count() or 1) // 2)
+
 
 INF = highspy.kHighsInf
 _STATUS = highspy.HighsModelStatus
@@ -87,15 +95,27 @@ _FEASIBLE = 2  # HiGHS solution status "feasible"
 
 
 def _thread_option(requested: int) -> tuple[dict, str]:
-    if not requested:
-        return {}, ""
+    """HiGHS's ``threads`` option for a run that asks for ``requested`` threads (0: the default),
+    and a note when the process's pool has another size.
+
+    Only the process's first run names a size (``requested``, or :func:`default_threads`); later
+    runs leave the option at 0, which takes the pool as it is, so a case asking for another
+    count is solved on the pool and told so instead of failing.
+    """
     with _first_run:
-        if not _pool_threads:
-            _pool_threads.append(requested)
-    if requested == _pool_threads[0]:
-        return {"threads": requested}, ""
-    return {}, (f"threads={requested} ignored: HiGHS already runs this process with "
-                f"{_pool_threads[0]} thread(s)")
+        first = not _pool_threads
+        if first:
+            _pool_threads.append(requested or default_threads())
+    return ({"threads": _pool_threads[0]} if first else {}), _ignored(requested)
+
+
+def _ignored(requested: int) -> str:
+    """The note for a run that asked for ``requested`` threads on the process's pool."""
+    pool = _pool_threads[0]
+    if requested in (0, pool):
+        return ""
+    held = f"{pool} thread(s)" if pool else "another thread count"
+    return f"threads={requested} ignored: HiGHS already runs this process with {held}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,12 +233,12 @@ class HighsModel:
                 h.changeObjectiveOffset(lp.offset_ * factor)
             if start:
                 self._set_start(h, start)
-            if _scheduler_ready.is_set():
-                h.run()
-            else:
-                with _first_run:
-                    h.run()
-                    _scheduler_ready.set()
+            if _run(h) == highspy.HighsStatus.kError and h.getModelStatus() == _STATUS.kNotset and threads:
+                # HiGHS refused the size: something else in this process ran HiGHS first, with another.
+                _pool_threads[0] = 0
+                h.setOptionValue("threads", 0)
+                _run(h)
+                note = _ignored(settings.threads)
             seconds = time.perf_counter() - t0
         except Exception as exc:  # the solver library failed; report, do not crash the caller
             return SolveOutcome.of(Outcome.ERROR, type(exc).__name__, None, None, 0.0, f"HiGHS failed: {exc}")
@@ -313,6 +333,16 @@ def model_lifetime() -> Iterator[None]:
         yield
     if gc.isenabled():
         gc.collect(0)
+
+
+def _run(h: highspy.Highs) -> highspy.HighsStatus:
+    """``h.run()``, the process's first run alone (it creates HiGHS's task scheduler)."""
+    if _scheduler_ready.is_set():
+        return h.run()
+    with _first_run:
+        status = h.run()
+        _scheduler_ready.set()
+        return status
 
 
 def run_highs(m: pyo.ConcreteModel, settings, *, load: bool = True, start: Mapping[VarData, float] | None = None,
