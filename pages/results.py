@@ -56,6 +56,11 @@ if not (clicked or state.is_requested(run)):
     timing = f" (about {expected[0]:.0f} s, from {expected[1]})" if expected and expected[0] >= 1 else ""
     st.info(f"{cancelled} {changed} Press **Solve** to compute the plan of the current case{timing}.",
             icon=":material/info:")
+    if ties := solving.tied(run):
+        st.caption(f"This day has deviations tied at the Γ boundary ({'; '.join(ties)}): the model chooses "
+                   "which of them count, the exact rule, which makes such a day several times slower to solve "
+                   "(up to half a minute at 15-minute periods in the benchmark). On the Uncertainty page, *The "
+                   "earliest of them deviate* fixes them instead: faster, and a more cautious plan.")
     st.stop()
 
 state.mark_requested(run)

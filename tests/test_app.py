@@ -304,6 +304,32 @@ def test_uncertainty_tie_rule_goes_into_the_case_and_leaves_with_paper_mode():
 # ----------------------------------------------------------------------------- Results
 
 
+def test_results_warns_of_tied_deviations_before_the_solve(paper_case):
+    tie_day = rvpp.with_options(paper_case, date="2025-04-06", strategy="balanced")
+    for case, warned in ((tie_day, True), (rvpp.with_options(tie_day, ties="earliest"), False), (paper_case, False)):
+        at = open_app()
+        at.session_state["case"] = case
+        at.switch_page("pages/results.py").run()
+        assert not at.exception and not at.get("plotly_chart")
+        said = " ".join(c.value for c in at.caption)
+        assert ("This day has deviations tied at the Γ boundary (CSP1: 4 of the 5 periods tied at a deviation of "
+                "300 MW_th)" in said) is warned, (case.delivery_date, case.budgets.ties)
+
+
+def test_a_tie_day_is_not_expected_to_take_a_day_without_ties(paper_case):
+    from dashboard.solving import Solver, shape
+
+    tie_day = rvpp.with_options(paper_case, date="2025-04-06", strategy="balanced")
+    quiet_day = rvpp.with_options(paper_case, strategy="balanced")
+    assert shape(tie_day) != shape(quiet_day)
+    assert shape(rvpp.with_options(tie_day, ties="earliest")) == shape(quiet_day)
+    solver = Solver(workers=1)
+    assert solver.expected_s(tie_day) is None  # the benchmark times a day without ties
+    solver.shape_seconds[shape(tie_day)] = 7.0
+    assert solver.expected_s(tie_day) == (7.0, "the last solve of a case like this one on this server")
+    assert solver.expected_s(quiet_day) != (7.0, "the last solve of a case like this one on this server")
+
+
 def test_results_says_when_the_model_chose_among_tied_deviations(paper_case):
     at = open_app()
     at.session_state["case"] = rvpp.with_options(paper_case, date="2025-04-06", strategy="balanced")
