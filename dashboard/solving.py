@@ -226,6 +226,11 @@ class Solver:
             self.results.popitem(last=False)
 
 
+# Where a day's tied deviations are named, before and after its solve.
+EARLIEST_HINT = ("On the Uncertainty page, *The earliest of them deviate* fixes them instead: faster, and a more "
+                 "cautious plan.")
+
+
 def shape(case: Case, gammas: Sequence[int] | None = None, problem: Problem | None = None) -> tuple:
     """What a solve's time depends on most: periods, strategy, budget mode, units, markets
     (and a sweep's number of Γ); for a single solve also whether the solver must choose among
@@ -324,9 +329,7 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
                            "is drawing.")
                 if result.has_plan and (ties := tied_budgets(result.problem)):
                     st.caption("The model chose which of the tied deviations count (the exact rule, which makes "
-                               f"such days slower to solve): {'; '.join(ties)}. On the Uncertainty page, "
-                               "*The earliest of them deviate* fixes them instead: faster, and a more cautious "
-                               "plan.")
+                               f"such days slower to solve): {'; '.join(ties)}. {EARLIEST_HINT}")
     return [found[case_key(c)] for c in cases]
 
 

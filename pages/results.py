@@ -59,8 +59,7 @@ if not (clicked or state.is_requested(run)):
     if ties := solving.tied(run):
         st.caption(f"This day has deviations tied at the Γ boundary ({'; '.join(ties)}): the model chooses "
                    "which of them count, the exact rule, which makes such a day several times slower to solve "
-                   "(up to half a minute at 15-minute periods in the benchmark). On the Uncertainty page, *The "
-                   "earliest of them deviate* fixes them instead: faster, and a more cautious plan.")
+                   f"(up to half a minute at 15-minute periods in the benchmark). {solving.EARLIEST_HINT}")
     st.stop()
 
 state.mark_requested(run)
