@@ -213,10 +213,11 @@ class Solver:
         key = case_key(case) if gammas is None else sweep_key(case, gammas)
         if key in self.seconds:
             return self.seconds[key], f"the last {work} of this case"
-        if shape(case, gammas) in self.shape_seconds:
-            return self.shape_seconds[shape(case, gammas)], f"the last {work} of a case like this one on this server"
-        if gammas is None and tied(case):
-            return None  # the benchmark's time is a day without ties
+        like = shape(case, gammas)
+        if like in self.shape_seconds:
+            return self.shape_seconds[like], f"the last {work} of a case like this one on this server"
+        if gammas is None and like[-1]:
+            return None  # a day with ties: the benchmark's time is a day without
         return benchmark_s(case, gammas)
 
     def _keep(self, key: str, result: Result) -> None:
@@ -245,10 +246,10 @@ def shape(case: Case, gammas: Sequence[int] | None = None, problem: Problem | No
 
 def tied(case: Case) -> list[str]:
     """The deviations tied at the Γ boundary that a solve of ``case`` leaves to the solver
-    (:func:`rvpp.solving.problem.tied_budgets`), empty when the case cannot be prepared (its
-    solve says why). Prepared again here: 2 ms for the paper case at 15 minutes."""
+    (:func:`rvpp.solving.problem.tied_budgets`) on the day :func:`prepare_cached` keeps, empty
+    when the case cannot be prepared (its solve says why)."""
     try:
-        return tied_budgets(rvpp.prepare(case))
+        return tied_budgets(prepare_cached(case))
     except RvppError:
         return []
 
