@@ -14,8 +14,14 @@ so starting one takes milliseconds. Two reasons for processes:
   process's output streams), and Streamlit runs every session in a thread of one
   process;
 * a process can be stopped: **Cancel** kills the solve's process at once, wherever HiGHS
-  is. (HiGHS's interrupt callback would need the solver module to poll a flag; killing
-  a process needs nothing from it and frees the core immediately.)
+  is, and frees the core immediately.
+
+A single solve also reports the solver's search (the best plan so far and its gap, every
+quarter second) and can be **stopped early**: the page sets the job's event, the solver
+process's watch (:data:`rvpp.solving.highs.Watch`) sees it and HiGHS ends with the best
+plan found so far (status ``stopped``). That plan is kept like any other until Solve is
+pressed again, which searches on to the optimum; its time is not taken as the case's
+expected time.
 
 A **sweep** solves one case for a grid of budgets Γ (the same Γ for every source) in one
 solver process with :func:`rvpp.solving.sweep.sweep_gamma`, which builds the day's
@@ -48,6 +54,7 @@ import streamlit as st
 
 import rvpp
 from rvpp import Case, CaseError, Problem, Result, RvppError
+from rvpp.solving.outcome import Outcome
 from rvpp.solving.problem import tied_budgets
 
 from . import widgets, worker
@@ -86,6 +93,8 @@ class Job:
     result: Result | list[Result] | None = None
     problems: list[str] | None = None
     cancelled: bool = False
+    search: object | None = None  # the solver's last report on its search (rvpp.Search)
+    stop: object = field(default_factory=CONTEXT.Event)  # set: end the search at its best plan
     process: multiprocessing.process.BaseProcess | None = None
     done: threading.Event = field(default_factory=threading.Event)
 
@@ -108,7 +117,7 @@ class Job:
 
     def _solve(self) -> None:
         receive, send = CONTEXT.Pipe(duplex=False)
-        target, args = ((worker.solve_into, (send, self.case)) if self.gammas is None
+        target, args = ((worker.solve_into, (send, self.case, self.stop)) if self.gammas is None
                         else (worker.sweep_into, (send, self.case, list(self.gammas))))
         self.process = CONTEXT.Process(target=target, args=args, daemon=True, name="rvpp-solve")
         self.stage = "starting the solver"
@@ -119,6 +128,10 @@ class Job:
                 kind, payload = receive.recv()
                 if kind == "stage":
                     self.stage = payload
+                    continue
+                if kind == "search":
+                    self.search = payload
+                    self.stage = searching(payload, self.stop.is_set())
                     continue
                 if kind == "progress":
                     self.done_points = payload
@@ -189,6 +202,20 @@ class Solver:
             if job.process is not None and job.process.is_alive():
                 job.process.kill()
 
+    def running(self, key: str) -> bool:
+        """Whether a solve of ``key`` is waiting or under way."""
+        with self.lock:
+            job = self.jobs.get(key)
+            return job is not None and not job.cancelled
+
+    def stop(self, keys: Sequence[str]) -> None:
+        """End the searches of the single solves ``keys`` at their best plan (at once if they have
+        one, else at their first)."""
+        with self.lock:
+            jobs = [self.jobs[k] for k in keys if k in self.jobs]
+        for job in jobs:
+            job.stop.set()
+
     def finish(self, job: Job) -> None:
         job.finished = time.perf_counter()
         with self.lock:
@@ -201,9 +228,10 @@ class Solver:
                     self.sweeps[job.key] = job.result
                     while len(self.sweeps) > KEPT_SWEEPS:
                         self.sweeps.popitem(last=False)
-                self.seconds[job.key] = job.elapsed_s
-                problem = job.result.problem if job.gammas is None else None  # prepared already
-                self.shape_seconds[shape(job.case, job.gammas, problem)] = job.elapsed_s
+                if not stopped(job.result):  # a search cut short says nothing of the case's time
+                    self.seconds[job.key] = job.elapsed_s
+                    problem = job.result.problem if job.gammas is None else None  # prepared already
+                    self.shape_seconds[shape(job.case, job.gammas, problem)] = job.elapsed_s
         job.done.set()
 
     def expected_s(self, case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:
@@ -225,6 +253,19 @@ class Solver:
         self.results.move_to_end(key)
         while len(self.results) > KEPT:
             self.results.popitem(last=False)
+
+
+def stopped(result: Result | list[Result]) -> bool:
+    """Whether ``result`` is a plan whose search was stopped early on request."""
+    return isinstance(result, Result) and result.status is Outcome.STOPPED
+
+
+def searching(search, stopping: bool) -> str:
+    """The stage line of a solve whose solver reports its search (``rvpp.Search``)."""
+    if search.objective is None:
+        return "stopping at the first plan found" if stopping else "searching for a first plan"
+    within = f"within {search.gap:.2%} of the optimum" if search.gap is not None else "no bound yet"
+    return f"{'stopping: ' if stopping else ''}best plan so far {within} ({search.nodes:,} nodes)"
 
 
 # Where a day's tied deviations are named, before and after its solve.
@@ -295,18 +336,21 @@ def _start_fork_server() -> None:
     forkserver.ensure_running()
 
 
-def solve(case: Case, label: str) -> Result | None:
-    """The plan of ``case``, solving it if needed while the page shows progress and Cancel.
+def solve(case: Case, label: str, again: bool = False, stoppable: bool = False) -> Result | None:
+    """The plan of ``case``, solving it if needed while the page shows progress and Cancel
+    (and, with ``stoppable``, **Stop early**: the page then shows the plan's status).
 
-    Returns ``None`` when the case cannot be solved at all (the reason is shown in
-    place) or when the solve was cancelled.
+    ``again``: the user pressed the page's Solve button, so a kept plan whose search was
+    stopped early is searched again. Returns ``None`` when the case cannot be solved at all
+    (the reason is shown in place) or when the solve was cancelled.
     """
-    results = solve_all([case], label)
+    results = solve_all([case], label, again, stoppable)
     return results[0] if results else None
 
 
-def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
-    """The plans of several cases, solved side by side, with one progress bar and Cancel.
+def solve_all(cases: Sequence[Case], label: str, again: bool = False, stoppable: bool = False) -> list[Result] | None:
+    """The plans of several cases, solved side by side, with one progress bar and Cancel
+    (``again``, ``stoppable``: as for :func:`solve`).
 
     Each case is kept on its own, so a plan solved here is instant on another page and
     the other way round. Returns ``None`` (with the reason shown) when a case cannot be
@@ -314,9 +358,12 @@ def solve_all(cases: Sequence[Case], label: str) -> list[Result] | None:
     """
     server = solver()
     found = {case_key(c): server.result(case_key(c)) for c in cases}
+    # A plan stopped early is searched again when asked, and not shown while that search runs.
+    found = {key: None if result is not None and stopped(result) and (again or server.running(key)) else result
+             for key, result in found.items()}
     jobs = [server.start(c) for c in cases if found[case_key(c)] is None]
     if jobs:
-        _wait(jobs, label, len(cases))
+        _wait(jobs, label, len(cases), stoppable)
         for job in jobs:
             if _without_result(job, label, again="the solve button"):
                 return None
@@ -373,16 +420,23 @@ def answered(job: Job) -> str:
     return f"{datetime.fromtimestamp(job.returned_at):%H:%M:%S.%f}"[:-3]
 
 
-def _wait(jobs: list[Job], label: str, total: int) -> None:
-    """Poll the jobs, drawing elapsed time, stage and an estimate, with a Cancel button."""
+def _wait(jobs: list[Job], label: str, total: int, stoppable: bool = False) -> None:
+    """Poll the jobs, drawing elapsed time, stage and an estimate, with a Cancel button (and, for
+    ``stoppable`` single solves, Stop early)."""
     slot = st.empty()
     keys = [job.key for job in jobs]
+    stoppable = stoppable and all(job.gammas is None for job in jobs)
     with slot.container():
-        bar_column, cancel_column = st.columns([6, 1], vertical_alignment="bottom")
-        bar = bar_column.progress(0.0, text=f"{label}…")
-        cancel_column.button("Cancel", key=f"cancel_{keys[0][:16]}", icon=":material/stop_circle:",
-                             on_click=_cancel, args=(keys,),
-                             help="Stops the solve at once (for every tab waiting on the same input).")
+        columns = st.columns([4, 1.5, 1.1] if stoppable else [6, 1], vertical_alignment="bottom")
+        bar = columns[0].progress(0.0, text=f"{label}…")
+        if stoppable:
+            columns[1].button("Stop early", key=f"stop_{keys[0][:16]}", icon=":material/done_all:",
+                              on_click=_stop, args=(keys,),
+                              help="Ends the search with the best plan found so far, which may not be optimal: "
+                                   "its gap to the optimum is shown with it. Solve again to search to the end.")
+        columns[-1].button("Cancel", key=f"cancel_{keys[0][:16]}", icon=":material/stop_circle:",
+                           on_click=_cancel, args=(keys,),
+                           help="Stops the solve at once, without a plan (for every tab waiting on the same input).")
     expected = solver().expected_s(jobs[0].case, jobs[0].gammas) if len(jobs) == 1 else None
     while True:
         running = [job for job in jobs if not job.done.is_set()]
@@ -405,6 +459,10 @@ def _wait(jobs: list[Job], label: str, total: int) -> None:
             break
         running[0].done.wait(POLL_S)
     slot.empty()
+
+
+def _stop(keys: list[str]) -> None:
+    solver().stop(keys)
 
 
 def _cancel(keys: list[str]) -> None:

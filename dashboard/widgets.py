@@ -102,6 +102,10 @@ def status_line(result: Result) -> None:
     if result.status is Outcome.OPTIMAL:
         st.success(f"Optimal plan for {result.day:%A %d %B %Y} ({result.case.budgets.strategy} strategy, "
                    f"{result.case.markets.label}).", icon=":material/check_circle:")
+    elif result.status is Outcome.STOPPED and result.has_plan:
+        st.warning(f"Stopped early, as asked, after {result.solve_s:.1f} s of search: the plan below is the best "
+                   f"found so far, feasible and within {result.mip_gap:.2%} of the optimum. Press **Solve** to "
+                   "search on to the optimum.", icon=":material/done_all:")
     elif result.has_plan:
         st.warning(f"The solver stopped at its time limit; the plan below is feasible but may not be optimal "
                    f"(gap {result.mip_gap:.2%}).", icon=":material/timer:")

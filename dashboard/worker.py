@@ -15,10 +15,17 @@ import rvpp
 from rvpp import Case, CaseError, RvppError
 
 
-def solve_into(connection, case: Case) -> None:
-    """Solve ``case`` and send ``("stage", text)`` messages, then one ``("result", Result)``,
-    ``("refused", problems)`` or ``("failed", message)``."""
-    _answer(connection, lambda: rvpp.solve(case, progress=lambda stage: connection.send(("stage", stage))))
+def solve_into(connection, case: Case, stop) -> None:
+    """Solve ``case`` and send ``("stage", text)`` and ``("search", Search)`` messages (the
+    solver's search every quarter second), then one ``("result", Result)``, ``("refused",
+    problems)`` or ``("failed", message)``. Once the event ``stop`` is set, the search ends at its
+    best plan (status ``stopped``)."""
+    def watch(search) -> bool:
+        connection.send(("search", search))
+        return stop.is_set()
+
+    _answer(connection, lambda: rvpp.solve(case, progress=lambda stage: connection.send(("stage", stage)),
+                                           watch=watch))
 
 
 def sweep_into(connection, case: Case, gammas: list[int]) -> None:

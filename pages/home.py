@@ -75,15 +75,16 @@ balanced = Variant(strategy="balanced").apply(state.run_case())
 expected = solving.solver().expected_s(balanced)
 if expected:
     st.caption(f":material/timer: Solving this case took {expected[0]:.1f} s ({expected[1]}); with "
-               f"{balanced.dt_h * 60:g}-minute periods. Longer solves show their progress and can be cancelled.")
+               f"{balanced.dt_h * 60:g}-minute periods. Longer solves show their progress and can be stopped "
+               "early or cancelled.")
 else:
     st.caption(f":material/timer: This case has not been solved on this server yet ({balanced.dt_h * 60:g}-minute "
                "periods; 15-minute periods take several times longer than hourly ones). The solve shows its "
-               "progress and can be cancelled.")
+               "progress and can be stopped early or cancelled.")
 clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
 if clicked or state.is_requested(balanced):
     state.mark_requested(balanced)
-    result = solving.solve(balanced, "Solving the balanced strategy")
+    result = solving.solve(balanced, "Solving the balanced strategy", again=clicked, stoppable=True)
     if result is not None:
         widgets.status_line(result)
         if result.has_plan:

@@ -63,7 +63,7 @@ if not (clicked or state.is_requested(run)):
     st.stop()
 
 state.mark_requested(run)
-result = solving.solve(run, "Solving the current case")
+result = solving.solve(run, "Solving the current case", again=clicked, stoppable=True)
 if result is None:
     st.stop()
 widgets.status_line(result)

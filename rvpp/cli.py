@@ -4,6 +4,11 @@ Every failure ends with exit code 1 and one line ``error: ...`` that names the o
 file or field and the rule, never a traceback: a bad option, a case that breaks a rule,
 a file that cannot be read or written, and a solve without a plan (infeasible, solver
 error). Success exits with 0.
+
+During ``solve``, Ctrl-C ends the solver's search with the best plan found so far, which
+is written as usual with status ``stopped`` and its gap (exit code 0); a second Ctrl-C
+gives up the solve (exit code 130, nothing written). A long search reports itself every
+:data:`SEARCH_REPORT_S` seconds.
 """
 
 from __future__ import annotations
@@ -11,7 +16,9 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import signal
 import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,6 +30,8 @@ from .errors import RvppError
 
 DEFAULT_CASE = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
 FAILURE = 1
+INTERRUPTED = 130  # the shell's code for a command ended by Ctrl-C
+SEARCH_REPORT_S = 5.0  # a solve's search reports itself this often [s]
 
 
 class Parser(argparse.ArgumentParser):
@@ -133,6 +142,9 @@ def main(argv: list[str] | None = None) -> int:
         return FAILURE
     try:
         return args.run(args)
+    except KeyboardInterrupt:
+        print("error: interrupted; nothing more was written", file=sys.stderr)
+        return INTERRUPTED
     except RvppError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return FAILURE
@@ -237,7 +249,9 @@ def _run_solve(args: argparse.Namespace) -> int:
         check_replaceable(args.write_mps, MPS_HEADERS, "an MPS file")
         write_mps(case, args.write_mps)
         say(f"wrote {args.write_mps}")
-    result = solve(case, progress=say)
+    stop = SearchStop(say)
+    with stop.on_ctrl_c():
+        result = solve(case, progress=say, watch=stop)
     written = write_plan(result, args.out)
     if not args.quiet:
         if result.has_plan:
@@ -250,6 +264,42 @@ def _run_solve(args: argparse.Namespace) -> int:
         print(f"error: {result.status}: {result.message}", file=sys.stderr)
         return FAILURE
     return 0
+
+
+class SearchStop:
+    """The solve's watch (:data:`rvpp.solving.highs.Watch`): reports the search every
+    :data:`SEARCH_REPORT_S` through ``say`` and ends it at the best plan once Ctrl-C was pressed."""
+
+    def __init__(self, say):
+        self.say = say
+        self.requested = False
+        self.reported = 0.0  # the search's clock at its last report [s]
+
+    def __call__(self, search) -> bool:
+        if search.seconds - self.reported >= SEARCH_REPORT_S:
+            self.reported = search.seconds
+            if search.objective is None:
+                self.say(f"search {search.seconds:.0f} s: no plan yet")
+            else:
+                gap = f"{search.gap:.2%}" if search.gap is not None else "n/a"
+                self.say(f"search {search.seconds:.0f} s: best plan {search.objective:,.0f} EUR, gap {gap} "
+                         f"({search.nodes} nodes); Ctrl-C keeps the best plan")
+        return self.requested
+
+    @contextmanager
+    def on_ctrl_c(self):
+        """The first Ctrl-C asks the search to end at its best plan; a second one gives up the solve."""
+        def interrupt(_signum, _frame):
+            if self.requested:
+                raise KeyboardInterrupt
+            self.requested = True
+            self.say("stopping at the best plan found so far (Ctrl-C again gives up)")
+
+        previous = signal.signal(signal.SIGINT, interrupt)
+        try:
+            yield self
+        finally:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _describe(result) -> str:

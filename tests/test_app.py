@@ -628,6 +628,49 @@ def test_a_cancelled_solve_stops_its_process_at_once(paper_case):
     assert solver.expected_s(paper_case)[1] == "the last solve of this case"
 
 
+def test_a_solve_stopped_early_keeps_its_best_plan_and_its_time_says_nothing(paper_case):
+    """6 April, 15 minutes, balanced: HiGHS has plans within a second and the optimum after 15-30 s."""
+    from dashboard.solving import Solver, stopped
+
+    solver = Solver(workers=1)
+    slow = rvpp.with_options(paper_case, date="2025-04-06", strategy="balanced", dt_h=0.25)
+    job = solver.start(slow)
+    wait_for(lambda: job.search is not None and job.search.objective is not None, TIMEOUT_S, every_s=0.05)
+    assert re.fullmatch(r"best plan so far within \d+\.\d\d% of the optimum \([\d,]+ nodes\)", job.stage), job.stage
+    solver.stop([job.key])
+    assert job.done.wait(TIMEOUT_S) and not job.cancelled
+    kept = solver.result(job.key)
+    assert kept is job.result and stopped(kept) and kept.has_plan
+    assert kept.mip_gap > slow.solver.rel_gap and kept.objective_eur < kept.bound_eur
+    assert job.key not in solver.seconds and solver.expected_s(slow) is None  # no time from a search cut short
+
+
+def test_results_shows_a_plan_stopped_early_until_solve_searches_on(paper_case, paper_solve):
+    from dashboard import solving
+    from dashboard.state import REQUESTED, case_key
+
+    case = rvpp.with_options(paper_case, strategy="balanced")
+    early = rvpp.solve(case, watch=lambda search: True)  # stopped at HiGHS's first plan
+    assert early.status == "stopped" and early.mip_gap > case.solver.rel_gap
+    at = open_app()
+    at.session_state["case"] = case
+    solving.solver().remember(early)
+    at.session_state[REQUESTED] = {case_key(case)}  # asked for before: the page shows what is kept
+    at.switch_page("pages/results.py").run()
+    assert not at.exception, at.exception
+    warned = [w.value for w in at.warning]
+    assert any(w.startswith("Stopped early, as asked") and f"within {early.mip_gap:.2%} of the optimum" in w
+               for w in warned), warned
+    assert at.get("plotly_chart")  # the plan is drawn
+    click(at, "results_solve")  # searches on
+    assert [s.value for s in at.success][0].startswith("Optimal plan")
+    solved = solving.solver().result(case_key(case))
+    assert solved.status == "optimal"
+    expected = paper_solve(strategy="balanced")
+    assert solved.objective_eur == pytest.approx(expected.objective_eur,
+                                                 abs=case.solver.rel_gap * abs(expected.objective_eur))
+
+
 def test_the_sweep_grid_takes_every_period_up_to_48_then_an_even_step():
     from dashboard.solving import sweep_grid
 

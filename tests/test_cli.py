@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import signal
 import subprocess
 import sys
 
@@ -12,7 +13,7 @@ import openpyxl
 import pandas as pd
 import pytest
 
-from rvpp import load_case
+from rvpp import load_case, with_options
 from rvpp.settle.audit import audit_export
 from rvpp.cli import main
 from rvpp.outputs.export import PLAN_FILES
@@ -407,3 +408,59 @@ def test_an_imported_table_replaces_the_one_written_before(tmp_path, capsys):
     frame = pd.read_csv(table)
     assert list(frame.columns) == ["time_utc", "time_local", "price_da"] and len(frame) == 23  # 25 March 2018: DST
     assert [p.name for p in tmp_path.iterdir()] == ["prices.csv"]  # no temporary left
+
+
+def test_ctrl_c_during_a_solve_writes_the_best_plan_found_so_far(tmp_path):
+    """6 April, 15 minutes, balanced: HiGHS has plans within a second, the optimum after 15-30 s."""
+    out = tmp_path / "plan"
+    process = subprocess.Popen([sys.executable, "-m", "rvpp", "solve", "--date", "2025-04-06", "--strategy",
+                                "balanced", "--dt", "0.25", "--out", str(out)],
+                               stderr=subprocess.PIPE, text=True)
+    said = []
+    for line in process.stderr:
+        said.append(line)
+        if "solving with HiGHS" in line:
+            process.send_signal(signal.SIGINT)
+            break
+    said += process.stderr.readlines()
+    assert process.wait(120) == 0, "".join(said)
+    assert any("stopping at the best plan found so far" in line for line in said)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "stopped" and summary["mip_gap"] > 1e-4
+    assert any(line.startswith("status stopped;") for line in said)
+    case = with_options(load_case(PAPER), date="2025-04-06", strategy="balanced", dt_h=0.25)
+    assert audit_export(case, out) == []  # the plan written is feasible
+
+
+def test_a_second_ctrl_c_gives_up_and_the_command_says_so(monkeypatch, capsys):
+    import rvpp.cli as cli
+
+    stop = cli.SearchStop(lambda _m: None)
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt), stop.on_ctrl_c():
+        signal.raise_signal(signal.SIGINT)
+        assert stop.requested
+        signal.raise_signal(signal.SIGINT)
+    assert signal.getsignal(signal.SIGINT) is before  # the handler before is back
+
+    def interrupted(_args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_run_solve", interrupted)
+    assert main(["solve"]) == cli.INTERRUPTED == 130
+    assert capsys.readouterr().err == "error: interrupted; nothing more was written\n"
+
+
+def test_a_long_search_reports_itself_every_few_seconds():
+    from rvpp.cli import SEARCH_REPORT_S, SearchStop
+    from rvpp.solving.highs import Search
+
+    said = []
+    stop = SearchStop(said.append)
+    assert stop(Search(1.0, None, None, None, 0)) is False and said == []
+    stop(Search(SEARCH_REPORT_S, None, -80000.0, None, 0))
+    stop(Search(SEARCH_REPORT_S + 1, -84010.4, -83403.2, 0.0072, 12))  # within the interval: not said
+    stop.requested = True
+    assert stop(Search(2 * SEARCH_REPORT_S, -84010.4, -83403.2, 0.0072, 1234)) is True
+    assert said == ["search 5 s: no plan yet",
+                    "search 10 s: best plan -84,010 EUR, gap 0.72% (1234 nodes); Ctrl-C keeps the best plan"]

@@ -67,7 +67,7 @@ def test_a_limit_with_incumbent_and_bound_is_usable_with_its_gap():
 def test_outcomes_read_as_their_plain_value():
     assert f"{Outcome.INFEASIBLE_OR_UNBOUNDED}" == "infeasible_or_unbounded"
     assert Outcome("time_limit") is Outcome.TIME_LIMIT
-    assert [o for o in Outcome if o.usable] == [Outcome.OPTIMAL, Outcome.TIME_LIMIT]
+    assert [o for o in Outcome if o.usable] == [Outcome.OPTIMAL, Outcome.TIME_LIMIT, Outcome.STOPPED]
 
 
 def test_a_kept_model_re_solves_after_its_data_change():
@@ -179,3 +179,57 @@ def test_a_start_reaches_highs_as_a_full_integer_point(monkeypatch):
     (count, index, value), = passed
     columns = [highs.compiled.columns[int(j)].name for j in index]
     assert count == 3 and dict(zip(columns, value)) == {"x[1]": 0.0, "x[2]": 1.0, "x[3]": 0.0}
+
+
+# A day whose search is long and finds plans early: 6 April, 15 minutes, balanced (tied deviations; HiGHS's
+# first plan within a second lies 16 % below its bound, the proven optimum takes 15-30 s).
+SLOW_DAY = {"date": "2025-04-06", "strategy": "balanced", "dt_h": 0.25}
+
+
+def test_a_watch_asked_before_the_first_plan_stops_the_search_at_it(paper_case):
+    import rvpp
+    from rvpp.settle.audit import audit_result
+
+    seen = []
+
+    def watch(search) -> bool:
+        seen.append(search)
+        return True  # from the first look on, before HiGHS has any plan
+
+    result = rvpp.solve(rvpp.with_options(paper_case, **SLOW_DAY), watch=watch)
+    assert result.status is Outcome.STOPPED and result.has_plan, result.message
+    assert "stopped on request" in result.message
+    assert seen and seen[0].objective is None  # the first look came before any plan
+    # Not proven optimal: the profit (maximized) lies below the bound by more than the case's gap.
+    assert result.objective_eur < result.bound_eur
+    assert result.mip_gap == pytest.approx(abs(result.bound_eur - result.objective_eur) / abs(result.objective_eur))
+    assert result.mip_gap > paper_case.solver.rel_gap
+    assert audit_result(result) == []  # the plan kept is feasible
+    times = [s.seconds for s in seen]
+    assert times == sorted(times)
+    for search in seen:
+        if search.objective is not None and search.bound is not None:
+            assert search.objective <= search.bound + 1e-6 * abs(search.bound)
+
+
+def test_a_watch_that_never_stops_leaves_the_solve_as_it_is(paper_solve, paper_case):
+    import rvpp
+
+    seen = []
+    result = rvpp.solve(rvpp.with_options(paper_case, strategy="pessimistic"),
+                        watch=lambda search: seen.append(search) is not None)  # always False
+    expected = paper_solve(strategy="pessimistic")
+    assert seen and result.status is Outcome.OPTIMAL
+    assert result.objective_eur == pytest.approx(expected.objective_eur,
+                                                 abs=paper_case.solver.rel_gap * abs(expected.objective_eur))
+
+
+@pytest.mark.parametrize("error", [ValueError("the watch broke"), KeyboardInterrupt()])
+def test_an_error_in_the_watch_reaches_the_caller(paper_case, error):
+    import rvpp
+
+    def watch(search):
+        raise error
+
+    with pytest.raises(type(error)):
+        rvpp.solve(rvpp.with_options(paper_case, **SLOW_DAY), watch=watch)

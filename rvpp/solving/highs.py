@@ -9,8 +9,12 @@ Pyomo model (mutable parameters, variable bounds) recompiles and re-solves witho
 rebuilding the model, optionally from a MIP start.
 
 HiGHS's own model status is mapped to :class:`~rvpp.solving.outcome.Outcome`: a plan is
-usable only when optimal, or when a limit stopped the search with a feasible incumbent
-and a finite bound.
+usable only when optimal, or when a limit (or a request) stopped the search with a
+feasible incumbent and a finite bound.
+
+A caller may *watch* a MIP search (:data:`Watch`): it is shown the search's state
+(:class:`Search`) every :data:`WATCH_S` seconds of HiGHS's clock and may end it, keeping
+the best plan found so far (``Outcome.STOPPED``).
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ import math
 import os
 import threading
 import time
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -92,6 +96,25 @@ _OUTCOMES = {
     _STATUS.kUnboundedOrInfeasible: Outcome.INFEASIBLE_OR_UNBOUNDED,
 }
 _FEASIBLE = 2  # HiGHS solution status "feasible"
+WATCH_S = 0.25  # how often a watch is shown the search [s of HiGHS's clock]
+
+
+@dataclass(frozen=True)
+class Search:
+    """A MIP search under way: seconds since HiGHS started, the best plan's objective and the
+    bound on the optimum (the model's units, ``None`` until HiGHS has them), their relative
+    gap (``None`` without a plan), and the branch-and-bound nodes explored."""
+
+    seconds: float
+    objective: float | None
+    bound: float | None
+    gap: float | None
+    nodes: int
+
+
+# Shown the search every WATCH_S; returns True to end it with the best plan found so far. Asked
+# before there is a plan, the search ends once it has one.
+Watch = Callable[[Search], bool]
 
 
 def _thread_option(requested: int) -> tuple[dict, str]:
@@ -208,12 +231,14 @@ class HighsModel:
             self.compiled, self.infeasible_reason = None, str(exc)
 
     def solve(self, settings, *, start: Mapping[VarData, float] | None = None, load: bool = True,
-              options: Mapping[str, object] | None = None, scale: int = 0) -> SolveOutcome:
+              options: Mapping[str, object] | None = None, scale: int = 0,
+              watch: Watch | None = None) -> SolveOutcome:
         """Run HiGHS with ``settings`` (time limit, gap, threads) and extra ``options``.
 
         ``start`` gives values of some or all variables as a MIP start; HiGHS completes a
         partial start itself and ignores one it cannot complete. HiGHS minimizes the
         objective times ``2**scale``; the objective and bound returned are in the model's units.
+        ``watch`` is shown a MIP search as it goes and may end it (:data:`Watch`).
         """
         if self.compiled is None:
             return SolveOutcome.of(Outcome.INFEASIBLE, "trivially infeasible", None, None, 0.0,
@@ -224,6 +249,7 @@ class HighsModel:
         for key, value in {**HIGHS_OPTIONS, **(options or {}), "time_limit": float(settings.time_limit_s),
                            "mip_rel_gap": float(settings.rel_gap), **threads}.items():
             h.setOptionValue(key, value)
+        stop = _Stop(watch, scale) if watch is not None and self.compiled.is_mip else None
         try:
             t0 = time.perf_counter()
             h.passModel(self.compiled.lp)
@@ -233,6 +259,8 @@ class HighsModel:
                 h.changeObjectiveOffset(lp.offset_ * factor)
             if start:
                 self._set_start(h, start)
+            if stop is not None:
+                h.cbMipInterrupt.subscribe(stop)
             if _run(h) == highspy.HighsStatus.kError and h.getModelStatus() == _STATUS.kNotset and threads:
                 # HiGHS refused the size: something else in this process ran HiGHS first, with another.
                 _pool_threads[0] = 0
@@ -242,7 +270,9 @@ class HighsModel:
             seconds = time.perf_counter() - t0
         except Exception as exc:  # the solver library failed; report, do not crash the caller
             return SolveOutcome.of(Outcome.ERROR, type(exc).__name__, None, None, 0.0, f"HiGHS failed: {exc}")
-        outcome = self._outcome(h, seconds, note, scale)
+        if stop is not None and stop.error is not None:
+            raise stop.error  # the watch's own failure, not the solver's
+        outcome = self._outcome(h, seconds, note, scale, stopped=stop is not None and stop.asked)
         self.solution = np.asarray(h.getSolution().col_value, dtype=float) if outcome.usable else None
         if outcome.usable and load:
             self.load()
@@ -260,10 +290,12 @@ class HighsModel:
         value[integer] = np.round(value[integer])
         h.setSolution(len(index), index, value)
 
-    def _outcome(self, h: highspy.Highs, seconds: float, note: str, scale: int) -> SolveOutcome:
+    def _outcome(self, h: highspy.Highs, seconds: float, note: str, scale: int, stopped: bool = False) -> SolveOutcome:
         model_status = h.getModelStatus()
         info = h.getInfo()
         status = _OUTCOMES.get(model_status, Outcome.ERROR)
+        if stopped and model_status == _STATUS.kInterrupt:
+            status = Outcome.STOPPED
         has_point = info.primal_solution_status == _FEASIBLE or model_status == _STATUS.kModelEmpty
         if status is Outcome.OPTIMAL and not has_point:
             status = Outcome.ERROR
@@ -317,6 +349,44 @@ class HighsModel:
             return
         for v, x in zip(self.compiled.columns, self.solution.tolist()):
             v.set_value(x, skip_validation=True)
+
+
+class _Stop:
+    """HiGHS's MIP interrupt callback for a :data:`Watch`: shows it the search every
+    :data:`WATCH_S` and interrupts HiGHS once the watch asked and a plan exists.
+
+    An exception raised in the watch (a ``KeyboardInterrupt`` too) cannot cross HiGHS: it
+    ends the search at once and is raised again by :meth:`HighsModel.solve` after it.
+    """
+
+    def __init__(self, watch: Watch, scale: int):
+        self.watch, self.scale = watch, scale
+        self.shown = -math.inf  # HiGHS's clock when the watch was last shown the search
+        self.asked = False
+        self.error: BaseException | None = None
+
+    def __call__(self, event) -> None:
+        try:
+            self._show(event)
+        except BaseException as exc:  # noqa: BLE001  (raised again once HiGHS has returned)
+            self.error = self.error or exc
+            event.interrupt()
+
+    def _show(self, event) -> None:
+        if self.error is not None:
+            event.interrupt()
+            return
+        data = event.data_out
+        has_plan = abs(data.mip_primal_bound) < INF
+        if data.running_time - self.shown >= WATCH_S:
+            self.shown = data.running_time
+            objective = math.ldexp(data.mip_primal_bound, -self.scale) if has_plan else None
+            bound = math.ldexp(data.mip_dual_bound, -self.scale) if abs(data.mip_dual_bound) < INF else None
+            gap = (abs(bound - objective) / max(abs(objective), 1e-9)
+                   if objective is not None and bound is not None else None)
+            self.asked |= bool(self.watch(Search(data.running_time, objective, bound, gap, int(data.mip_node_count))))
+        if self.asked and has_plan:
+            event.interrupt()
 
 
 @contextmanager

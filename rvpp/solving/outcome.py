@@ -21,6 +21,7 @@ class Outcome(StrEnum):
 
     OPTIMAL = "optimal"                  # proven optimal within the relative gap
     TIME_LIMIT = "time_limit"            # stopped on a limit with a feasible incumbent and a finite bound
+    STOPPED = "stopped"                  # stopped on request (a watch of the search) with a feasible incumbent
     NO_SOLUTION = "no_solution"          # stopped on a limit before any usable incumbent
     INFEASIBLE = "infeasible"            # proven infeasible
     UNBOUNDED = "unbounded"              # proven unbounded
@@ -30,12 +31,13 @@ class Outcome(StrEnum):
     @property
     def usable(self) -> bool:
         """True when the incumbent may be read as a plan or a settlement."""
-        return self in (Outcome.OPTIMAL, Outcome.TIME_LIMIT)
+        return self in (Outcome.OPTIMAL, Outcome.TIME_LIMIT, Outcome.STOPPED)
 
 
 MESSAGES = {
     Outcome.OPTIMAL: "",
     Outcome.TIME_LIMIT: "stopped on its time limit with a feasible plan that may not be optimal",
+    Outcome.STOPPED: "stopped on request with the best plan found so far, which may not be optimal",
     Outcome.NO_SOLUTION: "time limit reached before any feasible plan was found",
     Outcome.INFEASIBLE: "no feasible plan",
     Outcome.UNBOUNDED: ("the model is unbounded: some decision can grow without limit and improve the "
@@ -75,7 +77,7 @@ class SolveOutcome:
            lp_iterations: int | None = None) -> "SolveOutcome":
         """Build a consistent record: numbers only where usable, the gap from objective and bound."""
         bound = bound if bound is not None and math.isfinite(bound) else None
-        if status is Outcome.TIME_LIMIT and (objective is None or bound is None):
+        if status in (Outcome.TIME_LIMIT, Outcome.STOPPED) and (objective is None or bound is None):
             status = Outcome.NO_SOLUTION
         if not status.usable:
             objective = None

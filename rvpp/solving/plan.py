@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from ..data.case import Case
 from .diagnose import explain_infeasibility
-from .highs import HighsModel, model_lifetime, objective_scale
+from .highs import HighsModel, Watch, model_lifetime, objective_scale
 from .outcome import Outcome, SolveOutcome
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
@@ -23,26 +23,33 @@ from .results import Result
 Progress = Callable[[str], None]
 
 
-def solve(case: Case, progress: Progress | None = None) -> Result:
-    """Compute the robust day-ahead plan of ``case`` for its delivery date."""
+def solve(case: Case, progress: Progress | None = None, watch: Watch | None = None) -> Result:
+    """Compute the robust day-ahead plan of ``case`` for its delivery date.
+
+    ``watch`` is shown the solver's search as it goes (:class:`~rvpp.solving.highs.Search`:
+    the best plan's objective, the bound, their gap) and may end it early, keeping the best
+    plan found so far: the result's status is then ``stopped``, with its gap.
+    """
     say = progress or (lambda _msg: None)
     started = time.perf_counter()
     say("preparing forecast bands")
     problem = prepare(case)
-    return solve_problem(problem, progress=say, started=started)
+    return solve_problem(problem, progress=say, started=started, watch=watch)
 
 
-def solve_problem(problem: Problem, progress: Progress | None = None, started: float | None = None) -> Result:
-    """Solve an already prepared :class:`Problem`.
+def solve_problem(problem: Problem, progress: Progress | None = None, started: float | None = None,
+                  watch: Watch | None = None) -> Result:
+    """Solve an already prepared :class:`Problem` (``watch``: as for :func:`solve`).
 
     The Pyomo model lives inside :func:`~rvpp.solving.highs.model_lifetime` (the cyclic
     collector paused, the model collected young).
     """
     with model_lifetime():
-        return _solve_problem(problem, progress, started)
+        return _solve_problem(problem, progress, started, watch)
 
 
-def _solve_problem(problem: Problem, progress: Progress | None, started: float | None) -> Result:
+def _solve_problem(problem: Problem, progress: Progress | None, started: float | None,
+                   watch: Watch | None = None) -> Result:
     say = progress or (lambda _msg: None)
     started = time.perf_counter() if started is None else started
     reasons = infeasibility_reasons(problem)
@@ -54,7 +61,7 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     say("solving with HiGHS")
     highs = HighsModel(m)
     outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(problem.case.solver.mip_start),
-                          scale=day_scale(problem, m))
+                          scale=day_scale(problem, m), watch=watch)
     return plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
 
 
