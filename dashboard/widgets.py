@@ -113,6 +113,12 @@ def status_line(result: Result) -> None:
         st.error(f"No plan: {result.status}. {result.message}", icon=":material/error:")
 
 
+def unproven(result: Result) -> str:
+    """Why a plan is not proven optimal, in a few words: stopped early or at its time limit, and its gap."""
+    why = "stopped early, as asked" if result.status is Outcome.STOPPED else "stopped at its time limit"
+    return f"{why}, within {result.mip_gap:.2%} of the optimum"
+
+
 def problems(messages: list[str], title: str = "Edit refused", note: str = "The last valid case is kept.") -> None:
     """Show the case model's messages, one per line, where the edit was made."""
     lines = "\n".join(f"- {plain_message(m)}" for m in messages)

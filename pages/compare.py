@@ -10,6 +10,7 @@ from rvpp.data.variants import Variant
 from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
 from rvpp.outputs.economics import waterfall_figure
 from rvpp.outputs.plots import TRADE_NAMES, compare_trades_figure, idle_trades
+from rvpp.solving.outcome import Outcome
 
 state.through_app("pages/compare.py")
 
@@ -113,13 +114,18 @@ if solving.cancelled():
 if cases and (clicked or ready):
     for case in cases.values():
         state.mark_requested(case)
-    solved = solving.solve_all(list(cases.values()), "Solving the strategies")
+    solved = solving.solve_all(list(cases.values()), "Solving the strategies", again=clicked, stoppable=True)
     if solved is None:
         st.stop()
     results = dict(zip(cases, solved))
     failed = [f"{s} / {m}: {r.status} {r.message}" for (s, m), r in results.items() if not r.has_plan]
     if failed:
         st.warning("Some plans could not be made:\n\n" + "\n".join(f"- {f}" for f in failed))
+    unproven = [f"{s} / {m}: {widgets.unproven(r)}" for (s, m), r in results.items()
+                if r.has_plan and r.status is not Outcome.OPTIMAL]
+    if unproven:
+        st.warning("Not proven optimal, so compare them with care; press the button above to search on:\n\n"
+                   + "\n".join(f"- {u}" for u in unproven), icon=":material/done_all:")
 
     st.subheader("Cost [kEUR]")
     st.caption("Cost = −net result, as in the paper's Tables 10 and 11; lower is better.")

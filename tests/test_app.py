@@ -481,6 +481,25 @@ def test_learn_gamma_slider_sweeps_once_then_moves_without_solving(paper_case, p
 
 
 @pytest.mark.slow
+def test_compare_names_the_plans_not_proven_optimal_until_solved_again(paper_case):
+    from dashboard import solving
+    from dashboard.state import case_key
+
+    at = click(open_app("compare"), "compare_solve")
+    assert not [w for w in at.warning if "Not proven optimal" in w.value]
+    balanced = rvpp.with_options(paper_case, strategy="balanced")
+    early = rvpp.solve(balanced, watch=lambda search: True)  # stopped at HiGHS's first plan
+    assert early.status == "stopped"
+    solving.solver().remember(early)
+    at.run()
+    warned = [w.value for w in at.warning if "Not proven optimal" in w.value]
+    assert len(warned) == 1 and warned[0].endswith(
+        f"\n\n- balanced / DAM+SRM+HPA: stopped early, as asked, within {early.mip_gap:.2%} of the optimum"), warned
+    click(at, "compare_solve")  # searches on
+    assert not [w for w in at.warning if "Not proven optimal" in w.value]
+    assert solving.solver().result(case_key(balanced)).status == "optimal"
+
+
 def test_compare_gamma_slider_reuses_the_sweep_in_a_new_session(paper_case, paper_solve, solver_processes):
     at = open_app("compare")
     if at.select_slider(key="compare_sweep_gamma_24").disabled:
