@@ -18,7 +18,7 @@ so starting one takes milliseconds. Two reasons for processes:
 
 A single solve also reports the solver's search (the best plan so far and its gap, every
 quarter second) and can be **stopped early**: the page sets the job's event, the solver
-process's watch (:data:`rvpp.solving.highs.Watch`) sees it and HiGHS ends with the best
+process's watch (:data:`rvpp.solving.outcome.Watch`) sees it and HiGHS ends with the best
 plan found so far (status ``stopped``). That plan is kept like any other until Solve is
 pressed again, which searches on to the optimum; its time is not taken as the case's
 expected time.

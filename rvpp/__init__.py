@@ -18,7 +18,7 @@ _EXPORTS = {
     "Case": "data.case", "load_case": "data.case", "save_case": "data.case", "with_options": "data.case",
     "CaseError": "errors", "ModelError": "errors", "RvppError": "errors",
     "Problem": "solving.problem", "prepare": "solving.problem",
-    "Result": "solving.results", "Search": "solving.highs",
+    "Result": "solving.results", "Search": "solving.outcome",
     "audit_export": "settle.audit", "audit_result": "settle.audit",
     "write_plan": "outputs.export",
     "solve": "solving.plan", "solve_problem": "solving.plan",

@@ -267,7 +267,7 @@ def _run_solve(args: argparse.Namespace) -> int:
 
 
 class SearchStop:
-    """The solve's watch (:data:`rvpp.solving.highs.Watch`): reports the search every
+    """The solve's watch (:data:`rvpp.solving.outcome.Watch`): reports the search every
     :data:`SEARCH_REPORT_S` through ``say`` and ends it at the best plan once Ctrl-C was pressed."""
 
     def __init__(self, say):
@@ -282,8 +282,8 @@ class SearchStop:
                 self.say(f"search {search.seconds:.0f} s: no plan yet")
             else:
                 gap = f"{search.gap:.2%}" if search.gap is not None else "n/a"
-                self.say(f"search {search.seconds:.0f} s: best plan {search.objective:,.0f} EUR, gap {gap} "
-                         f"({search.nodes} nodes); Ctrl-C keeps the best plan")
+                self.say(f"search {search.seconds:.0f} s: best plan so far, profit {search.objective:,.0f} EUR, "
+                         f"gap {gap} ({search.nodes} nodes); Ctrl-C keeps it")
         return self.requested
 
     @contextmanager

@@ -10,6 +10,8 @@ import base64
 import io
 import json
 import re
+import subprocess
+import sys
 import time
 import zipfile
 from pathlib import Path
@@ -662,6 +664,20 @@ def test_a_solve_stopped_early_keeps_its_best_plan_and_its_time_says_nothing(pap
     assert kept is job.result and stopped(kept) and kept.has_plan
     assert kept.mip_gap > slow.solver.rel_gap and kept.objective_eur < kept.bound_eur
     assert job.key not in solver.seconds and solver.expected_s(slow) is None  # no time from a search cut short
+
+
+def test_the_server_process_never_imports_the_solver_stack():
+    """A solve's reports (stages, the search) and its result reach the server as plain data: the server
+    process, where every session runs, stays without Pyomo and HiGHS (1-2 s to import, and memory)."""
+    code = "\n".join([
+        "import sys", "import rvpp", "from dashboard.solving import Solver",
+        "job = Solver(workers=1).start(rvpp.load_case('data/cases/paper'))",
+        "assert job.done.wait(300), 'no answer'",
+        "assert job.search is not None and job.result.status == 'optimal', (job.search, job.problems)",
+        "print(sorted(m for m in ('pyomo', 'highspy') if m in sys.modules))"])
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip() == "[]"
 
 
 def test_results_shows_a_plan_stopped_early_until_solve_searches_on(paper_case, paper_solve):

@@ -453,7 +453,7 @@ def test_a_second_ctrl_c_gives_up_and_the_command_says_so(monkeypatch, capsys):
 
 def test_a_long_search_reports_itself_every_few_seconds():
     from rvpp.cli import SEARCH_REPORT_S, SearchStop
-    from rvpp.solving.highs import Search
+    from rvpp.solving.outcome import Search
 
     said = []
     stop = SearchStop(said.append)
@@ -463,4 +463,4 @@ def test_a_long_search_reports_itself_every_few_seconds():
     stop.requested = True
     assert stop(Search(2 * SEARCH_REPORT_S, -84010.4, -83403.2, 0.0072, 1234)) is True
     assert said == ["search 5 s: no plan yet",
-                    "search 10 s: best plan -84,010 EUR, gap 0.72% (1234 nodes); Ctrl-C keeps the best plan"]
+                    "search 10 s: best plan so far, profit -84,010 EUR, gap 0.72% (1234 nodes); Ctrl-C keeps it"]

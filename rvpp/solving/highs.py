@@ -12,9 +12,9 @@ HiGHS's own model status is mapped to :class:`~rvpp.solving.outcome.Outcome`: a 
 usable only when optimal, or when a limit (or a request) stopped the search with a
 feasible incumbent and a finite bound.
 
-A caller may *watch* a MIP search (:data:`Watch`): it is shown the search's state
-(:class:`Search`) every :data:`WATCH_S` seconds of HiGHS's clock and may end it, keeping
-the best plan found so far (``Outcome.STOPPED``).
+A caller may *watch* a MIP search (:data:`~rvpp.solving.outcome.Watch`): it is shown the
+search's state (:class:`~rvpp.solving.outcome.Search`) every :data:`WATCH_S` seconds of
+HiGHS's clock and may end it, keeping the best plan found so far (``Outcome.STOPPED``).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import math
 import os
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -38,7 +38,7 @@ from pyomo.core.base.var import VarData
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
 from .linear import StandardForm, TrivialInfeasibility, Unsupported, standard_form
-from .outcome import Outcome, SolveOutcome
+from .outcome import Outcome, Search, SolveOutcome, Watch
 
 # HiGHS options that are not exposed as settings, chosen by measurement (docs/performance.md).
 # The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models;
@@ -98,23 +98,6 @@ _OUTCOMES = {
 _FEASIBLE = 2  # HiGHS solution status "feasible"
 WATCH_S = 0.25  # how often a watch is shown the search [s of HiGHS's clock]
 
-
-@dataclass(frozen=True)
-class Search:
-    """A MIP search under way: seconds since HiGHS started, the best plan's objective and the
-    bound on the optimum (the model's units, ``None`` until HiGHS has them), their relative
-    gap (``None`` without a plan), and the branch-and-bound nodes explored."""
-
-    seconds: float
-    objective: float | None
-    bound: float | None
-    gap: float | None
-    nodes: int
-
-
-# Shown the search every WATCH_S; returns True to end it with the best plan found so far. Asked
-# before there is a plan, the search ends once it has one.
-Watch = Callable[[Search], bool]
 
 
 def _thread_option(requested: int) -> tuple[dict, str]:

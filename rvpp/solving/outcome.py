@@ -12,6 +12,7 @@ plain value (``optimal``, ``time_limit``, ...).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -86,3 +87,22 @@ class SolveOutcome:
             gap = abs(bound - objective) / max(abs(objective), 1e-9)
         message = "; ".join(part for part in (MESSAGES[status], note) if part)
         return cls(status, termination, objective, bound, gap, seconds, message, nodes, lp_iterations)
+
+
+@dataclass(frozen=True)
+class Search:
+    """A MIP search under way: seconds since HiGHS started, the best plan's objective and the
+    bound on the optimum (the model's units, ``None`` until HiGHS has them), their relative
+    gap (``None`` without a plan), and the branch-and-bound nodes explored. Plain data, so a
+    solver process can send it to a process that never imports the solver."""
+
+    seconds: float
+    objective: float | None
+    bound: float | None
+    gap: float | None
+    nodes: int
+
+
+# Shown the search every quarter second (rvpp.solving.highs.WATCH_S); returns True to end it with
+# the best plan found so far. Asked before there is a plan, the search ends once it has one.
+Watch = Callable[[Search], bool]

@@ -12,8 +12,8 @@ from collections.abc import Callable
 
 from ..data.case import Case
 from .diagnose import explain_infeasibility
-from .highs import HighsModel, Watch, model_lifetime, objective_scale
-from .outcome import Outcome, SolveOutcome
+from .highs import HighsModel, model_lifetime, objective_scale
+from .outcome import Outcome, SolveOutcome, Watch
 from ..model import build_model
 from .problem import Problem, infeasibility_reasons, prepare
 from .robust import budget_choices
@@ -26,7 +26,7 @@ Progress = Callable[[str], None]
 def solve(case: Case, progress: Progress | None = None, watch: Watch | None = None) -> Result:
     """Compute the robust day-ahead plan of ``case`` for its delivery date.
 
-    ``watch`` is shown the solver's search as it goes (:class:`~rvpp.solving.highs.Search`:
+    ``watch`` is shown the solver's search as it goes (:class:`~rvpp.solving.outcome.Search`:
     the best plan's objective, the bound, their gap) and may end it early, keeping the best
     plan found so far: the result's status is then ``stopped``, with its gap.
     """
