@@ -160,7 +160,9 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(title="commands")
 
     solve = commands.add_parser("solve", help="compute the plan of one delivery day and export it",
-                                description="Compute the robust plan of one delivery day and write it to --out.")
+                                description="Compute the robust plan of one delivery day and write it to --out. "
+                                            "Ctrl-C during a long search writes the best plan found so far "
+                                            "(status stopped, with its gap); a second Ctrl-C gives up.")
     solve.add_argument("--case", type=path_option, default=DEFAULT_CASE, help="case folder (default: the paper case)")
     solve.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
     solve.add_argument("--strategy", choices=STRATEGIES, help="budget preset (default: the case's)")
