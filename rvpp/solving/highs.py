@@ -38,7 +38,7 @@ from pyomo.core.base.var import VarData
 from pyomo.repn.plugins.standard_form import LinearStandardFormCompiler
 
 from .linear import StandardForm, TrivialInfeasibility, Unsupported, standard_form
-from .outcome import Outcome, Search, SolveOutcome, Watch
+from .outcome import Outcome, Search, SolveOutcome, Watch, relative_gap
 
 # HiGHS options that are not exposed as settings, chosen by measurement (docs/performance.md).
 # The RINS and RENS sub-MIP heuristics spend most of the time on these small, tight models;
@@ -97,7 +97,6 @@ _OUTCOMES = {
 }
 _FEASIBLE = 2  # HiGHS solution status "feasible"
 WATCH_S = 0.25  # how often a watch is shown the search [s of HiGHS's clock]
-
 
 
 def _thread_option(requested: int) -> tuple[dict, str]:
@@ -365,9 +364,9 @@ class _Stop:
             self.shown = data.running_time
             objective = math.ldexp(data.mip_primal_bound, -self.scale) if has_plan else None
             bound = math.ldexp(data.mip_dual_bound, -self.scale) if abs(data.mip_dual_bound) < INF else None
-            gap = (abs(bound - objective) / max(abs(objective), 1e-9)
-                   if objective is not None and bound is not None else None)
-            self.asked |= bool(self.watch(Search(data.running_time, objective, bound, gap, int(data.mip_node_count))))
+            search = Search(data.running_time, objective, bound, relative_gap(objective, bound),
+                            int(data.mip_node_count))
+            self.asked |= bool(self.watch(search))
         if self.asked and has_plan:
             event.interrupt()
 

@@ -82,11 +82,17 @@ class SolveOutcome:
             status = Outcome.NO_SOLUTION
         if not status.usable:
             objective = None
-        gap = None
-        if objective is not None and bound is not None:
-            gap = abs(bound - objective) / max(abs(objective), 1e-9)
+        gap = relative_gap(objective, bound)
         message = "; ".join(part for part in (MESSAGES[status], note) if part)
         return cls(status, termination, objective, bound, gap, seconds, message, nodes, lp_iterations)
+
+
+def relative_gap(objective: float | None, bound: float | None) -> float | None:
+    """How far the optimum may lie from a plan's ``objective``, given the ``bound`` on it, relative
+    to the objective; ``None`` without both."""
+    if objective is None or bound is None:
+        return None
+    return abs(bound - objective) / max(abs(objective), 1e-9)
 
 
 @dataclass(frozen=True)
