@@ -14,7 +14,7 @@ process cost 0.7-0.9 s before its solve could start.
 def main() -> None:
     import streamlit as st  # here, not above: every solver process imports this file
 
-    from dashboard import solving, state, widgets
+    from dashboard import browser, solving, state, widgets
 
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
                        layout="wide")
@@ -48,6 +48,7 @@ def main() -> None:
     summary = st.sidebar.empty()
     with summary.container():  # stays if the page stops early (st.stop() ends the run)
         widgets.sidebar(state.case())
+    browser.preload()
     page.run()
     with summary.container():  # drawn again after the page: the case as the page's edits left it
         widgets.sidebar(state.case())

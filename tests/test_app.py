@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import streamlit as st
 from streamlit.testing.v1 import AppTest
 
 import rvpp
@@ -369,7 +370,23 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
     assert [b.label for b in at.get("download_button")] == ["Bids (CSV)", "Full plan (Excel)",
                                                            "Case as edited (zip)", "Case as edited (Excel)"]
+    # Streamlit 1.67's markdown loads its emoji code for any text its frontend reads as an emoji name.
+    emoji_name = re.compile(r":(?!material/|streamlit:)[\w+-][\w_+-]*:")
+    texts = [e.value for e in (*at.markdown, *at.caption)]
+    assert any("The solver's answer came back at" in text for text in texts)
+    assert not [text for text in texts if emoji_name.search(text)]
 
+
+
+def test_every_page_loads_the_code_of_a_plans_elements_ahead_once():
+    at = open_app()
+    scripts = [e.proto.body for e in at.get("html")]
+    assert len(scripts) == 1
+    static = Path(st.__file__).parent / "static" / "static" / "js"
+    files = json.loads(re.search(r"const files = (\[.*?\]);", scripts[0]).group(1))
+    assert sorted(name.split(".")[0] for name in files) == ["DataFrame", "Metric", "TextInput"]
+    assert all((static / name).is_file() for name in files)
+    assert "window.__rvppPreloaded" in scripts[0]
 
 
 def test_results_come_back_from_the_cache_without_a_click():

@@ -162,6 +162,30 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         page.screenshot(path=ARTIFACTS / "results.png", full_page=True)
 
 
+def test_a_first_plan_finds_the_code_of_its_elements_loaded_ahead(app_url):
+    """Home has its browser load the code of cards, text fields and tables while idle, so a
+    session's first plan on Results fetches none of it, nor the markdown's emoji code."""
+    wanted = ("Metric.", "TextInput.", "DataFrame.")
+    with chromium_page() as page:
+        page.goto(app_url)
+        page.get_by_test_id("stPlotlyChart").first.locator(".main-svg").first.wait_for()
+        page.wait_for_function("(names) => names.every(n => performance.getEntriesByType('resource')"
+                               ".some(e => e.name.split('/').pop().startsWith(n) && e.name.endsWith('.js')))",
+                               arg=list(wanted))
+        page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()
+        page.get_by_role("button", name="Solve", exact=True).wait_for()
+        fetched = []
+        page.on("request", lambda request: fetched.append(request.url.rsplit("/", 1)[-1]))
+        page.get_by_role("button", name="Solve", exact=True).click()
+        page.get_by_test_id("stPlotlyChart").nth(5).locator(".main-svg").first.wait_for()
+        page.get_by_test_id("stDataFrame").first.wait_for()
+        page.get_by_text("The solver's answer came back at").wait_for(state="attached")  # in a closed expander
+        scripts = [name for name in fetched if name.endswith(".js")]
+        assert not [name for name in scripts if name.startswith((*wanted, "remark-emoji."))], scripts
+        clock = page.get_by_text("The solver's answer came back at").text_content()
+        assert re.search(r"at \d\d:\d\d:\d\d\.\d{3} \(server clock\)", clock), clock
+
+
 def test_the_learn_gamma_slider_moves_by_keyboard_to_the_plan_of_each_gamma(app_url, paper_case, paper_solve):
     with chromium_page() as page:
         page.goto(app_url)
