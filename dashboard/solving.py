@@ -373,10 +373,8 @@ def solve_all(cases: Sequence[Case], label: str, again: bool = False, stoppable:
             # An expander, not st.status: st.status sleeps 50 ms on creation, before the plan is drawn.
             icon = ":material/check:" if result.has_plan else ":material/error:"
             with st.expander(f"{label}: {result.status} in {jobs[0].elapsed_s:.1f} s", icon=icon):
-                # Colons escaped: to Streamlit's markdown "10:15:22" holds an emoji name (":15:"), and its
-                # emoji code (about 270 kB) would then be loaded while the plan is drawn.
-                clock = answered(jobs[0]).replace(":", "\\:")
-                st.caption(f"The solver's answer came back at {clock} (server clock); what follows is drawing.")
+                st.caption(f"The solver's answer came back at {answered(jobs[0])} (server clock); what follows "
+                           "is drawing.")
                 if result.has_plan and (ties := tied_budgets(result.problem)):
                     st.caption("The model chose which of the tied deviations count (the exact rule, which makes "
                                f"such days slower to solve): {'; '.join(ties)}. {EARLIEST_HINT}")
@@ -418,8 +416,10 @@ def _without_result(job: Job, label: str, again: str) -> bool:
 
 
 def answered(job: Job) -> str:
-    """When the solver's answer reached the server, to the millisecond: ``HH:MM:SS.mmm``."""
-    return f"{datetime.fromtimestamp(job.returned_at):%H:%M:%S.%f}"[:-3]
+    """When the solver's answer reached the server, to the millisecond, as markdown that shows
+    ``HH:MM:SS.mmm``. The colons are escaped: to Streamlit's markdown "10:15:22" holds an emoji
+    name (":15:"), and its emoji code (about 270 kB) would then be loaded while the plan is drawn."""
+    return f"{datetime.fromtimestamp(job.returned_at):%H:%M:%S.%f}"[:-3].replace(":", "\\:")
 
 
 def _wait(jobs: list[Job], label: str, total: int, stoppable: bool = False) -> None:

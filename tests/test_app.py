@@ -14,6 +14,7 @@ import subprocess
 import sys
 import time
 import zipfile
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ import streamlit as st
 from streamlit.testing.v1 import AppTest
 
 import rvpp
+from dashboard import solving
 from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
@@ -33,6 +35,8 @@ ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
 TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
 NET = "Net result [kEUR]"
+# Streamlit 1.67's markdown loads its emoji code for any text its frontend reads as an emoji name.
+EMOJI_NAME = re.compile(r":(?!material/|streamlit:)[\w+-][\w_+-]*:")
 KPI_MONEY = (NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "HPA cost [kEUR]", "Operating cost [kEUR]",
              "Protection [kEUR]")
 
@@ -370,11 +374,15 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
     assert [b.label for b in at.get("download_button")] == ["Bids (CSV)", "Full plan (Excel)",
                                                            "Case as edited (zip)", "Case as edited (Excel)"]
-    # Streamlit 1.67's markdown loads its emoji code for any text its frontend reads as an emoji name.
-    emoji_name = re.compile(r":(?!material/|streamlit:)[\w+-][\w_+-]*:")
     texts = [e.value for e in (*at.markdown, *at.caption)]
-    assert any("The solver's answer came back at" in text for text in texts)
-    assert not [text for text in texts if emoji_name.search(text)]
+    assert not [text for text in texts if EMOJI_NAME.search(text)]
+
+
+def test_the_clock_of_a_solvers_answer_shows_in_markdown_without_an_emoji_name():
+    returned = datetime(2026, 11, 26, 10, 15, 22, 123456).timestamp()
+    clock = solving.answered(solving.Job("key", None, returned_at=returned))
+    assert not EMOJI_NAME.search(clock)
+    assert re.sub(r"\\(.)", r"\1", clock) == "10:15:22.123"  # markdown's backslash escapes undone
 
 
 

@@ -162,12 +162,13 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         page.screenshot(path=ARTIFACTS / "results.png", full_page=True)
 
 
-def test_a_first_plan_finds_the_code_of_its_elements_loaded_ahead(app_url):
+def test_a_first_plan_finds_the_code_of_its_elements_loaded_ahead(tmp_path):
     """Home has its browser load the code of cards, text fields and tables while idle, so a
-    session's first plan on Results fetches none of it, nor the markdown's emoji code."""
+    server's first plan on Results fetches none of it, nor the markdown's emoji code."""
+    require_browser()
     wanted = ("Metric.", "TextInput.", "DataFrame.")
-    with chromium_page() as page:
-        page.goto(app_url)
+    with streamlit_server("streamlit-first-plan.log", tmp_path) as url, chromium_page() as page:
+        page.goto(url)
         page.get_by_test_id("stPlotlyChart").first.locator(".main-svg").first.wait_for()
         page.wait_for_function("(names) => names.every(n => performance.getEntriesByType('resource')"
                                ".some(e => e.name.split('/').pop().startsWith(n) && e.name.endsWith('.js')))",
