@@ -9,7 +9,7 @@ idle after the page's first chart is drawn (or after :data:`WAIT_MS`, on a page 
 charts), so that a session's first plan finds them ready.
 
 The pieces are files of the installed Streamlit (``static/js/<Element>.<hash>.js``),
-found by name when the server starts; a name that matches no file, or several, is
+found by name once per server process; a name that matches no file, or several, is
 skipped, and the page then loads that code when first needed as before.
 """
 
