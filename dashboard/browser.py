@@ -3,8 +3,8 @@
 Streamlit's page code comes in pieces: the code of a kind of element (a metric card, a
 text field, a table) is fetched and compiled the first time a page shows one. A plan is
 usually the first thing a session shows with cards, the run label's text field and the
-flexibility table, so before this module their code was loaded while the plan's charts
-waited for it. Every page now asks the browser, once, to import those pieces when it is
+flexibility table, so their code would be loaded while the plan's charts wait for it.
+Every page therefore asks the browser, once, to import those pieces when it is
 idle after the page's first chart is drawn (or after :data:`WAIT_MS`, on a page without
 charts), so that a session's first plan finds them ready.
 
