@@ -195,9 +195,7 @@ class Solver:
 
     def cancel(self, keys: Sequence[str]) -> None:
         """Stop the solves of ``keys``: a waiting one never starts, a running one is killed."""
-        with self.lock:
-            jobs = [self.jobs[k] for k in keys if k in self.jobs]
-        for job in jobs:
+        for job in self._jobs(keys):
             job.cancelled = True
             if job.process is not None and job.process.is_alive():
                 job.process.kill()
@@ -211,10 +209,13 @@ class Solver:
     def stop(self, keys: Sequence[str]) -> None:
         """End the searches of the single solves ``keys`` at their best plan (at once if they have
         one, else at their first)."""
-        with self.lock:
-            jobs = [self.jobs[k] for k in keys if k in self.jobs]
-        for job in jobs:
+        for job in self._jobs(keys):
             job.stop.set()
+
+    def _jobs(self, keys: Sequence[str]) -> list[Job]:
+        """The jobs of ``keys`` waiting or under way."""
+        with self.lock:
+            return [self.jobs[k] for k in keys if k in self.jobs]
 
     def finish(self, job: Job) -> None:
         job.finished = time.perf_counter()
