@@ -46,7 +46,6 @@ _LOADER = """<script>
 </script>"""
 
 
-@cache
 def chunk(element: str) -> str | None:
     """The file of Streamlit's code for ``element`` (``Metric.MSVuxtnf.js``), or ``None``
     when no single file has that name."""
@@ -55,9 +54,10 @@ def chunk(element: str) -> str | None:
     return found[0] if len(found) == 1 else None
 
 
+@cache
 def loader() -> str | None:
     """The script that loads the :data:`ELEMENTS`' code once per browser tab, or ``None``
-    when none of their files is found."""
+    when none of their files is found (built once: every page's every run puts it in)."""
     files = [name for name in map(chunk, ELEMENTS) if name]
     if not files:
         return None
