@@ -108,7 +108,7 @@ def sweep_times(case: rvpp.Case) -> dict:
     measured = {}
     for minutes, dt_h in PERIODS.items():
         day = rvpp.with_options(case, dt_h=dt_h)
-        grid = sweep_grid(rvpp.prepare(day).nt)
+        grid = sweep_grid(rvpp.prepare(day).nt, dt_h)
         started = time.perf_counter()
         sweep_gamma(day, grid)
         measured[f"{case.name}/{minutes} min/{len(grid)} Γ"] = round(time.perf_counter() - started, 2)

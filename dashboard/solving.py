@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import multiprocessing
 import os
 import threading
@@ -64,7 +63,6 @@ MAX_WORKERS = 2        # solves at once; more would compete for a small server's
 WORKERS = max(1, min(MAX_WORKERS, os.cpu_count() or 1))
 KEPT = 64              # solved cases kept in memory (about 1.3 MB each)
 KEPT_SWEEPS = 4        # sweeps kept in memory (25 plans, about 30 MB, on the default day)
-SWEEP_POINTS = 49      # at most this many Γ in a sweep: every period up to 48 periods, else evenly spread
 POLL_S = 0.1           # how often a waiting page refreshes its progress [s]
 JOIN_S = 5.0           # how long to wait for a finished solver process to exit [s]
 PRELOAD = ["dashboard.preload"]  # what every solver process starts with
@@ -231,8 +229,8 @@ class Solver:
                         self.sweeps.popitem(last=False)
                 if not stopped(job.result):  # a search cut short says nothing of the case's time
                     self.seconds[job.key] = job.elapsed_s
-                    problem = job.result.problem if job.gammas is None else None  # prepared already
-                    self.shape_seconds[shape(job.case, job.gammas, problem)] = job.elapsed_s
+                    prepared = (job.result if job.gammas is None else job.result[0]).problem
+                    self.shape_seconds[shape(job.case, job.gammas, prepared)] = job.elapsed_s
         job.done.set()
 
     def expected_s(self, case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:
@@ -245,7 +243,7 @@ class Solver:
         like = shape(case, gammas)
         if like in self.shape_seconds:
             return self.shape_seconds[like], f"the last {work} of a case like this one on this server"
-        if gammas is None and like[-1]:
+        if like[-1]:
             return None  # a day with ties: the benchmark's time is a day without
         return benchmark_s(case, gammas)
 
@@ -276,14 +274,18 @@ EARLIEST_HINT = ("On the Uncertainty page, *The earliest of them deviate* fixes 
 
 def shape(case: Case, gammas: Sequence[int] | None = None, problem: Problem | None = None) -> tuple:
     """What a solve's time depends on most: periods, strategy, budget mode, units, markets
-    (and a sweep's number of Γ); for a single solve also whether the solver must choose among
-    tied deviations (:func:`tied`, read from ``problem`` when the case is already prepared),
-    which makes a day several times slower."""
+    (and a sweep's number of Γ), and whether the solver must choose among tied deviations
+    (:func:`tied`, read from ``problem`` when the case is already prepared; for a sweep, at
+    how many of its Γ, :func:`tied_gammas`), which makes a day several times slower."""
     if gammas is None:
-        last = bool(tied_budgets(problem)) if problem is not None else bool(tied(case))
-    else:
-        last = len(gammas)
-    return (case.dt_h, case.budgets.strategy, case.budgets.mode, len(case.unit_names()), case.markets.label, last)
+        ties = bool(tied_budgets(problem)) if problem is not None else bool(tied(case))
+        return (*_case_shape(case), ties)
+    return (*_case_shape(case), len(gammas), len(tied_gammas(case, gammas, problem)))
+
+
+def _case_shape(case: Case) -> tuple:
+    """Periods, strategy, budget mode, units and markets of ``case``."""
+    return (case.dt_h, case.budgets.strategy, case.budgets.mode, len(case.unit_names()), case.markets.label)
 
 
 def tied(case: Case) -> list[str]:
@@ -296,15 +298,32 @@ def tied(case: Case) -> list[str]:
         return []
 
 
+def tied_gammas(case: Case, gammas: Sequence[int], problem: Problem | None = None) -> dict[int, list[str]]:
+    """``{Γ: tied deviations}`` for the Γ of a sweep of ``case`` (one Γ for every source) at
+    which the solver must choose among tied deviations (:func:`tied`); read from ``problem``
+    (the case prepared, at any Γ) when given."""
+    if problem is None:
+        try:
+            problem = prepare_cached(case)
+        except RvppError:
+            return {}
+    return {g: ties for g in gammas if (ties := tied_budgets(problem, g))}
+
+
 def sweep_key(case: Case, gammas: Sequence[int]) -> str:
     """A digest of a sweep's input: the case's content and the grid of Γ."""
     return hashlib.sha256(f"{case_key(case)}|sweep|{','.join(map(str, gammas))}".encode()).hexdigest()
 
 
-def sweep_grid(nt: int) -> list[int]:
-    """The Γ a sweep solves for a day of ``nt`` periods: every one from 0 to ``nt`` when that is
-    at most :data:`SWEEP_POINTS` plans, else an even step, always ending at ``nt``."""
-    step = max(1, math.ceil(nt / (SWEEP_POINTS - 1)))
+def sweep_grid(nt: int, dt_h: float) -> list[int]:
+    """The Γ a sweep solves for a day of ``nt`` periods of ``dt_h`` hours: every whole hour of
+    periods from 0 to ``nt`` (25 plans on a day of 24 hours at any period length), always
+    ending at ``nt``.
+
+    A Γ between whole hours splits an hour's periods, which carry the same hourly forecast
+    on most days, so every source's deviations would tie at the Γ boundary and the solver
+    would have to choose among them (docs/performance.md, the tie days)."""
+    step = max(1, round(1.0 / dt_h))
     return sorted({*range(0, nt + 1, step), nt})
 
 

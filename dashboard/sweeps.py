@@ -1,6 +1,7 @@
 """The Γ slider of Learn and Compare: the day swept once over every Γ, then any plan at once.
 
-One Γ for every source, from 0 to the number of periods. The first time, the slider
+One Γ for every source, from 0 to the number of periods in whole hours
+(:func:`dashboard.solving.sweep_grid`). The first time, the slider
 offers to sweep the case (:func:`dashboard.solving.sweep`: one model re-solved for each
 Γ in a solver process, with progress and Cancel); once the sweep is warm (for this
 session or any other, until the case changes), moving the slider only picks the plan
@@ -30,7 +31,7 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
 
     A fragment: moving the slider reruns only this part of the page.
     """
-    grid = solving.sweep_grid(nt)
+    grid = solving.sweep_grid(nt, run.dt_h)
     key = solving.sweep_key(run, grid)
     slider_key = f"{page}_sweep_gamma_{nt}"
     if slider_key not in st.session_state:
@@ -46,6 +47,7 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
                          key=f"{page}_sweep", icon=":material/play_arrow:", on_click=state.mark_requested_key,
                          args=(key,), help="One model of the day re-solved for each Γ in the background; the plans "
                                            "are kept for this case on this server.")
+            _ties_note(run, grid)
             return
         points = solving.sweep(run, grid, f"Solving the plans for Γ = 0 to {nt}")
         if points is None:  # refused (the reason is shown) or cancelled
@@ -63,6 +65,18 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
         figures.insert(0, sweep_curve(key, gamma, grid, points))
     for i, (column, figure) in enumerate(zip(st.columns(len(figures)), figures)):
         column.plotly_chart(figure, key=f"{page}_sweep_chart_{i}")
+
+
+def _ties_note(run: Case, grid: list[int]) -> None:
+    """Name the Γ of the sweep at which the solver must choose among tied deviations, if any."""
+    tied = solving.tied_gammas(run, grid)
+    if not tied:
+        return
+    sources = sorted({phrase.split(":")[0] for phrases in tied.values() for phrase in phrases})
+    at = ", ".join(f"{g:g}" for g in tied)
+    st.caption(f"At Γ = {at} this day has deviations tied at the Γ boundary ({', '.join(sources)}): the model "
+               "chooses which of them count, the exact rule, which makes each of these plans several times slower "
+               f"to solve (the sweep can take minutes at 15-minute periods). {solving.EARLIEST_HINT}")
 
 
 def _expected(run: Case, grid: list[int]) -> str:

@@ -731,14 +731,52 @@ def test_results_shows_a_plan_stopped_early_until_solve_searches_on(paper_case, 
                                                  abs=case.solver.rel_gap * abs(expected.objective_eur))
 
 
-def test_the_sweep_grid_takes_every_period_up_to_48_then_an_even_step():
+def test_the_sweep_grid_takes_every_whole_hour_of_periods():
     from dashboard.solving import sweep_grid
 
-    assert sweep_grid(24) == list(range(25))
-    assert sweep_grid(48) == list(range(49))
-    assert sweep_grid(96) == list(range(0, 97, 2))
-    assert sweep_grid(50) == list(range(0, 51, 2))
-    assert sweep_grid(100) == [*range(0, 100, 3), 100]
+    assert sweep_grid(24, 1.0) == list(range(25))
+    assert sweep_grid(23, 1.0) == list(range(24))  # the spring change of clocks
+    assert sweep_grid(48, 0.5) == [0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30, 32, 34, 36, 38,
+                                   40, 42, 44, 46, 48]
+    assert sweep_grid(96, 0.25) == [4 * hours for hours in range(25)]
+    assert sweep_grid(100, 0.25) == [4 * hours for hours in range(26)]  # the autumn change
+
+
+def test_a_sweep_names_its_gammas_with_tied_deviations(paper_case):
+    from dashboard.solving import Solver, shape, sweep_grid, tied_gammas
+
+    # Half-hour periods carry the hourly forecast twice, so an odd Γ splits an hour of
+    # every source with a deviation there; no whole hour does on the bundled day.
+    half_hours = rvpp.with_options(paper_case, dt_h=0.5)
+    assert sorted(tied_gammas(half_hours, range(49))) == list(range(1, 48, 2))
+    assert tied_gammas(half_hours, sweep_grid(48, 0.5)) == {}
+    # 6 April: the field of CSP1 deviates by its 300 MW_th in five hours, so Γ = 1 to 4 tie there.
+    tie_day = rvpp.with_options(paper_case, date="2025-04-06")
+    tied = tied_gammas(tie_day, range(25))
+    assert sorted(tied) == [1, 2, 3, 4]
+    assert tied[4] == ["CSP1: 4 of the 5 periods tied at a deviation of 300 MW_th"]
+    assert tied_gammas(rvpp.with_options(tie_day, ties="earliest"), range(25)) == {}
+    solver = Solver(workers=1)
+    grid = list(range(25))
+    assert solver.expected_s(tie_day, grid) is None  # the benchmark sweeps a day without ties
+    solver.shape_seconds[shape(tie_day, grid)] = 40.0
+    assert solver.expected_s(tie_day, grid) == (40.0, "the last sweep of a case like this one on this server")
+    assert solver.expected_s(paper_case, grid) != (40.0, "the last sweep of a case like this one on this server")
+
+
+def test_learn_names_the_tied_gammas_before_a_sweep(paper_case):
+    from dashboard import solving
+
+    solving.solver().sweeps.clear()  # cold, whichever test of this process swept before
+    tie_day = rvpp.with_options(paper_case, date="2025-04-06")
+    for case, warned in ((tie_day, True), (rvpp.with_options(tie_day, ties="earliest"), False), (paper_case, False)):
+        at = open_app()
+        at.session_state["case"] = case
+        at.switch_page("pages/learn.py").run()
+        assert not at.exception and at.select_slider(key="learn_sweep_gamma_24").disabled
+        said = " ".join(c.value for c in at.caption)
+        assert ("At Γ = 1, 2, 3, 4 this day has deviations tied at the Γ boundary (CSP1)" in said) is warned, \
+            case.budgets.ties
 
 
 @pytest.mark.slow

@@ -160,6 +160,11 @@ def test_tied_budgets_name_the_source_the_count_and_the_tied_deviation():
         "W: 1 of the 2 periods tied at a deviation of 3.5 MW"]
     assert tied_budgets(tiny_problem(_small_case({"W": 3}), **bands)) == []
     assert tied_budgets(tiny_problem(_small_case({"W": 4}).replace(budgets={"ties": "earliest"}), **bands)) == []
+    # One Γ for W instead of its own: Γ = 1 takes one of the two 4.5s, Γ = 2 and Γ = 5 whole groups.
+    three = tiny_problem(_small_case({"W": 3}), **bands)
+    assert tied_budgets(three, gamma=4) == ["W: 1 of the 2 periods tied at a deviation of 3.5 MW"]
+    assert tied_budgets(three, gamma=1) == ["W: 1 of the 2 periods tied at a deviation of 4.5 MW"]
+    assert tied_budgets(three, gamma=2) == tied_budgets(three, gamma=5) == []
 
 
 def test_budget_choices_are_the_tied_deviations_at_the_gamma_boundary_and_the_variants_without_the_fast_path():

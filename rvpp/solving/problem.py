@@ -182,10 +182,11 @@ def budget_split(deviation: np.ndarray, gamma: int, ties: str = "choose") -> tup
     return sure, tied, count
 
 
-def tied_budgets(problem: Problem) -> list[str]:
+def tied_budgets(problem: Problem, gamma: int | None = None) -> list[str]:
     """The sources whose Γ the model places among tied deviations, one phrase each, e.g.
     ``CSP1: 4 of the 5 periods tied at a deviation of 300 MW_th`` (empty when the data decide
-    every period: no such tie, another budget variant, or ``budgets.ties: earliest``).
+    every period: no such tie, another budget variant, or ``budgets.ties: earliest``);
+    with ``gamma``, for that Γ given to every source instead of each source's own.
 
     These are the days the solver has to search (docs/performance.md, the tie days)."""
     budgets = problem.case.budgets
@@ -195,7 +196,7 @@ def tied_budgets(problem: Problem) -> list[str]:
     for name, source in problem.sources.items():
         if source.is_price:
             continue
-        _, tied, count = budget_split(source.deviation, int(source.gamma))
+        _, tied, count = budget_split(source.deviation, int(source.gamma if gamma is None else gamma))
         if count and int(tied.sum()) > count:
             phrases.append(f"{name}: {count} of the {int(tied.sum())} periods tied at a deviation of "
                            f"{float(source.deviation[tied][0]):g} {power_unit(source.unit_kind)}")
