@@ -15,6 +15,7 @@ from rvpp.model import build_model
 from rvpp.solving.problem import tied_budgets
 from rvpp.solving.robust import add_price_protection, budget_choices
 from rvpp.solving.highs import run_highs
+from rvpp.solving.sweep import sweep_parts
 from rvpp.solving.outcome import Outcome
 
 from tests.factories import demand, heat, tiny_case, tiny_problem, wind
@@ -165,6 +166,18 @@ def test_tied_budgets_name_the_source_the_count_and_the_tied_deviation():
     assert tied_budgets(three, gamma=4) == ["W: 1 of the 2 periods tied at a deviation of 3.5 MW"]
     assert tied_budgets(three, gamma=1) == ["W: 1 of the 2 periods tied at a deviation of 4.5 MW"]
     assert tied_budgets(three, gamma=2) == tied_budgets(three, gamma=5) == []
+
+
+def test_a_sweep_solves_each_gamma_with_tied_deviations_as_a_part_of_its_own():
+    # W deviates by 4.5 twice, 4, 3.5 twice, 3 twice: Γ = 1, 4 and 6 fall among equal deviations.
+    dev = np.array([3, 9, 1, 7, 7, 2, 0, 5, 8, 6, 4, 2, 1, 3, 9, 0, 2, 2, 5, 6, 1, 0, 4, 3], float)
+    bands = _small_bands(dev, np.zeros(NT), np.zeros(NT), np.zeros(NT))
+    problems = {g: tiny_problem(_small_case({"W": g}), **bands) for g in range(8)}
+    assert sweep_parts(problems, 2) == [[1], [4], [6], [0, 2, 3], [5, 7]]
+    assert sweep_parts(problems, 1) == [list(range(8))]
+    earliest = {g: tiny_problem(_small_case({"W": g}).replace(budgets={"ties": "earliest"}), **bands)
+                for g in range(8)}
+    assert sweep_parts(earliest, 2) == [[0, 1, 2, 3], [4, 5, 6, 7]]
 
 
 def test_budget_choices_are_the_tied_deviations_at_the_gamma_boundary_and_the_variants_without_the_fast_path():

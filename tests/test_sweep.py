@@ -36,6 +36,19 @@ def test_every_source_swept_equals_the_plans_solved_one_by_one(day):
     assert profits == sorted(profits, reverse=True), "profit never rises with the budget"
 
 
+@pytest.mark.slow
+def test_a_gamma_among_tied_deviations_swept_equals_the_plan_solved_alone(paper_case):
+    # 6 April: the field of CSP1 deviates by its 300 MW_th in five hours, so Γ = 3 ties there;
+    # it is solved as a part of its own, with a model of its own.
+    tie_day = with_options(paper_case, date="2025-04-06")
+    points = sweep_gamma(tie_day, [6, 3, 0], workers=2)
+    for gamma, point in zip([6, 3, 0], points):
+        alone = solve(with_options(tie_day, gammas={name: gamma for name in tie_day.sources()}))
+        _same_optimum(point, alone)
+        assert audit_result(point) == []
+    assert [p.problem.budgets["CSP1"] for p in points] == [6, 3, 0]
+
+
 def test_one_source_swept_keeps_the_other_budgets(day):
     points = sweep_gamma(with_options(day, strategy="optimistic"), [0, 24], sources=["price_da"])
     assert [p.problem.budgets["price_da"] for p in points] == [0, 24]
