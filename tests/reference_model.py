@@ -93,6 +93,13 @@ def local_periods(case) -> pd.DatetimeIndex:
     return pd.date_range(first, last, freq=pd.Timedelta(hours=case.dt_h), inclusive="left").tz_convert(case.timezone)
 
 
+def band_method(case, source: str, kind: str | None) -> str:
+    """How the case draws ``source``'s band: its own entry in ``uncertainty.bands``, else its
+    unit kind's, else the ``default`` entry, else climatology (case-format.md)."""
+    chosen = dict(case.uncertainty.bands)
+    return chosen.get(source) or (chosen.get(kind) if kind else None) or chosen.get("default", "climatology")
+
+
 def hourly_band(case, column: str, scale: float, hours: np.ndarray) -> tuple[np.ndarray, ...]:
     """``(lo, mid, hi)`` per period of the clock ``hours`` from the window before the day (§6)."""
     frame = case.history.frame
@@ -163,7 +170,7 @@ def day_data(case) -> DayData:
     gamma = budgets(case, nt)
 
     def band(name, column, scale, kind=None, forecast=None):
-        if case.uncertainty.band_method(name, kind) == "forecast":
+        if band_method(case, name, kind) == "forecast":
             return forecast_error_band(case, column, scale, forecast, periods)
         return hourly_band(case, column, scale, hours)
 
@@ -187,7 +194,7 @@ def day_data(case) -> DayData:
             top, bottom = np.clip(hi, 0.0, cap), np.clip(lo, 0.0, cap)
             uncertain[unit.name] = Uncertain(top, top - bottom, gamma[unit.name], -1.0)
         else:
-            if case.uncertainty.band_method(unit.name, kind) == "forecast":
+            if band_method(case, unit.name, kind) == "forecast":
                 lo, hi = np.maximum(lo, 0.0), np.maximum(hi, 0.0)
             uncertain[unit.name] = Uncertain(lo, hi - lo, gamma[unit.name], +1.0)
     return DayData(nt=nt, dt=case.dt_h, price=price, gamma={n: gamma[n] for n in PRICES}, uncertain=uncertain)
@@ -474,7 +481,8 @@ class ReferenceModel:
         ``startup_duration_h`` after the start when given.
         """
         pb = unit.power_block
-        startup_len = pb.startup_periods(self.d.dt)
+        # A start draws its heat in its own period, or for startup_duration_h after it when given.
+        startup_len = 1 if pb.startup_duration_h is None else int(round(pb.startup_duration_h / self.d.dt))
         startup_heat = pb.startup_fraction * pb.p_in_max_mw_th
         c["p_pb"] = []
         for t in self.T:

@@ -12,7 +12,6 @@ import json
 import re
 import subprocess
 import sys
-import time
 import zipfile
 from datetime import datetime
 from pathlib import Path
@@ -24,7 +23,6 @@ from streamlit.testing.v1 import AppTest
 
 import rvpp
 from dashboard import solving
-from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
@@ -438,12 +436,15 @@ def test_compare_costs_and_flexibility_match_the_library(paper_case, paper_solve
 def test_learn_moves_the_adversary_live(paper_solve):
     at = open_app("learn")
     plan = paper_solve()
-    exposure = price_exposures(plan.problem, plan.market)["price_da"]
+    # The DAM price's loss per period, worked out here: λ falls by its deviation where the plan sells,
+    # rises by its upward deviation where it buys; the adversary takes the 3 largest.
+    da, sold = plan.problem.sources["price_da"], plan.market["p_da_mw"].to_numpy(float)
+    loss = np.where(sold > 0, da.deviation * sold, -da.deviation_up * sold) * plan.problem.dt_h
     protection = [m for m in at.metric if m.label == "Protection"][0]
     assert number(protection.value) == pytest.approx(plan.protection_eur["price_da"], abs=0.51)
     at.slider(key="learn_price_gamma").set_value(3).run()
     protection = [m for m in at.metric if m.label == "Protection"][0]
-    assert number(protection.value) == pytest.approx(protection_exact(exposure, 3), abs=0.51)
+    assert number(protection.value) == pytest.approx(sum(sorted(np.maximum(loss, 0.0))[-3:]), abs=0.51)
     at.slider(key="learn_gamma").set_value(9).run()
     band = next(spec for title, spec in figures(at).items() if title.startswith("WF1 ("))
     assert trace(band, "Deviates (χ = 1) in 9 periods")
@@ -579,8 +580,10 @@ def test_a_capacity_edit_scales_the_band_and_moves_the_plans_bound(paper_case, p
     click(at, "results_solve")
     before = paper_solve().units.query("unit == 'WF1'")["bound_mw"].to_numpy()
     after = rvpp.solve(case_of(at)).units.query("unit == 'WF1'")["bound_mw"].to_numpy()
-    # Independent of the band code: the history's WF1 profile times 1.6, as the case says.
-    assert after.max() > before.max() and after.max() <= 80.0 + 1e-9
+    # The band is the history's WF1 profile times the series scale, and scaling every deviation by 1.6
+    # keeps the same periods the largest: the bound is 1.6 times the unedited plan's, below 80 MW.
+    np.testing.assert_allclose(after, 1.6 * before, rtol=1e-9, atol=1e-6)
+    assert after.max() <= 80.0 + 1e-9
     assert_kpis_match(at, rvpp.solve(case_of(at)))
     band = figures(at)["Day-ahead energy and secondary-reserve bands"]
     assert values(trace(band, "DAM energy (+ sell, − buy)")["y"]).sum() > paper_solve().market["p_da_mw"].sum()
@@ -651,11 +654,10 @@ def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_sol
 
 
 def _cancel_stops_at_once(solver, job) -> None:
-    """Cancel ``job`` and check that its process ends within seconds, with no result."""
-    started = time.monotonic()
+    """Cancel ``job`` and check that its process was killed: it ends without a result (a solve
+    left to run would have brought one)."""
     solver.cancel([job.key])
-    assert job.done.wait(10)
-    assert time.monotonic() - started < 5
+    assert job.done.wait(TIMEOUT_S)
     assert job.cancelled and job.result is None and not job.process.is_alive()
 
 

@@ -118,6 +118,7 @@ def test_naive_price_models_and_the_day_after_clocks_go_forward():
     clock = point.index.tz_convert(TZ).hour
     # The history ends the day before: a naive price forecast needs nothing of the delivery day.
     assert len(point) == 24
+    assert (point.to_numpy() == 100.0 * (i - 1) + clock).all()
     day = dt.date(2025, 3, 31)
     i = day_index(day)
     point, _ = forecast_and_errors(hist, day, BandSpec("p", method="forecast", price_model="same_hour_yesterday"),
@@ -259,16 +260,16 @@ def test_unit_tables_and_the_workbook_keep_forecast_columns_bands_and_provenance
 
 def test_band_figure_draws_the_model_band_the_other_method_and_the_realized_day():
     from rvpp.outputs.plots import band_overlays, bands_figure
-    from rvpp.uncertainty.bands import forecast_bands
 
     case = _case(bands={"wind": "forecast"}, forecast_series="W_fc")
     problem = prepare(case)
     overlays = band_overlays(problem, "W")
     label, lo, hi = overlays["compare"]
-    climatology = forecast_bands(case.history, DAY, problem.periods, {"W": ("W", 1.0)}, n_days=5, q_lo=0.2,
-                                 q_hi=0.8, timezone=TZ)
+    # Climatology of W = 30 + 5·cos(i) over the window D-5..D-1, the same in every hour.
+    d = day_index(DAY)
+    window = 30.0 + 5.0 * np.cos(np.arange(d - 5, d))
     assert label == "Climatology"
-    assert np.allclose(lo, climatology[("W", "lo")]) and np.allclose(hi, climatology[("W", "hi")])
+    assert np.allclose(lo, np.quantile(window, 0.2)) and np.allclose(hi, np.quantile(window, 0.8))
     assert np.allclose(overlays["realized"], 30.0 + 5.0 * np.cos(day_index(DAY)))
     figure = bands_figure(problem, "W", **overlays)
     names = [trace.name for trace in figure.data]

@@ -131,11 +131,14 @@ def test_plan_tables_carry_the_bands_the_reference_derives(solved, name):
 
 
 def test_the_tie_day_leaves_the_choice_of_hours_to_the_models(solved):
-    case, _ = solved("tie day")
+    case, chosen = solved("tie day")
     field = day_data(case).uncertain[case.csp[0].name]
     largest = np.sort(field.deviation)[::-1][field.gamma - 1]
     tied = np.flatnonzero(field.deviation == largest)
     assert largest == pytest.approx(300.0) and field.gamma == 4 and len(tied) == 5
+    # rvpp's plan spends the whole budget among those five hours, choosing four of them.
+    chi = chosen.csp[chosen.csp["unit"] == case.csp[0].name].sort_values("t")["chi"].to_numpy()
+    assert chosen.status == "optimal" and chi.sum() == 4 and chi[tied].sum() == 4
 
 
 def test_earliest_ties_match_the_reference_with_those_periods_deviating(solved):

@@ -13,7 +13,6 @@ import pytest
 
 from rvpp import solve, with_options
 from rvpp.settle.audit import audit_result
-from rvpp.model.curve import curve_output
 
 # Γ in hours per strategy (paper Table 7), written here rather than read from rvpp.
 TABLE7 = {"deterministic": dict(price=0, wind=0, pv=0, csp=0, ed=0, td=0),
@@ -131,10 +130,13 @@ def test_power_block_output_follows_the_breakpoint_curve(paper_solve, paper_case
     csp = result.csp
     online = csp["online"] == 1
     assert online.any(), "the CSP should run on the default day"
+    # The curve as the case gives it: output = input × efficiency at each breakpoint, straight between them.
+    inputs = [p for p, _ in pb.breakpoints]
+    outputs = [p * eta for p, eta in pb.breakpoints]
     for scenario, shift in (("none", 0), ("up", 1), ("dn", -1)):
         reserve = csp["ts_r_up_mw"] if shift > 0 else csp["ts_r_dn_mw"]
         thermal = csp["p_pb_mw"] + shift * reserve
-        expected = np.asarray(curve_output(pb, thermal[online]))
+        expected = np.interp(thermal[online], inputs, outputs)
         assert np.allclose(csp.loc[online, f"e_{scenario}_mw"], expected, atol=1e-5)
     assert (csp.loc[online, "p_pb_mw"] >= pb.p_in_min_mw_th - 1e-6).all()
     assert np.allclose(csp.loc[~online, ["p_pb_mw", "e_none_mw"]], 0.0)
