@@ -33,7 +33,7 @@ from rvpp.uncertainty.forecast import BandSpec, forecast_and_errors  # noqa: E40
 from rvpp.uncertainty.quality import MAX_FILLED_GAP_H, band_quality_from_files, score  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
-SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", ROOT.parent.parent / "shared" / "data" / "spain"))
+SPAIN = Path(os.environ.get("RVPP_SPAIN_DATA", ROOT.parent / "shared" / "data" / "spain"))
 RUNS = (  # (file, series, year)
     ("entsoe_spain_2015_2018.csv", "wind_onshore", 2018),
     ("entsoe_spain_2015_2018.csv", "solar", 2018),
