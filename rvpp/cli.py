@@ -14,6 +14,7 @@ gives up the solve (exit code 130, nothing written). A long search reports itsel
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import math
 import re
 import signal
@@ -22,7 +23,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from .data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
+from .data.case import (FIRST_DATE, LAST_DATE, MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets,
+                        with_options)
 from .data.files import excerpt
 from .data.periods import ALLOWED_DT_H
 from .data.variants import describe
@@ -124,6 +126,21 @@ def _market_list(text: str) -> str:
     return text
 
 
+def date_option(text: str) -> str:
+    """An argparse ``type`` for a delivery date: ``YYYY-MM-DD``, a day of the calendar, within the
+    dates rvpp plans; refused in the option's words (``--date: '2025-02-30' is not a day ...``)."""
+    try:
+        day = dt.date.fromisoformat(text) if re.fullmatch(r"\d{4}-\d{2}-\d{2}", text) else None
+    except ValueError:
+        day = None
+    if day is None:
+        raise argparse.ArgumentTypeError(f"{excerpt(text)!r} is not a day of the calendar; give YYYY-MM-DD, "
+                                         "e.g. 2025-03-18")
+    if not FIRST_DATE <= day <= LAST_DATE:
+        raise argparse.ArgumentTypeError(f"{text} is not allowed; give a day from {FIRST_DATE} to {LAST_DATE}")
+    return text
+
+
 def path_option(text: str) -> Path:
     """An argparse ``type`` for a file or folder: an empty value is refused, not read as "."."""
     if not text.strip():
@@ -164,7 +181,7 @@ def _parser() -> argparse.ArgumentParser:
                                             "Ctrl-C during a long search writes the best plan found so far "
                                             "(status stopped, with its gap); a second Ctrl-C gives up.")
     solve.add_argument("--case", type=path_option, default=DEFAULT_CASE, help="case folder (default: the paper case)")
-    solve.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
+    solve.add_argument("--date", type=date_option, help="delivery date YYYY-MM-DD (default: the case's)")
     solve.add_argument("--strategy", choices=STRATEGIES, help="budget preset (default: the case's)")
     solve.add_argument("--gamma-fraction", type=Number(0, 1, unit="fraction of the day"), metavar="F",
                        help="Γ of every source as a fraction of the day, Γ = round(F·periods) (replaces the "
@@ -235,7 +252,7 @@ def _parse_gammas(items: list[str]) -> dict[str, int]:
 
 
 def _run_solve(args: argparse.Namespace) -> int:
-    from .outputs.export import check_replaceable, write_plan
+    from .outputs.export import check_plan_folder, check_replaceable, write_plan
     from .solving.plan import MPS_HEADERS, solve, write_mps
     from .solving.problem import tied_budgets
 
@@ -246,8 +263,9 @@ def _run_solve(args: argparse.Namespace) -> int:
                         markets=args.markets, csp=not args.no_csp, hpa_flat=args.hpa_flat, dt_h=args.dt,
                         budget_mode=args.budget_mode, ties=args.ties, time_limit_s=args.time_limit, rel_gap=args.gap,
                         threads=args.threads)
+    check_plan_folder(args.out)  # before the solve, not after it
     if not args.quiet:
-        print(f"rvpp: case {case.name}, {case.delivery_date}, {describe(case)}", file=sys.stderr)
+        print(f"rvpp: case {excerpt(case.name)}, {case.delivery_date}, {describe(case)}", file=sys.stderr)
     if args.write_mps:
         check_replaceable(args.write_mps, MPS_HEADERS, "an MPS file")
         write_mps(case, args.write_mps)

@@ -119,7 +119,7 @@ def test_no_csp_and_no_hpa_names_the_missing_heat_source(tmp_path, capsys):
     (["--gamma", "PV1=25"], "exceeds the 24 periods"),
     (["--markets", "SRM"], "must include DAM"),
     (["--date", "2031-01-01"], "is not covered"),
-    (["--date", "18/03/2025"], "delivery_date='18/03/2025' must be a date"),
+    (["--date", "18/03/2025"], "--date: '18/03/2025' is not a day of the calendar; give YYYY-MM-DD"),
     (["--case", "does/not/exist"], "no case.yaml found"),
     (["--hpa-flat", "-5"], "--hpa-flat: '-5' is not allowed; give a number in [0, 1e+06] [EUR/MWh_th]"),
     (["--ties", "earliest", "--budget-mode", "planner_chosen"],
@@ -138,8 +138,21 @@ def test_unwritable_output_is_reported(tmp_path, capsys):
     assert code == 1 and err.startswith("error:") and "Traceback" not in err
     code, err = run(capsys, "solve", "--quiet", "--out", str(blocker))
     assert code == 1
-    assert err == f"error: cannot write: {blocker} (it is a file, not a folder)\n"
+    assert err == f"error: cannot write: {blocker} (it is a file, not a folder)\n"  # said before solving
     assert blocker.read_text() == "x" and [p.name for p in tmp_path.iterdir()] == ["file"]
+    code, err = run(capsys, "solve", "--quiet", "--out", "/")
+    assert code == 1 and err == "error: cannot write: / (the root folder cannot take the exports; give a folder inside it)\n"
+
+
+def test_the_current_folder_takes_the_exports(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "notes.txt").write_text("mine")
+    code, err = run(capsys, "solve", "--case", str(PAPER), "--quiet", "--out", ".")
+    assert code == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["csp.csv", "flexibility.csv", "market.csv", "notes.txt",
+                                                          "plan.xlsx", "summary.json", "units.csv"]
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == "optimal"
 
 
 def test_data_build_regenerates_the_committed_history(tmp_path, capsys):
@@ -193,12 +206,11 @@ SOLVE = [
     (["--gamma", "WF1=3", "--gamma", "WF1=4"], "--gamma gives 'WF1' twice (WF1=3 and WF1=4); keep one"),
     (["--gamma", "=3"], "--gamma '=3' must look like SOURCE=N"),
     (["--gamma", "WF1=-2"], "--gamma 'WF1=-2': N=-2 must be >= 0"),
-    (["--date", "2025-02-30"], "delivery_date='2025-02-30' must be a date such as 2025-03-18"),
-    (["--date", ""], "delivery_date='' must be a date such as 2025-03-18"),
-    (["--date", "9999-12-31"], "delivery_date=9999-12-31 must lie between 1900-01-01 and 2199-12-31"),
-    (["--date", "2025-05-05T00:00"], "delivery_date='2025-05-05T00:00' must be a date such as 2025-03-18, "
-                                     "without a time of day"),
-    (["--date", "20250505"], "delivery_date='20250505' must be a date such as 2025-03-18"),
+    (["--date", "2025-02-30"], "--date: '2025-02-30' is not a day of the calendar; give YYYY-MM-DD, e.g. 2025-03-18"),
+    (["--date", ""], "--date: '' is not a day of the calendar"),
+    (["--date", "9999-12-31"], "--date: 9999-12-31 is not allowed; give a day from 1900-01-01 to 2199-12-31"),
+    (["--date", "2025-05-05T00:00"], "--date: '2025-05-05T00:00' is not a day of the calendar"),
+    (["--date", "20250505"], "--date: '20250505' is not a day of the calendar"),
     (["--case", ""], "--case: is empty; give a file or folder"),
     (["--out", ""], "--out: is empty; give a file or folder"),
     (["--frobnicate"], "unrecognized arguments: --frobnicate"),

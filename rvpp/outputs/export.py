@@ -35,9 +35,7 @@ def write_plan(result: Result, folder: str | Path) -> list[Path]:
     shows a stale plan beside a new summary. Other files in ``folder`` (notes of your
     own) are never touched; a failure part-way leaves the earlier run's files as they were.
     """
-    folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise NotADirectoryError(errno.ENOTDIR, "it is a file, not a folder", str(folder))
+    folder = check_plan_folder(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     staging = _sibling(folder, "tmp")
     staging.mkdir()
@@ -54,6 +52,19 @@ def write_plan(result: Result, folder: str | Path) -> list[Path]:
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return [folder / name for name in names]
+
+
+def check_plan_folder(folder: str | Path) -> Path:
+    """``folder`` as an absolute path, once it is known to be able to take a plan's exports (a
+    folder or nothing yet, not the root folder); else :class:`OSError` naming ``folder`` as given.
+    ``.`` is the current folder: the exports are written beside it first, so they need its name."""
+    path = Path(os.path.abspath(folder))
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, "it is a file, not a folder", str(folder))
+    if path.parent == path:
+        raise IsADirectoryError(errno.EISDIR, "the root folder cannot take the exports; give a folder inside it",
+                                str(folder))
+    return path
 
 
 def _write_exports(result: Result, folder: Path) -> list[str]:

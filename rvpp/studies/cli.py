@@ -7,7 +7,7 @@ import re
 import sys
 from pathlib import Path
 
-from ..cli import Number, choice_of, listed, path_option
+from ..cli import Number, choice_of, date_option, listed, path_option
 from ..data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
 from ..data.files import excerpt
 from ..data.periods import ALLOWED_DT_H
@@ -32,7 +32,7 @@ def add_study_commands(commands) -> None:
                        help="the study; reproduce runs those of the paper and the backtest (all but stress)")
     study.add_argument("--case", type=path_option, default=DEFAULT_CASE,
                        help="case folder (default: the paper case)")
-    study.add_argument("--date", help="delivery date YYYY-MM-DD (default: the case's)")
+    study.add_argument("--date", type=date_option, help="delivery date YYYY-MM-DD (default: the case's)")
     study.add_argument("--dt", type=choice_of(ALLOWED_DT_H, "h"), help="period length in hours: 1, 0.5 or 0.25")
     study.add_argument("--out", type=path_option, help="output folder (default: out/study-NAME)")
     study.add_argument("--scheduler", type=scheduler_option, default="processes",
