@@ -263,10 +263,9 @@ def test_cvar_95_is_the_mean_of_the_worst_five_percent_of_days(n, worst):
 def test_an_export_holds_the_records_and_reproduces_the_inputs(week, tmp_path):
     store, ident, settings = week
     target = tmp_path / "export"
-    target.mkdir()
-    (target / "old.txt").write_text("replaced as a whole")
     export(store, ident, target)
-    assert not (target / "old.txt").exists()
+    (target / "records.csv").write_text("an earlier export's table")  # an earlier export is replaced as a whole
+    export(store, ident, target)
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "a staging folder was left behind"
     records = pd.read_csv(target / "records.csv")
     assert len(records) == 14 and {"net_cost_eur", "gamma_price_da", "start_CSP1_e_mwh_th"} <= set(records.columns)
@@ -286,8 +285,8 @@ def test_an_export_that_fails_leaves_the_previous_one_untouched(week, tmp_path, 
 
     store, ident, _ = week
     target = tmp_path / "export"
-    target.mkdir()
-    (target / "kept.txt").write_text("previous export")
+    export(store, ident, target)
+    before = {p.name: p.read_bytes() for p in target.iterdir() if p.is_file()}
 
     def broken(*_args, **_kwargs):
         raise OSError("disk full")
@@ -295,7 +294,7 @@ def test_an_export_that_fails_leaves_the_previous_one_untouched(week, tmp_path, 
     monkeypatch.setattr(module, "save_case", broken)
     with pytest.raises(OSError, match="disk full"):
         export(store, ident, target)
-    assert (target / "kept.txt").read_text() == "previous export"
+    assert {p.name: p.read_bytes() for p in target.iterdir() if p.is_file()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["export"]
 
 

@@ -60,7 +60,8 @@ def add_backtest_commands(commands) -> None:
 
     export = actions.add_parser("export", help="write a stored backtest's records and inputs to a folder")
     export.add_argument("ident", metavar="ID", help="the backtest id (see backtest list)")
-    export.add_argument("--out", type=path_option, required=True, help="folder to write (replaced as a whole)")
+    export.add_argument("--out", type=path_option, required=True,
+                        help="folder to write: a new or empty folder, or an earlier export (replaced as a whole)")
     export.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
     export.set_defaults(run=run_export_command)
 
@@ -86,7 +87,9 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
                             "at most one per core)")
     parser.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
     parser.add_argument("--label", default="", help="a name for the backtest in the store")
-    parser.add_argument("--out", type=path_option, help="also export records, aggregates and inputs to this folder")
+    parser.add_argument("--out", type=path_option,
+                        help="also export records, aggregates and inputs to this folder (a new or empty folder, "
+                             "or an earlier export, which is replaced)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -115,6 +118,19 @@ def settings_from(args: argparse.Namespace, first, last, strategies, fractions) 
                             variants=variants_of(strategies, fractions, perfect=not args.no_perfect),
                             penalties=penalties, storage_end=args.storage_end, fix_commitment=args.fix_commitment,
                             audit=not args.no_audit)
+
+
+def check_out(out: Path | None) -> None:
+    """Refuse an ``--out`` the export may not replace (:func:`.export.check_replaceable_export`),
+    before any backtest runs; the message names the option and the folder as given."""
+    from .export import check_replaceable_export
+
+    if out is None:
+        return
+    try:
+        check_replaceable_export(out)
+    except OSError as exc:
+        raise BacktestError(f"--out {out}: {exc.strerror or exc}") from None
 
 
 def stop_on_terminate() -> None:
@@ -156,6 +172,7 @@ def run_backtest_command(args: argparse.Namespace) -> int:
     strategies = args.strategies if args.strategies is not None else (() if args.fractions else STRATEGIES)
     settings = settings_from(args, parse_day(args.first, "--from"), parse_day(args.last, "--to"), strategies,
                              args.fractions or ())
+    check_out(args.out)
     case = load_case(args.case)
     settings.check_case(case)
     store = BacktestStore(args.store)
@@ -199,13 +216,16 @@ def _report(store, ident: str, out: Path | None, say) -> int:
 def run_recommend_command(args: argparse.Namespace) -> int:
     from ..solving.parallel import open_executor
     from ..store import BacktestStore
-    from .recommend import recommend, write_recommendation
+    from .recommend import check_periods, recommend, write_recommendation
 
     train = parse_period(args.train, "--train")
     test = parse_period(args.test, "--test")
+    check_periods(train, test)  # before the settings of train[0]..test[1], whose rules name --from and --to
+    check_out(args.out)
     case = load_case(args.case)
-    store = BacktestStore(args.store)
     template = settings_from(args, train[0], test[1], STRATEGIES, ())
+    template.check_case(case, first_option="--train", last_option="--test")
+    store = BacktestStore(args.store)
     bar = ProgressBar(not args.quiet, "backtest")
     stop_on_terminate()
     try:
@@ -229,6 +249,7 @@ def run_export_command(args: argparse.Namespace) -> int:
     from ..store import BacktestStore
     from .export import export
 
+    check_out(args.out)
     export(BacktestStore(args.store), args.ident, args.out)
     print(f"wrote {args.out}", file=sys.stderr)
     return 0

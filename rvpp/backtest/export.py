@@ -14,14 +14,18 @@
   (when the code runs from a git checkout) and the time of the export.
 
 The folder appears complete or not at all: everything is written into a temporary
-sibling folder that replaces ``folder`` in one rename.
+sibling folder that replaces ``folder`` in one rename. Since it replaces ``folder`` as a
+whole, ``folder`` may only be missing, an empty folder or an earlier export holding nothing
+else (:func:`check_replaceable_export`): a folder of your own or a file is never replaced.
 """
 
 from __future__ import annotations
 
 import datetime as dt
+import errno
 import io
 import json
+import os
 import shutil
 import subprocess
 import tempfile
@@ -33,12 +37,15 @@ from typing import Any
 import pandas as pd
 
 from ..data.case import save_case
+from ..data.files import excerpt_names
 from ..store import BacktestStore
 from . import metrics
 from .engine import BIDS
 
 ROOT = Path(__file__).resolve().parents[2]
 NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp", "plan_integer_ones")
+MANIFEST = "manifest.json"
+MANIFEST_MAX_BYTES = 1024 ** 2  # an export's manifest holds settings and notes: a few kB; larger is not one
 
 
 def records_table(records: pd.DataFrame) -> pd.DataFrame:
@@ -101,15 +108,19 @@ def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str
            notes: dict[str, Any] | None = None) -> Path:
     """Write the backtest ``ident`` into ``folder`` (replaced as a whole); return the folder.
 
-    ``extra`` tables are written beside the others (CSV and Parquet); ``notes`` go into the manifest.
+    ``folder`` must be missing, empty or an earlier export (:func:`check_replaceable_export`,
+    checked before anything is written and again just before the swap). ``extra`` tables are
+    written beside the others (CSV and Parquet); ``notes`` go into the manifest.
     """
     from .. import __version__
 
     folder = Path(folder)
+    check_replaceable_export(folder)
+    place = folder.resolve()  # "." or "/" has no name to give the staging folder beside it
     case, settings = store.load(ident)
     records = store.records(ident)
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    place.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{place.name}.", dir=place.parent))
     try:
         tables = {"records": records_table(records), "bids": bids_table(records), "dispatch": dispatch_table(records),
                   "aggregates": metrics.aggregates(records), "monthly": metrics.monthly(records), **(extra or {})}
@@ -125,8 +136,8 @@ def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str
                     "exported_at": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
                     **(notes or {}),
                     "files": sorted(p.name for p in staging.iterdir())}
-        (staging / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str) + "\n", encoding="utf-8")
-        _replace(staging, folder)
+        (staging / MANIFEST).write_text(json.dumps(manifest, indent=2, default=str) + "\n", encoding="utf-8")
+        _replace(staging, place)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
@@ -166,8 +177,57 @@ def _text(value: Any) -> str:
     return value.isoformat() if isinstance(value, (dt.date, dt.datetime)) else str(value)
 
 
+def check_replaceable_export(folder: str | Path) -> None:
+    """Refuse to replace ``folder`` with an export unless it is missing, an empty folder or an
+    earlier export of :func:`export` holding nothing else.
+
+    An earlier export is recognised by its ``manifest.json``: a JSON object with a
+    ``backtest_id`` and the ``files`` written beside it, and no other file in the folder.
+    Anything else (a folder of your own, a file, a link to nothing) raises
+    :class:`FileExistsError` naming ``folder`` and the reason, as
+    :func:`rvpp.outputs.export.check_replaceable` does for single files, so a mistyped
+    folder cannot destroy unrelated work.
+    """
+    folder = Path(folder)
+    if not os.path.lexists(folder):
+        return
+    if not folder.is_dir():
+        what = "a file of that name exists" if folder.is_file() else "it exists and is not a folder"
+        raise FileExistsError(errno.EEXIST, f"{what}; choose a new folder", str(folder))
+    entries = {p.name for p in folder.iterdir()}
+    if not entries:
+        return
+    exported = _exported_files(folder / MANIFEST)
+    if exported is None:
+        raise FileExistsError(errno.EEXIST, "the folder exists and is not a backtest export; choose a new folder "
+                              "or remove it", str(folder))
+    others = sorted(entries - exported - {MANIFEST})
+    if others:
+        raise FileExistsError(errno.EEXIST, f"the folder is an earlier backtest export but also holds "
+                              f"{excerpt_names(others)}, which the export did not write; move them out or choose "
+                              "a new folder", str(folder))
+
+
+def _exported_files(manifest: Path) -> set[str] | None:
+    """The files an earlier export lists in its ``manifest`` (``None``: not an export's manifest)."""
+    if not manifest.is_file():
+        return None
+    with manifest.open("rb") as handle:
+        data = handle.read(MANIFEST_MAX_BYTES + 1)
+    try:
+        content = json.loads(data) if len(data) <= MANIFEST_MAX_BYTES else None
+    except (ValueError, RecursionError):  # not JSON or not text; nested deeper than Python's parser goes
+        return None
+    if not (isinstance(content, dict) and isinstance(content.get("backtest_id"), str)
+            and isinstance(content.get("files"), list) and all(isinstance(f, str) for f in content["files"])):
+        return None
+    return set(content["files"])
+
+
 def _replace(staging: Path, folder: Path) -> None:
-    """Move ``staging`` to ``folder`` in one rename, the old folder (if any) set aside first."""
+    """Move ``staging`` to ``folder`` in one rename, the old folder (an earlier export, or empty)
+    set aside first; ``folder`` is checked once more, in case something was put there meanwhile."""
+    check_replaceable_export(folder)
     old = None
     if folder.exists():
         old = folder.with_name(f".{folder.name}.old-{uuid.uuid4().hex[:8]}")

@@ -65,7 +65,7 @@ def recommend(case: Case, train: tuple[dt.date, dt.date], test: tuple[dt.date, d
     ``template``: settings whose penalties, storage rule and switches are kept (days and
     variants are set here). Resumes like any backtest.
     """
-    _check_periods(train, test)
+    check_periods(train, test)
     if criterion not in CRITERIA:
         raise BacktestError(f"--criterion {criterion!r} must be one of {', '.join(CRITERIA)}")
     grid = sorted(set(float(f) for f in fractions))
@@ -86,7 +86,7 @@ def recommend(case: Case, train: tuple[dt.date, dt.date], test: tuple[dt.date, d
 def recommendation_from(records: pd.DataFrame, train: tuple[dt.date, dt.date], test: tuple[dt.date, dt.date],
                         fractions: Sequence[float], criterion: str, backtest_id: str = "") -> Recommendation:
     """The recommendation from a backtest's records (pure: no solve)."""
-    _check_periods(train, test)
+    check_periods(train, test)
     table = metrics.daily(records)
     column = CRITERIA[criterion]
     periods = {"train": train, "test": test}
@@ -107,7 +107,8 @@ def recommendation_from(records: pd.DataFrame, train: tuple[dt.date, dt.date], t
     return Recommendation(backtest_id, criterion, train, test, fraction, curve, comparison, verdict)
 
 
-def _check_periods(train, test) -> None:
+def check_periods(train, test) -> None:
+    """Refuse a training and a test period out of order, in the words of `backtest recommend`."""
     if train[1] < train[0] or test[1] < test[0]:
         raise BacktestError("--train and --test must each run from their first to their last day")
     if test[0] <= train[1]:

@@ -166,18 +166,21 @@ class BacktestSettings:
     def with_changes(self, **changes: Any) -> "BacktestSettings":
         return dataclasses.replace(self, **changes)
 
-    def check_case(self, case: Case) -> None:
-        """Refuse days the case's history cannot plan (window before) or settle (the day itself)."""
+    def check_case(self, case: Case, first_option: str = "--from", last_option: str = "--to") -> None:
+        """Refuse days the case's history cannot plan (window before) or settle (the day itself).
+
+        The messages name the first and last day by the options the user gave them with
+        (``backtest recommend``: ``--train`` and ``--test``)."""
         covered = case.history.local_days(case.timezone)
         first, last = covered[0], covered[-1]
         earliest = first + dt.timedelta(days=case.uncertainty.window_days)
         if self.first_day < earliest:
-            raise BacktestError(f"--from {self.first_day}: the first day needs the {case.uncertainty.window_days} "
-                                f"days of history before it; {case.history.source} starts on {first}, so the "
-                                f"earliest day is {earliest}")
+            raise BacktestError(f"{first_option} {self.first_day}: the first day needs the "
+                                f"{case.uncertainty.window_days} days of history before it; {case.history.source} "
+                                f"starts on {first}, so the earliest day is {earliest}")
         if self.last_day > last:
-            raise BacktestError(f"--to {self.last_day}: the day is settled against its own observations, and "
-                                f"{case.history.source} ends on {last}; choose a day up to {last}")
+            raise BacktestError(f"{last_option} {self.last_day}: the day is settled against its own observations, "
+                                f"and {case.history.source} ends on {last}; choose a day up to {last}")
 
 
 def parse_day(text: str, option: str) -> dt.date:
