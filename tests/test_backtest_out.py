@@ -200,3 +200,14 @@ def test_recommend_names_train_and_test_not_from_and_to(tmp_path, capsys, train,
     assert code == 1
     assert words in err and "Traceback" not in err
     assert "--to" not in err and "--from" not in err
+
+
+def test_a_backtest_without_a_recorded_day_is_refused_by_name(paper_case, tmp_path, capsys):
+    """Stopped before its first day: nothing to export, said so (it was a KeyError in the monthly sums)."""
+    url = f"sqlite:///{tmp_path / 'store.sqlite3'}"
+    settings = BacktestSettings(DAY, DAY, variants_of(["deterministic"], [], perfect=False))
+    ident = BacktestStore(url).open(paper_case, settings.stored(), keys_total=1)
+    code, err = run(capsys, "export", ident, "--out", str(tmp_path / "out"), "--store", url)
+    assert code == 1
+    assert err == f"error: backtest {ident} has no day recorded yet: nothing to export (see backtest list)\n"
+    assert not (tmp_path / "out").exists()

@@ -41,6 +41,7 @@ from ..data.files import excerpt_names
 from ..store import BacktestStore
 from . import metrics
 from .engine import BIDS
+from .settings import BacktestError
 
 ROOT = Path(__file__).resolve().parents[2]
 NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp", "plan_integer_ones")
@@ -119,6 +120,8 @@ def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str
     place = folder.resolve()  # "." or "/" has no name to give the staging folder beside it
     case, settings = store.load(ident)
     records = store.records(ident)
+    if records.empty:
+        raise BacktestError(f"backtest {ident} has no day recorded yet: nothing to export (see backtest list)")
     place.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{place.name}.", dir=place.parent))
     try:
