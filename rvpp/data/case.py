@@ -19,17 +19,55 @@ from typing import Annotated, Any, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import yaml
-from pydantic import (BaseModel, ConfigDict, Field, ValidationError, field_serializer, field_validator,
-                      model_validator)
+from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, ValidationError,
+                      field_serializer, field_validator, model_validator)
+from pydantic_core import PydanticCustomError
 
-from ..errors import CaseError, CaseFileError
+from ..errors import CaseError, CaseFileError, CasePathError
 from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
-Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
-NonNegative = Annotated[float, Field(ge=0.0, le=MAX_QUANTITY)]
-Positive = Annotated[float, Field(gt=0.0, le=MAX_QUANTITY)]
+
+def _not_true_false(kind: str) -> BeforeValidator:
+    """Refuse true/false where a number belongs (pydantic would read ``true`` as 1), reported as the
+    pydantic error ``kind`` so that the message reads like any other wrong type."""
+
+    def check(value: Any) -> Any:
+        if isinstance(value, bool):
+            raise PydanticCustomError(kind, "true/false is not a number")
+        return value
+
+    return BeforeValidator(check)
+
+
+# Control characters (C0, DEL and C1: a YAML escape such as "\x01" or "\e") in text that is shown
+# and exported: Excel refuses them in a cell and a terminal obeys them. Ordinary Unicode letters,
+# spaces and joiners are fine; prose keeps its tabs and line breaks. (pydantic refuses lone surrogates.)
+_CONTROL_CHARACTER = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+_CONTROL_IN_PROSE = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]")
+
+
+def _printable(pattern: re.Pattern) -> AfterValidator:
+    """Refuse text holding a character that ``pattern`` matches, naming its code point."""
+
+    def check(value: str) -> str:
+        found = pattern.search(value)
+        if found:
+            raise ValueError(f"must not contain control characters (found U+{ord(found.group()):04X})")
+        return value
+
+    return AfterValidator(check)
+
+
+Number = Annotated[float, _not_true_false("float_type")]
+WholeNumber = Annotated[int, _not_true_false("int_type")]
+Fraction = Annotated[Number, Field(ge=0.0, le=1.0)]
+NonNegative = Annotated[Number, Field(ge=0.0, le=MAX_QUANTITY)]
+Positive = Annotated[Number, Field(gt=0.0, le=MAX_QUANTITY)]
+ONE_LINE, PROSE = _printable(_CONTROL_CHARACTER), _printable(_CONTROL_IN_PROSE)  # after any length rule
+Text = Annotated[str, ONE_LINE]  # a name, a column
+Prose = Annotated[str, PROSE]  # a description: lines and tabs allowed
 UnitName = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,39}$")]
 
 STRATEGIES = ("deterministic", "optimistic", "balanced", "pessimistic")
@@ -48,6 +86,19 @@ CASE_FILE = "case.yaml"
 MAX_CASE_YAML_BYTES = MIB  # a case.yaml of 100 units is about 80 KiB
 MAX_YAML_DEPTH = 32        # nesting levels (a case uses five)
 MAX_YAML_VALUES = 100_000  # values once aliases are expanded (a case of 100 units holds about 10,000)
+YAML_TAG = "tag:yaml.org,2002:"
+# Explicit tags a case may carry: those of plain data (``name: !!str 2025``). The other standard
+# tags build values a case has no use for (!!binary, !!set, !!omap, !!pairs; a date is written
+# plainly, without !!timestamp) and any other tag names a constructor rvpp does not have: both are
+# refused from the parser's events, before anything is built.
+PLAIN_TAGS = frozenset(YAML_TAG + kind for kind in ("str", "int", "float", "bool", "null", "seq", "map"))
+NON_SPECIFIC_TAG = "!"  # "! x": no tag named (PyYAML reads the value as if untagged)
+# What a value of a standard tag must be, for a message when it cannot be built (``!!float abc``).
+TAG_MEANS = {"int": "a whole number", "float": "a number", "bool": "true or false", "null": "an empty value",
+             "timestamp": "a valid date or time (a date is written 2025-03-18)", "str": "text", "seq": "a list",
+             "map": "a mapping"}
+# What PyYAML's constructors raise, besides its own errors, for a value they cannot build.
+CONSTRUCTION_ERRORS = (ValueError, TypeError, AttributeError, IndexError, KeyError, OverflowError, RecursionError)
 HOURS_PER_DAY = 24
 FIRST_DATE, LAST_DATE = dt.date(1900, 1, 1), dt.date(2199, 12, 31)  # delivery dates rvpp plans
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
@@ -87,9 +138,9 @@ class NdresUnit(_FollowsSeries):
     ramp_up_mw_per_min: NonNegative
     ramp_dn_mw_per_min: NonNegative
     reserve_share: Fraction = 0.1
-    series: str | None = None
+    series: Text | None = None
     series_scale: Positive = 1.0
-    forecast_series: str | None = None
+    forecast_series: Text | None = None
 
     @model_validator(mode="after")
     def _limits(self) -> "NdresUnit":
@@ -101,9 +152,9 @@ class SolarField(_Frozen):
     """CSP solar field: thermal power collected, uncertain [MW_th]."""
 
     p_max_mw_th: Positive
-    series: str | None = None
+    series: Text | None = None
     series_scale: Positive = 1.0
-    forecast_series: str | None = None
+    forecast_series: Text | None = None
 
 
 class ThermalStorage(_Frozen):
@@ -115,8 +166,8 @@ class ThermalStorage(_Frozen):
     p_ch_min_mw_th: NonNegative = 0.0
     p_dis_max_mw_th: NonNegative
     p_dis_min_mw_th: NonNegative = 0.0
-    eta_ch: Annotated[float, Field(gt=0.0, le=1.0)]
-    eta_dis: Annotated[float, Field(gt=0.0, le=1.0)]
+    eta_ch: Annotated[Number, Field(gt=0.0, le=1.0)]
+    eta_dis: Annotated[Number, Field(gt=0.0, le=1.0)]
     e_init_mwh_th: NonNegative | None = None
     e_end_min_mwh_th: NonNegative | None = None
 
@@ -157,7 +208,7 @@ class PowerBlock(_Frozen):
     p_in_max_mw_th: Positive
     p_in_min_mw_th: Positive
     p_el_max_mw: Positive
-    breakpoints: tuple[tuple[float, float], ...]
+    breakpoints: tuple[tuple[Annotated[Number, Field(le=MAX_QUANTITY)], Number], ...]
     min_up_h: NonNegative = 0.0
     min_down_h: NonNegative = 0.0
     startup_fraction: NonNegative = 0.0
@@ -181,7 +232,7 @@ class CSP(_Frozen):
 
     name: UnitName
     om_eur_per_mwh: NonNegative = 0.0
-    heat_efficiency: Annotated[float, Field(gt=0.0, le=1.0)] = 1.0
+    heat_efficiency: Annotated[Number, Field(gt=0.0, le=1.0)] = 1.0
     ramp_mw_per_min: NonNegative
     reserve_share: Fraction = 0.5
     solar_field: SolarField
@@ -260,9 +311,9 @@ class ElectricalDemand(_FollowsSeries):
     ramp_dn_mw_per_min: NonNegative
     flex_up: Fraction = 0.1
     flex_dn: Fraction = 0.1
-    series: str | None = None
+    series: Text | None = None
     series_scale: Positive = 1.0
-    forecast_series: str | None = None
+    forecast_series: Text | None = None
 
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":
@@ -279,9 +330,9 @@ class ThermalDemand(_FollowsSeries):
     h_max_mw_th: Positive
     q_min_mwh_th: NonNegative
     h_init_mw_th: NonNegative | None = None
-    series: str | None = None
+    series: Text | None = None
     series_scale: Positive = 1.0
-    forecast_series: str | None = None
+    forecast_series: Text | None = None
 
     @model_validator(mode="after")
     def _limits(self) -> "ThermalDemand":
@@ -297,8 +348,8 @@ class ImbalancePrices(_Frozen):
     ``π_def`` (``short``: paid for energy delivered short of the DAM bid) and ``π_sur``
     (``long``: received for energy delivered beyond it) (MODEL_SPEC §10)."""
 
-    short: str = Field(min_length=1)
-    long: str = Field(min_length=1)
+    short: Annotated[str, Field(min_length=1), ONE_LINE]
+    long: Annotated[str, Field(min_length=1), ONE_LINE]
 
 
 class Markets(_Frozen):
@@ -359,9 +410,9 @@ class UncertaintySettings(_Frozen):
     forecast of prices with forecast bands.
     """
 
-    window_days: Annotated[int, Field(ge=1, le=366)] = 30
-    q_lo: Annotated[float, Field(gt=0.0, lt=0.5)] = 0.2
-    q_hi: Annotated[float, Field(gt=0.5, lt=1.0)] = 0.8
+    window_days: Annotated[WholeNumber, Field(ge=1, le=366)] = 30
+    q_lo: Annotated[Number, Field(gt=0.0, lt=0.5)] = 0.2
+    q_hi: Annotated[Number, Field(gt=0.5, lt=1.0)] = 0.8
     bands: tuple[tuple[str, BandMethod], ...] = ()
     price_forecast: Literal["same_hour_yesterday", "same_hour_last_week", "blend"] = "same_hour_yesterday"
 
@@ -457,14 +508,14 @@ class SolverSettings(_Frozen):
     """HiGHS settings and formulation choices."""
 
     time_limit_s: Positive = 120.0
-    rel_gap: Annotated[float, Field(ge=0.0, lt=1.0)] = 1e-4
-    threads: Annotated[int, Field(ge=0, le=MAX_THREADS)] = 0
+    rel_gap: Annotated[Number, Field(ge=0.0, lt=1.0)] = 1e-4
+    threads: Annotated[WholeNumber, Field(ge=0, le=MAX_THREADS)] = 0
     budget_encoding: Literal["top_gamma", "binary"] = "top_gamma"
     pwl_encoding: Literal["incremental", "convex_combination"] = "incremental"
     # A MIP start: the integer variables at one in an earlier plan (a backtest passes the day before's),
     # the others at zero. HiGHS checks it and ignores it when it does not fit the day, so it can shorten
     # the search but never changes what counts as optimal; names the model does not have are ignored.
-    mip_start: Annotated[tuple[Annotated[str, Field(min_length=1, max_length=200)], ...],
+    mip_start: Annotated[tuple[Annotated[str, Field(min_length=1, max_length=200), ONE_LINE], ...],
                          Field(max_length=MAX_START_NAMES)] = ()
 
 
@@ -473,8 +524,8 @@ class ColumnSource(_Frozen):
     fingerprint) or ``synthetic`` (generated), and how it was made from its source."""
 
     origin: Literal["real", "synthetic"]
-    source: str = Field(min_length=1)
-    note: str = ""
+    source: Annotated[str, Field(min_length=1), ONE_LINE]
+    note: Prose = ""
 
 
 class Case(_Frozen):
@@ -483,11 +534,11 @@ class Case(_Frozen):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False,
                               arbitrary_types_allowed=True)
 
-    name: str = Field(min_length=1)
-    description: str = ""
+    name: Annotated[str, Field(min_length=1), ONE_LINE]
+    description: Prose = ""
     delivery_date: dt.date
     timezone: str = "Europe/Madrid"
-    dt_h: float = 1.0
+    dt_h: Number = 1.0
     markets: Markets
     uncertainty: UncertaintySettings = UncertaintySettings()
     budgets: Budgets = Budgets()
@@ -497,7 +548,7 @@ class Case(_Frozen):
     csp: tuple[CSP, ...] = ()
     ed: tuple[ElectricalDemand, ...] = ()
     td: tuple[ThermalDemand, ...] = ()
-    provenance: tuple[tuple[str, ColumnSource], ...] = ()
+    provenance: tuple[tuple[Text, ColumnSource], ...] = ()
     history: History
 
     @field_validator("provenance", mode="before")
@@ -910,20 +961,25 @@ def _rule(kind: str, ctx: dict, msg: str) -> str:
 def load_case(path: str | Path) -> Case:
     """Read a case folder (or its ``case.yaml``) and validate it.
 
-    The history CSV named by ``history:`` must lie inside the case folder: an absolute
-    path, a ``..`` step or a link out of the folder raises
-    :class:`~rvpp.errors.CasePathError` before any file is opened, so a case is a
+    ``case.yaml`` and the history CSV named by ``history:`` must lie inside the case
+    folder: an absolute path, a ``..`` step or a link out of the folder raises
+    :class:`~rvpp.errors.CasePathError` before the file is opened, so a case is a
     portable folder and never reads files beside it.
     """
     path = Path(path)
     try:
         file = path / CASE_FILE if path.is_dir() else path
         found = file.is_file()
-    except (OSError, ValueError):  # no permission, a NUL in the name
+        target = file.resolve()
+        inside = target.is_relative_to(file.parent.resolve())
+    except (OSError, ValueError, RuntimeError):  # no permission, a NUL in the name, a loop of links
         found = False
     if not found:
         raise CaseError(f"no {CASE_FILE} found at {excerpt(path, 200)}")
-    data = read_case_yaml(read_file(file, file.name, max_bytes=MAX_CASE_YAML_BYTES), file.name)
+    if not inside:  # the target is never opened nor named: it may be any file of the server
+        raise CasePathError(f"{excerpt(file.name)}: is a link to a file outside the case folder; copy the file "
+                            "into the folder")
+    data = read_case_yaml(read_file(target, file.name, max_bytes=MAX_CASE_YAML_BYTES), file.name)
     relative = history_path(data, file.name)
     history = History.read_csv(inside_folder(file.parent, relative, "history", file.name), source=str(relative))
     return parse_case(data, history)
@@ -939,7 +995,9 @@ def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:
 
     The file must be UTF-8 text of at most ``MAX_CASE_YAML_BYTES``, nested at most
     ``MAX_YAML_DEPTH`` levels and at most ``MAX_YAML_VALUES`` values once its aliases
-    are expanded; its top level must be a mapping. Raises :class:`CaseFileError`.
+    are expanded, with no tag but those of ``PLAIN_TAGS``; its top level must be a
+    mapping. A value that cannot be built (``!!float abc``, ``2025-02-30``) is named by
+    its line. Raises :class:`CaseFileError`.
     """
     if len(data) > MAX_CASE_YAML_BYTES:
         raise CaseFileError(f"{file}: is larger than {MAX_CASE_YAML_BYTES // 1024} KiB; a case.yaml is usually "
@@ -958,6 +1016,8 @@ def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = getattr(exc, "problem", None) or exc
         raise CaseFileError(f"{file}: not valid YAML{where} ({excerpt(problem, 120)})") from None
+    except CONSTRUCTION_ERRORS:  # not placed at a value by _CaseLoader.construct_object
+        raise CaseFileError(f"{file}: not valid YAML (a value cannot be read as plain data)") from None
     if not isinstance(loaded, Mapping):
         got = "the file is empty" if loaded is None else f"it holds {_kind_of(loaded)}"
         raise CaseFileError(f"{file}: the top level must be a mapping of settings (name:, markets:, units:, ...); "
@@ -970,11 +1030,21 @@ _YamlBase = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when availa
 
 class _CaseLoader(_YamlBase):
     """PyYAML's safe loader (plain data only: no Python objects) that refuses a key written
-    twice in one mapping, at every depth, instead of keeping the last value."""
+    twice in one mapping, at every depth, instead of keeping the last value, and reports a
+    value it cannot build (``!!float abc``, ``2025-02-30``) at its line, never as a traceback."""
 
     file = CASE_FILE
 
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        try:
+            return super().construct_object(node, deep=deep)
+        except CONSTRUCTION_ERRORS:
+            raise yaml.constructor.ConstructorError(None, None, _cannot_build(node), node.start_mark) from None
+
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        if not isinstance(node, yaml.MappingNode):  # "!!map 5", "!!map [1, 2]"
+            raise yaml.constructor.ConstructorError(None, None, f"{_tag_name(node.tag)} must be a mapping (key: value "
+                                                    f"lines), not {_node_kind(node)}", node.start_mark)
         lines: dict[Any, int] = {}
         for key_node, _ in node.value:
             if key_node.tag == "tag:yaml.org,2002:merge":  # "<<: *defaults" may be overridden on purpose
@@ -990,6 +1060,24 @@ class _CaseLoader(_YamlBase):
         return super().construct_mapping(node, deep=deep)
 
 
+def _tag_name(tag: str) -> str:
+    """A tag as written: ``!!float`` for the standard ones."""
+    return excerpt("!!" + tag.removeprefix(YAML_TAG) if tag.startswith(YAML_TAG) else tag, 60)
+
+
+def _node_kind(node: yaml.Node) -> str:
+    return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping" if isinstance(
+        node, yaml.MappingNode) else "a single value"
+
+
+def _cannot_build(node: yaml.Node) -> str:
+    """Why the value at ``node`` cannot be built, e.g. ``'abc' is not a number`` (for ``!!float abc``)."""
+    means = TAG_MEANS.get(node.tag.removeprefix(YAML_TAG), "plain data")
+    if not isinstance(node, yaml.ScalarNode):
+        return f"{_node_kind(node)} here cannot be read as {means}"
+    return f"{excerpt(node.value)!r} is not {means}"
+
+
 def _hashable(value: Any) -> bool:
     try:
         hash(value)
@@ -999,12 +1087,17 @@ def _hashable(value: Any) -> bool:
 
 
 def _check_yaml_shape(text: str, file: str) -> None:
-    """Refuse YAML nested too deep or too large once aliases are expanded (a "billion laughs"),
-    from the parser's events, before any value is built."""
+    """Refuse YAML nested too deep, too large once aliases are expanded (a "billion laughs") or
+    carrying a tag other than those of plain data, from the parser's events, before any value is built."""
     total = 0
     sizes: dict[str, int] = {}
     stack: list[list] = [[None, 0]]  # [anchor, expanded values so far] of each open collection
     for event in yaml.parse(text, Loader=_YamlBase):
+        tag = getattr(event, "tag", None)
+        if tag not in (None, NON_SPECIFIC_TAG) and tag not in PLAIN_TAGS:
+            raise CaseFileError(f"{file}: the YAML tag {_tag_name(tag)} at line {event.start_mark.line + 1}, column "
+                                f"{event.start_mark.column + 1} is not allowed in a case; remove it (a case holds "
+                                "text, numbers, true/false, dates, lists and mappings; put text in quotes)")
         if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
             if len(stack) > MAX_YAML_DEPTH:
                 raise CaseFileError(f"{file}: nested more than {MAX_YAML_DEPTH} levels deep (line "

@@ -33,8 +33,9 @@ EXPECTED = ("a zip of a case folder, a case.yaml together with its history CSV, 
 
 
 def case_zip_bytes(case: Case, folder_name: str | None = None) -> bytes:
-    """``case.yaml`` and ``history.csv`` of ``case`` in a zip, inside one folder."""
-    folder_name = folder_name or case.name
+    """``case.yaml`` and ``history.csv`` of ``case`` in a zip, inside one folder named after the case
+    (letters, digits, ``_ . -`` kept, anything else as ``_``: a name such as ``../x`` stays one folder)."""
+    folder_name = archive_folder(folder_name or case.name)
     buffer = io.BytesIO()
     with tempfile.TemporaryDirectory() as tmp:
         folder = save_case(case, Path(tmp) / "case")
@@ -42,6 +43,12 @@ def case_zip_bytes(case: Case, folder_name: str | None = None) -> bytes:
             for path in sorted(folder.iterdir()):
                 archive.write(path, arcname=f"{folder_name}/{path.name}")
     return buffer.getvalue()
+
+
+def archive_folder(name: str) -> str:
+    """``name`` as one folder of an archive: no path separators, no leading dot, at most 80 characters."""
+    safe = "".join(c if c.isascii() and (c.isalnum() or c in "_.-") else "_" for c in name).lstrip(".")[:80]
+    return safe or "case"
 
 
 def read_case_files(files: Mapping[str, bytes], limits: UploadLimits = UploadLimits()) -> Case:

@@ -51,6 +51,14 @@ SERIES_FIELDS = {"wind": "series", "pv": "series", "csp": "solar_field.series", 
 NAME_PREFIXES = {"wind": "WF", "pv": "PV", "csp": "CSP", "ed": "ED", "td": "TD"}
 SETTING_SECTIONS = ("markets", "uncertainty", "budgets", "solver")
 TOP_SETTINGS = ("name", "description", "delivery_date", "timezone", "dt_h")
+# Sections of the ``case`` sheet, each given as dotted rows (one field of each as an example).
+SECTION_EXAMPLES = {"markets": "markets.kappa", "uncertainty": "uncertainty.window_days",
+                    "budgets": "budgets.strategy", "solver": "solver.time_limit_s",
+                    "provenance": "provenance.price_da.origin"}
+# Parts of a case read from sheets of their own: a row of the ``case`` sheet would be overwritten.
+# (Not budgets.overrides: the writer puts them in both places, and the budgets sheet wins.)
+OWN_SHEETS = {"units": "the sheets wind, pv, csp, ed and td",
+              "markets.hpa_tariff_eur_per_mwh": "the sheet 'hpa_tariff'"}
 HOURS_PER_DAY = 24
 SHEET_WIDTH = (10, 40)  # [characters] narrowest and widest column of a written sheet
 
@@ -441,6 +449,14 @@ def _settings(sheet: pd.DataFrame, label: str) -> dict[str, Any]:
         rows[field] = row_number
         flat[field] = _plain(row["value"])
     flat = {key: value for key, value in flat.items() if value is not None or key == "description"}
+    for field in flat:
+        if field in SECTION_EXAMPLES:
+            raise CaseError(f"{label}: sheet 'case': {field} must be a section of fields ({SECTION_EXAMPLES[field]}, "
+                            f"...), not a value (row {rows[field]})")
+        part = next((part for part in OWN_SHEETS if field == part or field.startswith(part + ".")), None)
+        if part is not None:
+            raise CaseError(f"{label}: sheet 'case': {excerpt(field)} is read from {OWN_SHEETS[part]}, not from a "
+                            f"row of this sheet (row {rows[field]}); remove the row")
     if isinstance(flat.get("delivery_date"), dt.date):
         flat["delivery_date"] = flat["delivery_date"].isoformat()
     if flat.get("description") is None:
