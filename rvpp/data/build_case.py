@@ -52,6 +52,8 @@ FLEETS = {"wind": ("actual_wind_onshore", "forecast_wind_onshore"), "pv": ("actu
 FORECAST_SUFFIX = "_fc"
 SYNTHETIC_CSP_FIELD_MW_TH = 300.0  # the solar field synth.py models (MODEL_SPEC §12)
 PRICE_LAG_DAYS = 7  # naive price forecasts look back up to a week before the window
+HISTORY_FILE = "history.csv"
+WRITTEN = (HISTORY_FILE, CASE_FILE)  # the files a build writes into its folder, in this order
 
 
 @dataclass(frozen=True)
@@ -111,10 +113,7 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     """Build a case folder from downloaded files; see the module notes for what each column is."""
     say = progress or (lambda _m: None)
     out = Path(out)
-    if (out / CASE_FILE).exists() and not overwrite:
-        raise RvppError(f"{out} already holds a case; choose another folder or overwrite it (--force)")
-    if out.exists() and not out.is_dir():
-        raise RvppError(f"{out} exists and is not a folder")
+    _check_out(out, overwrite)
     base = template if isinstance(template, Case) else load_case(template)
     say(f"reading {len(sources)} file(s)")
     imports = import_files(list(sources), options.zone)
@@ -184,9 +183,9 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed)
     columns.update(synthetic)
     provenance.update(sources_text)
-    history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source="history.csv")
+    history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source=HISTORY_FILE)
     case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last)
-    _write(case, out)
+    _write(case, out, overwrite)
     say(f"wrote {out}")
     return BuiltCase(folder=out, case=case, reports=tuple(i.report for i in imports), capacities_mw=capacities,
                      notes=tuple(notes))
@@ -376,14 +375,31 @@ def _case(base: Case, name: str, history: History, delivery: dt.date, provenance
         raise CaseError([f"the built case breaks a rule: {p}" for p in err.problems]) from None
 
 
-def _write(case: Case, out: Path) -> None:
-    """Write the case into a temporary folder beside ``out``, then move its two files into place."""
+def _check_out(out: Path, overwrite: bool) -> None:
+    """Refuse to replace a file ``out`` already holds (a case, or a user's own history.csv)
+    unless ``overwrite`` (--force), and a folder where one of the two files belongs even then."""
+    if os.path.lexists(out / CASE_FILE) and not overwrite:
+        raise RvppError(f"{out} already holds a case; choose another folder or overwrite it (--force)")
+    if out.exists() and not out.is_dir():
+        raise RvppError(f"{out} exists and is not a folder")
+    for name in WRITTEN:
+        target = out / name
+        if target.is_dir():
+            raise RvppError(f"{target} is a folder, where the case's {name} belongs; choose another folder")
+        if os.path.lexists(target) and not overwrite:
+            raise RvppError(f"{out} already holds {name}; choose another folder or overwrite it (--force)")
+
+
+def _write(case: Case, out: Path, overwrite: bool) -> None:
+    """Write the case into a temporary folder beside ``out``, then move its two files into place
+    (checking again that nothing has appeared there meanwhile that ``overwrite`` does not allow)."""
     out.parent.mkdir(parents=True, exist_ok=True)
     temp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
     try:
-        save_case(case, temp)
+        save_case(case, temp, HISTORY_FILE)
         out.mkdir(exist_ok=True)
-        os.replace(temp / "history.csv", out / "history.csv")
-        os.replace(temp / CASE_FILE, out / CASE_FILE)
+        _check_out(out, overwrite)
+        for name in WRITTEN:
+            os.replace(temp / name, out / name)
     finally:
         shutil.rmtree(temp, ignore_errors=True)

@@ -54,7 +54,8 @@ def add_data_commands(commands) -> None:
                             "every source on the paper's bands")
     build.add_argument("--seed", type=Number(0, whole=True), help="seed of the synthetic series >= 0 "
                        "(default: the published one)")
-    build.add_argument("--force", action="store_true", help="overwrite a folder that already holds a case")
+    build.add_argument("--force", action="store_true",
+                       help="overwrite the case.yaml and history.csv of a folder that already holds them")
     build.set_defaults(run=_run_build_case)
 
     quality = commands.add_parser(

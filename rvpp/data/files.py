@@ -16,13 +16,17 @@ and columns of history and the time spent reading it (:class:`UploadBudget`).
 from __future__ import annotations
 
 import io
+import os
 import re
+import stat
 import time
 import zipfile
 import zlib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
-from typing import Any
+from typing import Any, BinaryIO
 
 from ..errors import CaseFileError, CasePathError, UploadError, UploadLimitError
 
@@ -48,6 +52,9 @@ MAGIC = (
     (b"\xff\xfe", "UTF-16 text"),
     (b"\xfe\xff", "UTF-16 text"),
 )
+# What zipfile.ZipFile raises on data that is not a zip it can read: damaged records, a
+# version or size it does not support, a name that is not UTF-8 (a ValueError).
+UNREADABLE_ZIP = (zipfile.BadZipFile, zipfile.LargeZipFile, ValueError, EOFError, NotImplementedError)
 WINDOWS_DRIVE = re.compile(r"^[A-Za-z]:")
 S_IFMT, S_IFLNK = 0o170000, 0o120000
 
@@ -146,18 +153,52 @@ def _is_cp1252(data: bytes) -> bool:
 
 
 def read_file(path: Path, name: str, max_bytes: int | None = None) -> bytes:
-    """The bytes of a file on disk; a folder, a missing file, no permission or more than
-    ``max_bytes`` raise :class:`CaseFileError` naming ``name``."""
+    """The bytes of a file on disk; a folder, a named pipe or device, a missing file, no
+    permission or more than ``max_bytes`` raise :class:`CaseFileError` naming ``name``."""
     try:
-        with path.open("rb") as handle:
+        with open_regular(path, name) as handle:
             data = handle.read() if max_bytes is None else handle.read(max_bytes + 1)
-    except IsADirectoryError:
-        raise CaseFileError(f"{name}: is a folder, not a file") from None
     except OSError as exc:
         raise CaseFileError(f"{name}: cannot be read ({exc.strerror or exc})") from None
     if max_bytes is not None and len(data) > max_bytes:
         raise CaseFileError(f"{name}: is larger than {_mib(max_bytes)}; a case file is usually a few KiB")
     return data
+
+
+def open_regular(path: Path, name: str, error: type[Exception] = CaseFileError) -> BinaryIO:
+    """``path`` opened for reading, only if it is a regular file (links followed).
+
+    A folder, a named pipe, a device or a socket raises ``error`` naming ``name``, e.g.
+    ``history.csv: not a regular file (it is a named pipe)``, before it is opened: opening a
+    named pipe waits for a writer, and a device such as ``/dev/zero`` never ends. The file
+    is opened without waiting and checked again once open, in case it changed in between.
+    Other failures (missing, no permission) raise :class:`OSError` for the caller to name.
+    """
+    def refuse(mode: int) -> None:
+        if stat.S_ISDIR(mode):
+            raise error(f"{name}: is a folder, not a file")
+        if not stat.S_ISREG(mode):
+            raise error(f"{name}: not a regular file (it is {_file_kind(mode)}); give a file saved on disk")
+
+    refuse(os.stat(path).st_mode)
+    descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    try:
+        refuse(os.fstat(descriptor).st_mode)
+        return os.fdopen(descriptor, "rb")
+    except BaseException:
+        os.close(descriptor)
+        raise
+
+
+def _file_kind(mode: int) -> str:
+    """What a file that is not regular is, for a message."""
+    if stat.S_ISFIFO(mode):
+        return "a named pipe"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a plain file"
 
 
 # ----------------------------------------------------------------------------- paths
@@ -237,7 +278,7 @@ def open_zip(data: bytes, name: str, limits: UploadLimits, expected: str = "a zi
     """
     try:
         archive = zipfile.ZipFile(io.BytesIO(data))
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, ValueError, EOFError):
+    except UNREADABLE_ZIP:
         kind = sniff(data) or ("empty" if not data else "text or other data, not a zip archive")
         raise UploadError(f"{name}: cannot be read as {expected} (it seems to be {kind})") from None
     members = archive.infolist()
@@ -266,20 +307,40 @@ def unzip(archive: zipfile.ZipFile, member: zipfile.ZipInfo, name: str, budget: 
           keep: bool = True) -> bytes:
     """The inflated bytes of ``member``, counted against the budget while they are read
     (``keep=False``: only counted and checked, nothing kept)."""
-    where = f'{name}, member "{excerpt(member.filename, 80)}"'
+    where = member_name(name, member)
     chunks = []
-    try:
+    with unpacking(name, member):
         with archive.open(member) as stream:
             while chunk := stream.read(CHUNK_BYTES):
                 budget.count_unzipped(len(chunk), name)
                 budget.check_time(f"unpacking {where}")
                 if keep:
                     chunks.append(chunk)
-    except zipfile.BadZipFile:
-        raise UploadError(f"{where}: is damaged (its data does not match the zip's records)") from None
-    except (NotImplementedError, RuntimeError, EOFError, OSError, zlib.error) as exc:
-        raise UploadError(f"{where}: cannot be unpacked ({excerpt(exc, 80)})") from None
     return b"".join(chunks)
+
+
+def member_name(name: str, member: zipfile.ZipInfo) -> str:
+    """A zip member for a message: ``prices.zip, member "marginalpdbc_20180326.1"``."""
+    return f'{name}, member "{excerpt(member.filename, 80)}"'
+
+
+@contextmanager
+def unpacking(name: str, member: zipfile.ZipInfo, error: type[Exception] = UploadError) -> Iterator[None]:
+    """Turn what reading ``member`` of zip ``name`` raises when it is damaged (a corrupt
+    stream, a bad CRC, cut short), encrypted or packed with a method Python cannot read
+    into ``error`` naming the zip and the member (:func:`member_name`)."""
+    where = member_name(name, member)
+    try:
+        yield
+    except zipfile.BadZipFile:
+        raise error(f"{where}: is damaged (its data does not match the zip's records)") from None
+    except RuntimeError as exc:
+        if member.flag_bits & 0x1:
+            raise error(f"{where}: is encrypted; give a zip without a password") from None
+        raise error(f"{where}: cannot be unpacked ({excerpt(exc, 80)})") from None
+    except (NotImplementedError, EOFError, OSError, ValueError, zlib.error) as exc:
+        # ValueError: an offset in the records points before the file; a name that is not UTF-8
+        raise error(f"{where}: cannot be unpacked ({excerpt(exc, 80)})") from None
 
 
 def _mib(n: int) -> str:

@@ -9,6 +9,7 @@ complete; every problem is reported with the column and the time it concerns.
 
 from __future__ import annotations
 
+import csv
 import datetime as dt
 import hashlib
 import io
@@ -67,6 +68,11 @@ class History:
             if columns > max_columns:
                 raise UploadLimitError(f"{source}: has {columns:,} columns; an upload may have at most "
                                        f"{max_columns:,}")
+        try:  # the header as written: pandas would rename a second "WF1" to "WF1.1"
+            header = next((row for row in csv.reader(io.StringIO(text)) if row), [])
+        except csv.Error as exc:
+            raise CaseFileError(f"{source}: cannot be read as CSV ({excerpt(str(exc).strip(), 120)})") from None
+        _refuse_repeated(header, source, CaseFileError)
         try:
             frame = pd.read_csv(io.StringIO(text), nrows=None if max_rows is None else max_rows + 1)
         except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
@@ -160,8 +166,12 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
     if isinstance(frame.index, pd.DatetimeIndex) and "timestamp" not in frame.columns:
         frame = frame.reset_index(names="timestamp")
     frame = frame.set_axis([str(c) for c in frame.columns], axis="columns")
+    _refuse_repeated(list(frame.columns), source, CaseError)
     if "timestamp" not in frame.columns:
         raise CaseError(f'{source}: no "timestamp" column (found {excerpt_names(frame.columns)})')
+    unprintable = [_unprintable(column, source) for column in frame.columns if not column.isprintable()]
+    if unprintable:
+        raise CaseError(unprintable)
     if len(frame) == 0:
         raise CaseError(f"{source}: no rows")
     stamps = _parse_timestamps(frame["timestamp"], source)
@@ -198,6 +208,24 @@ def _validated(frame: pd.DataFrame, source: str) -> pd.DataFrame:
     out = pd.DataFrame(numeric, index=stamps.tz_convert("UTC"))
     out.index.name = "timestamp"
     return out
+
+
+def _refuse_repeated(names: list[str], source: str, error: type[CaseError]) -> None:
+    """A column written twice is refused rather than one of the two read without a word."""
+    seen: dict[str, int] = {}
+    for i, name in enumerate(names):
+        if name in seen:
+            raise error(f'{source}: has the column "{excerpt(name)}" twice (columns {seen[name] + 1} and {i + 1}); '
+                        "keep one")
+        seen[name] = i
+
+
+def _unprintable(column: str, source: str) -> str:
+    """The problem of a column name holding a control character (which no unit is named with,
+    and which spreadsheet files cannot hold)."""
+    at = next(i for i, ch in enumerate(column) if not ch.isprintable())
+    return (f'{source}: column "{excerpt(column)}" holds a non-printable character (U+{ord(column[at]):04X}) at '
+            f"character {at + 1}; write column names as plain text")
 
 
 def _as_written(column: pd.Series) -> list[pd.Timestamp]:

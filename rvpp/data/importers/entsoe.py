@@ -46,7 +46,7 @@ import pandas as pd
 
 from ...errors import DataImportError
 from ..files import excerpt, excerpt_names
-from .report import Imported, Rows, SourceFile, assemble, decode, fingerprint, read_bytes, slug
+from .report import Imported, Rows, SourceFile, assemble, check_year, decode, fingerprint, read_bytes, slug
 
 SOURCE = "ENTSO-E Transparency Platform CSV export"
 CENTRAL_EUROPE = "Europe/Brussels"  # the CET/CEST wall clock of the platform
@@ -220,6 +220,7 @@ def _rows(body, columns: list[_Column], time_index: int, clock: str, name: str):
             raise DataImportError(f"{where}: time {excerpt(row[time_index])!r} is not "
                                   '"DD.MM.YYYY HH:MM - DD.MM.YYYY HH:MM"')
         start, end = _naive(match.groups()[0:6], where), _naive(match.groups()[7:13], where)
+        check_year(start.year, where, f"time {excerpt(row[time_index])!r}")  # the end only measures the period
         marker = match.group(7) or match.group(15) or match.group(14)
         values = {c.name: _number(row[c.index] if len(row) > c.index else "", where, c.name) for c in columns}
         parsed.append((where, start, end, marker, values))

@@ -38,8 +38,8 @@ from pathlib import Path
 import pandas as pd
 
 from ...errors import DataImportError
-from ..files import excerpt
-from .report import Imported, Rows, SourceFile, assemble, decode, fingerprint, read_bytes
+from ..files import UNREADABLE_ZIP, excerpt, unpacking
+from .report import Imported, Rows, SourceFile, assemble, check_year, decode, fingerprint, read_bytes
 
 SOURCE = "OMIE day-ahead marginal prices (marginalpdbc)"
 TIMEZONE = "Europe/Madrid"
@@ -98,7 +98,7 @@ def _members(name: str, data: bytes):
     """Daily files inside an archive, with limits against oversized or nested content."""
     try:
         archive = zipfile.ZipFile(io.BytesIO(data))
-    except zipfile.BadZipFile:
+    except UNREADABLE_ZIP:
         raise DataImportError(f'"{name}" is not a readable zip archive') from None
     entries = [e for e in archive.infolist() if not e.is_dir()]
     if len(entries) > MAX_ZIP_MEMBERS:
@@ -111,8 +111,12 @@ def _members(name: str, data: bytes):
         if entry.file_size > MAX_MEMBER_BYTES:
             raise DataImportError(f"{member} is {entry.file_size / 1e6:.1f} MB unpacked; a daily file is far "
                                   "smaller, so it is refused")
-        with archive.open(entry) as handle:
-            content = handle.read(MAX_MEMBER_BYTES + 1)
+        with unpacking(name, entry, DataImportError):  # damaged, encrypted, an unknown method
+            with archive.open(entry) as handle:
+                content = handle.read(MAX_MEMBER_BYTES + 1)
+        if len(content) > MAX_MEMBER_BYTES:  # the size in the zip's records was wrong
+            raise DataImportError(f"{member} unpacks to more than {MAX_MEMBER_BYTES / 1e6:.1f} MB; a daily file "
+                                  "is far smaller, so it is refused")
         found += 1
         yield member, content
     if not found:
@@ -155,6 +159,7 @@ def _read_text(text: str, name: str, zone: str, rows: Rows, days: dict[dt.date, 
 
 def _date(fields: list[str], where: str) -> dt.date:
     year, month, day = (_whole(f, n, where) for f, n in zip(fields, ("YEAR", "MONTH", "DAY")))
+    check_year(year, where, f"YEAR={year}")
     try:
         return dt.date(year, month, day)
     except ValueError:

@@ -25,6 +25,7 @@ name                       unit      meaning
 from __future__ import annotations
 
 import hashlib
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,11 +33,24 @@ import numpy as np
 import pandas as pd
 
 from ...errors import DataImportError
-from ..files import sniff
+from ..case import FIRST_DATE, LAST_DATE
+from ..files import open_regular, sniff
 
 HOUR = pd.Timedelta(hours=1)
+# The years rvpp plans (the delivery dates a case may have); every reader refuses a date
+# outside them before building a timestamp, which pandas cannot hold before 1677 or after 2262.
+FIRST_YEAR, LAST_YEAR = FIRST_DATE.year, LAST_DATE.year
+DATE_RANGE = f"dates must lie between {FIRST_YEAR} and {LAST_YEAR}"
 SHOWN = 12  # gaps, duplicates and missing runs listed in full before "and N more"
 UNITS = {"price": "EUR/MWh", "actual": "MW", "forecast": "MW", "load": "MW"}
+
+
+def check_year(year: int, where: str, written: str) -> None:
+    """Refuse a date of ``year`` outside :data:`FIRST_YEAR` to :data:`LAST_YEAR`, e.g.
+    ``prices.csv line 5: time_utc '3000-01-01T00:00:00Z' is out of range; dates must lie between
+    1900 and 2199`` (``where``: file and line; ``written``: the field as the file gives it)."""
+    if not FIRST_YEAR <= year <= LAST_YEAR:
+        raise DataImportError(f"{where}: {written} is out of range; {DATE_RANGE}")
 
 
 def unit_of(name: str) -> str:
@@ -198,14 +212,28 @@ class Rows:
         parts += [(s, e, v.reindex(columns=names).astype(float), w) for s, e, v, w in self.tables]
         if not parts:
             return pd.DatetimeIndex([], tz="UTC"), pd.DatetimeIndex([], tz="UTC"), pd.DataFrame(columns=names), []
-        starts = _utc_index([p[0] for p in parts])
-        ends = _utc_index([p[1] for p in parts])
+        where = [w for p in parts for w in p[3]]
+        starts = _utc_index([p[0] for p in parts], where)
+        ends = _utc_index([p[1] for p in parts], where)
         table = pd.concat([p[2] for p in parts], ignore_index=True)
-        return starts, ends, table, [w for p in parts for w in p[3]]
+        return starts, ends, table, where
 
 
-def _utc_index(pieces: list[pd.DatetimeIndex]) -> pd.DatetimeIndex:
-    nanoseconds = np.concatenate([p.tz_convert("UTC").as_unit("ns").asi8 for p in pieces])
+def _utc_index(pieces: list[pd.DatetimeIndex], where: list[str]) -> pd.DatetimeIndex:
+    """The instants of ``pieces`` as one UTC index; the last guard against a reader that let
+    a year outside :data:`FIRST_YEAR` to :data:`LAST_YEAR` through (``where``: each row's place)."""
+    utc = [p.tz_convert("UTC") for p in pieces]
+    years = np.concatenate([p.year.to_numpy() for p in utc])
+    # a year of margin each side: local midnight of 1 January 1900 is still 1899 in UTC, and the
+    # last period of 2199 ends in 2200
+    outside = np.flatnonzero((years < FIRST_YEAR - 1) | (years > LAST_YEAR + 1))
+    if len(outside):
+        i = int(outside[0])
+        offsets = np.cumsum([0] + [len(p) for p in utc])
+        piece = int(np.searchsorted(offsets, i, side="right")) - 1
+        stamp = utc[piece][i - int(offsets[piece])]
+        raise DataImportError(f"{where[i]}: the period at {stamp:%Y-%m-%dT%H:%MZ} is out of range; {DATE_RANGE}")
+    nanoseconds = np.concatenate([p.as_unit("ns").asi8 for p in utc])
     return pd.DatetimeIndex(nanoseconds.astype("datetime64[ns]")).tz_localize("UTC")
 
 
@@ -261,7 +289,8 @@ def assemble(rows: Rows, *, source: str, files: list[SourceFile], timezone: str,
 
 
 def _count(start: pd.Timestamp, end: pd.Timestamp, step: pd.Timedelta) -> int:
-    return max(1, int(round((end - start) / step)))
+    # in whole nanoseconds: a gap of centuries (files of 1900 and 2199) exceeds a pandas Timedelta
+    return max(1, int(round((end.value - start.value) / step.value)))
 
 
 def _utc(stamp: pd.Timestamp) -> str:
@@ -329,14 +358,22 @@ def hourly(imported: Imported) -> tuple[pd.DataFrame, list[str]]:
 
 
 def read_bytes(path: str | Path, limit_mb: float = 512.0) -> bytes:
-    """A file's bytes, refusing folders, missing files and files above ``limit_mb``."""
+    """A file's bytes, refusing folders, named pipes and devices (before opening them, see
+    :func:`rvpp.data.files.open_regular`), missing or unreadable files and files above ``limit_mb``."""
     path = Path(path)
-    if not path.is_file():
-        raise DataImportError(f'"{path.name}" is not a file' if path.exists() else f'"{path.name}" does not exist')
-    size = path.stat().st_size
-    if size > limit_mb * 1e6:
+    limit = int(limit_mb * 1e6)
+    try:
+        with open_regular(path, f'"{path.name}"', DataImportError) as handle:
+            size = os.fstat(handle.fileno()).st_size
+            data = handle.read(limit + 1) if size <= limit else b""  # read no more than the limit, even if it grows
+    except FileNotFoundError:
+        raise DataImportError(f'"{path.name}" does not exist') from None
+    except OSError as exc:
+        raise DataImportError(f'"{path.name}" cannot be read ({exc.strerror or exc})') from None
+    size = max(size, len(data))
+    if size > limit:
         raise DataImportError(f'"{path.name}" is {size / 1e6:.0f} MB; files above {limit_mb:g} MB are refused')
-    return path.read_bytes()
+    return data
 
 
 def decode(data: bytes, name: str) -> str:

@@ -38,7 +38,8 @@ import pandas as pd
 
 from ...errors import DataImportError
 from ..files import excerpt
-from .report import HOUR, Imported, Rows, SourceFile, assemble, decode, fingerprint, read_bytes, slug, unit_of
+from .report import (FIRST_YEAR, HOUR, LAST_YEAR, Imported, Rows, SourceFile, assemble, check_year, decode,
+                     fingerprint, read_bytes, slug, unit_of)
 
 DATASET = "Spanish energy dataset (hourly, ENTSO-E and OMIE)"
 TIME_UTC = "Hourly table (time_utc, time_local)"
@@ -132,6 +133,7 @@ def _dataset_times(text: list[str], name: str) -> tuple[pd.DatetimeIndex, int]:
             raise DataImportError(f"{name} line {i + 2}: time {excerpt(value)!r} must be like "
                                   "2015-01-01 00:00:00+01:00 "
                                   "(local time with its UTC offset)")
+        check_year(int(match.group(1)), f"{name} line {i + 2}", f"time {excerpt(value.strip())!r}")
         parts.append(match.groups())
     written = _instants(parts, name, swap=False)
     swapped = _instants(parts, name, swap=True)
@@ -166,7 +168,8 @@ def _ordered(stamps: pd.DatetimeIndex | None) -> bool:
 
 
 def _missing_hours(stamps: pd.DatetimeIndex) -> int:
-    return int(((stamps[-1] - stamps[0]) / HOUR) + 1 - len(stamps))
+    # in whole nanoseconds: a span of centuries exceeds a pandas Timedelta
+    return int((stamps[-1].value - stamps[0].value) // HOUR.value + 1 - len(stamps))
 
 
 def _offsets_match(parts, instants: pd.DatetimeIndex) -> bool:
@@ -260,6 +263,11 @@ def _utc_times(frame: pd.DataFrame, name: str) -> pd.DatetimeIndex:
         i = int(np.flatnonzero(bad.to_numpy())[0])
         raise DataImportError(f"{name} line {i + 2}: time_utc {excerpt(text[i])!r} must be a UTC time such as "
                               "2018-01-01T00:00:00Z")
+    years = text.str.slice(0, 4).astype(int).to_numpy()
+    outside = np.flatnonzero((years < FIRST_YEAR) | (years > LAST_YEAR))
+    if len(outside):
+        i = int(outside[0])
+        check_year(int(years[i]), f"{name} line {i + 2}", f"time_utc {excerpt(text[i])!r}")
     stamps = pd.DatetimeIndex(pd.to_datetime(text, utc=True, format="ISO8601"))
     off_hour = np.flatnonzero((stamps.minute != 0) | (stamps.second != 0))
     if len(off_hour):
