@@ -171,6 +171,56 @@ def test_a_bad_store_url_is_a_named_error():
         connect("postgresql+nodriver://u@h/x")
 
 
+@pytest.mark.parametrize("url", ["postgresql:/user:s3cret@db.example/rvpp",      # one slash short
+                                 "postgresql+psycopg://u:s3cret@h:5432x/db",     # a port that is not a number
+                                 "postgresql://user:top@s3cret@127.0.0.1:1/db"])  # an "@" in the password
+def test_a_mistyped_store_url_never_shows_its_password(url):
+    with pytest.raises(StoreError) as refused:
+        connect(url)
+    assert "s3cret" not in str(refused.value) and "***" in str(refused.value)
+    assert "percent-encoded" in str(refused.value)
+
+
+def test_a_store_in_memory_is_refused_since_it_keeps_nothing():
+    for url in ("sqlite://", "sqlite:///:memory:"):
+        with pytest.raises(StoreError, match="names no file: a store in memory keeps nothing"):
+            connect(url)
+
+
+def test_a_data_folder_that_cannot_be_made_is_named(monkeypatch, tmp_path):
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    (tmp_path / "afile").write_text("mine")
+    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "afile"))
+    with pytest.raises(StoreError, match=r"\(from RVPP_DATA_DIR\): its folder cannot be made \(File exists\)"):
+        RunLibrary()
+    assert (tmp_path / "afile").read_text() == "mine"
+
+
+def test_a_data_folder_whose_name_looks_like_a_url_query_holds_the_store(monkeypatch, tmp_path):
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    folder = tmp_path / "data?v=1 #2 %41"
+    monkeypatch.setenv("RVPP_DATA_DIR", str(folder))
+    RunLibrary()
+    assert [p.name for p in folder.iterdir() if p.suffix == ".sqlite3"] == ["rvpp.sqlite3"]
+
+
+def test_opening_a_new_store_that_another_process_is_creating_tries_once_more(monkeypatch, tmp_path):
+    from rvpp.store import engine as module
+
+    calls = []
+    create_all = module.metadata.create_all
+
+    def raced(bind):
+        calls.append(1)
+        if len(calls) == 1:  # what the second of two processes sees: a table made meanwhile
+            raise sa.exc.OperationalError("CREATE TABLE blobs", {}, Exception("table blobs already exists"))
+        return create_all(bind)
+
+    monkeypatch.setattr(module.metadata, "create_all", raced)
+    connect(f"sqlite:///{tmp_path / 'store.sqlite3'}")
+    assert len(calls) == 2
+
+
 def test_the_default_store_lives_in_the_data_folder_from_the_environment(monkeypatch, tmp_path):
     from rvpp.store import default_url
 

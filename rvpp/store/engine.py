@@ -21,10 +21,13 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import os
+import re
+import urllib.parse
 from pathlib import Path
 
 import sqlalchemy as sa
 
+from ..data.files import excerpt
 from ..errors import RvppError
 
 URL_VARIABLE = "RVPP_STORE_URL"
@@ -129,7 +132,14 @@ def default_url() -> str:
     if url:
         return url
     folder = Path(os.environ.get(DIR_VARIABLE, "").strip() or DEFAULT_DIR)
-    return f"sqlite:///{(folder / SQLITE_FILE).resolve()}"
+    # Quoted: a "?", "#" or "%" in the folder's name is part of the path, not of the URL.
+    return f"sqlite:///{urllib.parse.quote(str((folder / SQLITE_FILE).resolve()), safe='/')}"
+
+
+def masked(url: str) -> str:
+    """``url`` for a message, whatever its shape: the password between ``user:`` and the host's
+    ``@`` hidden (to the last ``@`` before the path, so a password holding ``@`` stays hidden)."""
+    return re.sub(r"(:/*[^:/@\s]*:)[^/]*@", r"\1***@", url)
 
 
 def connect(url: str | None = None) -> sa.Engine:
@@ -138,13 +148,21 @@ def connect(url: str | None = None) -> sa.Engine:
     url = url or default_url()
     try:
         parsed = sa.make_url(url)
-    except sa.exc.ArgumentError:
-        raise StoreError(f"{given}{url!r} is not a database URL such as "
-                         "sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp") from None
+        parsed.port  # a port that is not a number fails here
+    except (sa.exc.ArgumentError, ValueError):
+        raise StoreError(f"{given}{masked(url)!r} is not a database URL such as sqlite:///runs.sqlite3 or "
+                         "postgresql+psycopg://user@host/rvpp (special characters in a user name or password "
+                         "are written percent-encoded, e.g. @ as %40)") from None
     shown, backend = parsed.render_as_string(hide_password=True), parsed.get_backend_name()
+    if "@" in (parsed.host or ""):
+        raise StoreError(f"{given}{masked(url)!r}: the host holds '@'; write an '@' of the password "
+                         "percent-encoded, as %40")
     if backend not in BACKENDS:
         raise StoreError(f"{given}{shown!r}: the store is kept in SQLite or PostgreSQL, not {backend!r}; give a URL "
                          "such as sqlite:///runs.sqlite3 or postgresql+psycopg://user@host/rvpp")
+    if backend == "sqlite" and parsed.database in (None, "", ":memory:"):
+        raise StoreError(f"{given}{masked(url)!r} names no file: a store in memory keeps nothing; give a file, "
+                         "e.g. sqlite:///runs.sqlite3")
     try:
         if backend == "sqlite":
             engine = _sqlite_engine(parsed)
@@ -152,17 +170,25 @@ def connect(url: str | None = None) -> sa.Engine:
             engine = sa.create_engine(parsed, pool_pre_ping=True)
     except (ImportError, sa.exc.NoSuchModuleError) as exc:
         raise StoreError(f"cannot open the store at {shown}: its database driver is not available ({exc})") from None
-    try:
-        metadata.create_all(engine)
-    except sa.exc.SQLAlchemyError as exc:
-        raise StoreError(f"cannot open the store at {shown}: "
-                         f"{exc.__class__.__name__}: {getattr(exc, 'orig', exc)}") from None
+    except OSError as exc:  # the store's folder cannot be made: a file of that name, a read-only disk
+        where = f" (from {DIR_VARIABLE})" if given == f"{URL_VARIABLE}=" and os.environ.get(DIR_VARIABLE) else ""
+        raise StoreError(f"cannot open the store at {shown}{where}: its folder cannot be made "
+                         f"({exc.strerror or exc})") from None
+    for attempt in (1, 2):
+        try:
+            metadata.create_all(engine)
+            break
+        except sa.exc.SQLAlchemyError as exc:
+            # Two processes opening a new store at once: one creates a table the other then finds. The
+            # second attempt sees the tables and creates nothing.
+            if attempt == 2:
+                raise StoreError(f"cannot open the store at {shown}: "
+                                 f"{exc.__class__.__name__}: {excerpt(getattr(exc, 'orig', exc), 200)}") from None
     return engine
 
 
 def _sqlite_engine(url: sa.URL) -> sa.Engine:
-    if url.database and url.database != ":memory:":
-        Path(url.database).parent.mkdir(parents=True, exist_ok=True)
+    Path(url.database).parent.mkdir(parents=True, exist_ok=True)  # connect refuses a store in memory
     engine = sa.create_engine(url, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
 
     @sa.event.listens_for(engine, "connect")
