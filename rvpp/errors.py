@@ -58,3 +58,12 @@ class DataImportError(RvppError):
 class SettlementError(RvppError):
     """Settlement settings or imbalance prices break a rule (multipliers out of range, a short
     price below the long price); the message names the field, the value and the rule."""
+
+
+def require(value: object, kind: type | tuple[type, ...], what: str, hint: str = "") -> None:
+    """Refuse a value of the wrong type handed to the library, by name (``rvpp.solve: case must
+    be a Case (from rvpp.load_case), not dict``), before it fails somewhere deep inside."""
+    if not isinstance(value, kind):
+        kinds = kind if isinstance(kind, tuple) else (kind,)
+        expected = " or ".join(k.__name__ for k in kinds)
+        raise TypeError(f"{what} must be a {expected}{f' ({hint})' if hint else ''}, not {type(value).__name__}")

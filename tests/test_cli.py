@@ -476,3 +476,21 @@ def test_a_long_search_reports_itself_every_few_seconds():
     assert stop(Search(2 * SEARCH_REPORT_S, -84010.4, -83403.2, 0.0072, 1234)) is True
     assert said == ["search 5 s: no plan yet",
                     "search 10 s: best plan so far, profit -84,010 EUR, gap 0.72% (1234 nodes); Ctrl-C keeps it"]
+
+
+def test_the_library_names_a_value_of_the_wrong_type(tmp_path):
+    from rvpp import load_case as load, solve as solve_case, write_plan
+
+    case = load(PAPER)
+    refused = [(lambda: solve_case(None), "rvpp.solve: case must be a Case (from rvpp.load_case), not NoneType"),
+               (lambda: solve_case({}), "rvpp.solve: case must be a Case (from rvpp.load_case), not dict"),
+               (lambda: write_plan(case, tmp_path / "o"), "rvpp.write_plan: result must be a Result"),
+               (lambda: load(None), "rvpp.load_case: path must be a str or PathLike"),
+               (lambda: with_options(None), "rvpp.with_options: case must be a Case"),
+               (lambda: with_options(case, csp="no"), "rvpp.with_options: csp must be a bool"),
+               (lambda: with_options(case, gammas=[1]), "rvpp.with_options: gammas must be a Mapping")]
+    for call, message in refused:
+        with pytest.raises(TypeError) as error:
+            call()
+        assert str(error.value).startswith(message)
+    assert not (tmp_path / "o").exists()

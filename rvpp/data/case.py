@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import os
 import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path, PurePosixPath
@@ -23,7 +24,7 @@ from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fi
                       field_serializer, field_validator, model_validator)
 from pydantic_core import PydanticCustomError
 
-from ..errors import CaseError, CaseFileError, CasePathError
+from ..errors import CaseError, CaseFileError, CasePathError, require
 from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
@@ -966,6 +967,7 @@ def load_case(path: str | Path) -> Case:
     :class:`~rvpp.errors.CasePathError` before the file is opened, so a case is a
     portable folder and never reads files beside it.
     """
+    require(path, (str, os.PathLike), "rvpp.load_case: path", "a case folder or its case.yaml")
     path = Path(path)
     try:
         file = path / CASE_FILE if path.is_dir() else path
@@ -1243,6 +1245,9 @@ def with_options(
     """
     from .variants import Variant
 
+    require(case, Case, "rvpp.with_options: case", "from rvpp.load_case")
+    require(csp, bool, "rvpp.with_options: csp", "True keeps the CSPs, False removes them")
+    require(gammas if gammas is not None else {}, Mapping, "rvpp.with_options: gammas", "{source: Γ}")
     variant = Variant(strategy=strategy, gamma_fraction=gamma_fraction, gammas=dict(gammas or {}), markets=markets,
                       dt_h=dt_h, csp=csp, hpa_flat=hpa_flat)
     changes: dict[str, Any] = variant.changes(case)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..errors import require
 from ..solving.results import Result
 
 TABLES = ("market", "units", "csp", "flexibility")
@@ -35,6 +36,7 @@ def write_plan(result: Result, folder: str | Path) -> list[Path]:
     shows a stale plan beside a new summary. Other files in ``folder`` (notes of your
     own) are never touched; a failure part-way leaves the earlier run's files as they were.
     """
+    require(result, Result, "rvpp.write_plan: result", "from rvpp.solve")
     folder = check_plan_folder(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     staging = _sibling(folder, "tmp")

@@ -11,6 +11,7 @@ from pathlib import Path
 from collections.abc import Callable
 
 from ..data.case import Case
+from ..errors import require
 from .diagnose import explain_infeasibility
 from .highs import HighsModel, model_lifetime, objective_scale
 from .outcome import Outcome, SolveOutcome, Watch
@@ -30,6 +31,7 @@ def solve(case: Case, progress: Progress | None = None, watch: Watch | None = No
     the best plan's objective, the bound, their gap) and may end it early, keeping the best
     plan found so far: the result's status is then ``stopped``, with its gap.
     """
+    require(case, Case, "rvpp.solve: case", "from rvpp.load_case")
     say = progress or (lambda _msg: None)
     started = time.perf_counter()
     say("preparing forecast bands")
