@@ -77,3 +77,59 @@ def test_a_local_pool_has_at_most_one_worker_per_core():
     with open_executor("processes", workers=10 ** 6) as executor:
         pids = set(executor.map(_pid_after_a_while, range(3 * cores + 2)))
     assert 1 <= len(pids) <= cores
+
+
+POOL_PARENT = """
+import os, sys, time
+sys.path.insert(0, sys.argv[1])
+from rvpp.solving.parallel import open_executor
+if __name__ == "__main__":
+    with open_executor("processes", workers=2) as pool:
+        for task in [pool.submit(time.sleep, 0.5) for _ in range(2)]:  # two tasks at once start both workers
+            task.result()
+        print("ready", flush=True)
+        time.sleep(600)
+"""
+
+
+def test_pool_workers_end_when_the_process_that_started_them_is_killed(tmp_path):
+    """kill -9 of a backtest gives its pool no word: the workers (and the pool's resource tracker)
+    notice that their parent is gone and end."""
+    import signal
+    import subprocess
+    import sys
+
+    script = tmp_path / "parent.py"
+    script.write_text(POOL_PARENT)
+    parent = subprocess.Popen([sys.executable, str(script), str(Path(__file__).resolve().parents[1])],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert parent.stdout.readline().strip() == "ready"
+        children = _children(parent.pid)
+        assert len(children) >= 2  # two workers, and the resource tracker
+    finally:
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+    deadline = time.monotonic() + 60  # a ceiling for the check, not a speed target (workers look every 2 s)
+    while any(_running(pid) for pid in children) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not [pid for pid in children if _running(pid)], "a pool process outlived its killed parent"
+
+
+def _stat(pid: int) -> list[str] | None:
+    """``/proc/PID/stat`` after the command name: state, parent, ...; ``None`` once gone."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (FileNotFoundError, ProcessLookupError):
+        return None
+
+
+def _children(parent: int) -> list[int]:
+    pids = [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()]
+    return [pid for pid in pids if (stat := _stat(pid)) and int(stat[1]) == parent]
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` is a live process (a zombie waiting for its reaper counts as ended)."""
+    stat = _stat(pid)
+    return stat is not None and stat[0] != "Z"

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
+import time
 from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
@@ -24,6 +26,7 @@ from contextlib import contextmanager
 from ..errors import RvppError
 
 SCHEDULERS = ("processes", "serial", "local")
+PARENT_CHECK_S = 2.0  # how often a pool worker looks whether the process that started it is still there
 
 
 def default_workers() -> int:
@@ -46,7 +49,8 @@ def open_executor(scheduler: str = "processes", workers: int | None = None) -> I
     if scheduler == "serial":
         yield None
     elif scheduler == "processes":
-        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=end_with_parent, initargs=(os.getpid(),)) as pool:
             yield pool
     elif scheduler == "local":
         with _dask_local(workers) as executor:
@@ -54,6 +58,18 @@ def open_executor(scheduler: str = "processes", workers: int | None = None) -> I
     else:
         with _dask_remote(scheduler) as executor:
             yield executor
+
+
+def end_with_parent(parent: int) -> None:
+    """In a pool worker: end the worker once ``parent`` (the process that started the pool) is
+    gone, e.g. killed with ``kill -9``, which gives its workers no word; they would otherwise
+    wait for work forever, each holding its imports in memory."""
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_CHECK_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="rvpp-parent-watch", daemon=True).start()
 
 
 @contextmanager
