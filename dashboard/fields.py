@@ -7,6 +7,7 @@ import streamlit as st
 
 from rvpp import Case
 from rvpp.data.edits import FIELDS, label
+from rvpp.data.history import PRICE_COLUMNS
 from rvpp.outputs.workbook import SERIES_FIELDS, new_unit_row, unit_columns
 
 TEXT_FIELDS = {"name"}
@@ -15,9 +16,10 @@ BOOL_FIELDS = {"initially_on"}
 
 def column_config(case: Case, kind: str) -> dict:
     """``st.data_editor`` column settings for the unit table of ``kind``; new rows start
-    from the template unit with a free name."""
+    from the template unit with a free name. A unit's series are chosen among the history's
+    columns other than the prices."""
     defaults = new_unit_row(case, kind)
-    series_options = list(case.history.columns)
+    series_options = [c for c in case.history.columns if c not in PRICE_COLUMNS]
     config = {}
     for column in unit_columns(kind):
         field = column.split(".")[-1]

@@ -5,6 +5,7 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import CaseError
+from rvpp.data.edits import with_period_length
 from rvpp.outputs.plots import bands_figure, tariff_figure
 
 state.through_app("pages/markets.py")
@@ -20,8 +21,21 @@ def apply(**changes) -> None:
     try:
         state.set_case(state.case().replace(**changes))
         st.session_state["markets_problems"] = []
+        st.session_state["markets_notes"] = []
     except CaseError as err:
         st.session_state["markets_problems"] = err.problems
+
+
+def set_period_length(key: str) -> None:
+    """A new market time unit; Γ overrides are converted so they keep their hours, and the page says so."""
+    try:
+        case, converted = with_period_length(state.case(), PERIOD_MINUTES.get(st.session_state[key]))
+    except CaseError as err:
+        st.session_state["markets_problems"] = err.problems
+        return
+    state.set_case(case)
+    st.session_state["markets_problems"] = []
+    st.session_state["markets_notes"] = ["Γ overrides kept their hours: " + "; ".join(converted)] if converted else []
 
 
 def set_tariff(values: list[float]) -> None:
@@ -29,8 +43,8 @@ def set_tariff(values: list[float]) -> None:
     widgets.reset_editor(TARIFF_KEY)
 
 
-def from_widget(field: str, key: str, section: str | None = None, convert=lambda v: v) -> None:
-    value = convert(st.session_state[key])
+def from_widget(field: str, key: str, section: str | None = None) -> None:
+    value = st.session_state[key]
     apply(**({section: {field: value}} if section else {field: value}))
 
 
@@ -55,8 +69,9 @@ c3.toggle("Heat purchase (HPA)", value=markets.hpa, key="markets_hpa", on_change
 minutes = {v: k for k, v in PERIOD_MINUTES.items()}[case.dt_h]
 c1, c2, c3 = st.columns(3)
 c3.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=minutes, key="markets_dt",
-                     required=True, on_change=from_widget, args=("dt_h", "markets_dt", None, PERIOD_MINUTES.get),
-                     help="Period length; 15 minutes is the EU day-ahead market time unit (96 periods).")
+                     required=True, on_change=set_period_length, args=("markets_dt",),
+                     help="Period length; 15 minutes is the EU day-ahead market time unit (96 periods). Γ "
+                          "overrides keep their duration in hours (rounded to whole periods).")
 c1.number_input("κ: reserve band cap [-], from 0 to 1", min_value=0.0, max_value=1.0, step=0.05, value=markets.kappa,
                 key="markets_kappa", on_change=from_widget, args=("kappa", "markets_kappa", "markets"),
                 help="Each SR band is at most κ × (generation capacity − demand capacity); paper: 0.3.")
@@ -67,6 +82,8 @@ c2.number_input("Reserve delivery time [min], at least 1", min_value=1.0, step=1
                 help="A reserve band must be deliverable for this long: ramp [MW/min] × time caps each band.")
 if st.session_state.get("markets_problems"):
     widgets.problems(st.session_state["markets_problems"])
+for note in st.session_state.get("markets_notes", []):
+    st.caption(note)
 
 st.subheader("Heat purchase agreement tariff")
 st.caption("One price per clock hour [EUR/MWh_th]; with 15-minute periods each quarter-hour takes its hour's "

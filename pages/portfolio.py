@@ -3,7 +3,8 @@
 import streamlit as st
 
 from dashboard import fields, solving, state, widgets
-from rvpp.data.edits import follow_capacity
+from rvpp import CaseError
+from rvpp.data.edits import follow_capacity, table_message
 from rvpp.outputs import workbook
 from rvpp.outputs.plots import bands_figure, curve_figure, thin_clock_ticks
 
@@ -33,14 +34,24 @@ def unit_table(kind: str):
 
 
 def with_unit_table(kind: str, table):
-    """The edited table as a case; capacities that changed scale their forecast band unless unticked."""
+    """The edited table as a case; capacities that changed scale their forecast band unless unticked.
+
+    The unticked units are remembered only once the case model accepts the edit: a refused
+    edit leaves them as they were. An empty cell is named by its column.
+    """
+    current = state.case()
+    unticked = set(fixed())
     if SCALE in table:
         follows = table[SCALE].fillna(True).astype(bool)
-        fixed().difference_update(set(table["name"].dropna()))
-        fixed().update(name for name, on in zip(table["name"], follows) if not on)
-    current = state.case()
-    edited = workbook.with_unit_table(current, kind, table.drop(columns=[SCALE], errors="ignore"))
-    return follow_capacity(current, edited, fixed=fixed())
+        listed = {u.name for u in getattr(current, kind)} | set(table["name"].dropna())
+        unticked = (fixed() - listed) | {name for name, on in zip(table["name"], follows) if not on}
+    try:
+        edited = workbook.with_unit_table(current, kind, table.drop(columns=[SCALE], errors="ignore"))
+    except CaseError as err:
+        raise CaseError([table_message(problem) for problem in err.problems]) from None
+    edited = follow_capacity(current, edited, fixed=unticked)
+    st.session_state[FIXED] = unticked
+    return edited
 
 
 st.title("Portfolio")

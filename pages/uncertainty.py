@@ -12,6 +12,8 @@ from rvpp.data.case import STRATEGIES
 from rvpp.data.history import PRICE_COLUMNS
 from rvpp.data.periods import delivery_periods
 from rvpp.data.case import PRICE_MODELS
+from rvpp.data.edits import PERIOD_NAMES
+from rvpp.data.files import excerpt
 from rvpp.outputs.plots import band_overlays, bands_figure, deviating_periods, thin_clock_ticks
 from rvpp.solving.problem import STRATEGY_BUDGETS_H, strategy_budgets
 from rvpp.uncertainty.forecast import band_specs, has_forecast
@@ -27,7 +29,6 @@ NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 TABLE_ROW_PX, TABLE_BORDER_PX = 35, 3  # st.data_editor row height and frame
 PRICE_LABELS = {"price_da": "DAM price", "price_sr_up": "SR up price", "price_sr_dn": "SR down price"}
 GROUPS = {"Prices": ("price",), "Wind": ("wind",), "PV": ("pv",), "CSP": ("csp",), "Demands": ("ed", "td")}
-PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
 MODES = {"paper": "Paper: each source deviates in its Γ largest-deviation periods",
          "planner_chosen": "Planner-chosen periods (teaching only; see Learn)"}
 TIES = {"choose": "The model chooses among them (as the binary formulation)",
@@ -81,8 +82,17 @@ def with_budgets(case: Case, table: pd.DataFrame) -> Case:
     """Γ that differ from the strategy preset become overrides; an empty cell means the preset.
 
     A Γ outside 0 to the day's number of periods, or not a whole number, is refused by
-    name, value and range (never clipped).
+    name, value and range (never clipped). The table has one row per source; a row that
+    names no source of the case, or a source twice (a crafted request can add rows), is
+    refused by name.
     """
+    sources, rows = case.sources(), list(table["source"])
+    unknown = ["Budgets Γ: a row without a source; the table has one row per source" if pd.isna(source) else
+               f"Budgets Γ: {excerpt(source)!r} is not a source of this case (sources: {', '.join(sources)})"
+               for source in rows if pd.isna(source) or source not in sources]
+    unknown += [f"Budgets Γ: {source} has more than one row" for source in sources if rows.count(source) > 1]
+    if unknown:
+        raise CaseError(list(dict.fromkeys(unknown)))
     nt = period_count(case)
     name = f"Γ [{PERIOD_NAMES[case.dt_h]}]"
     wrong = [f"{name} of {row.source}: {row.gamma:g} is outside the allowed range 0 to {nt} (the day's {nt} "

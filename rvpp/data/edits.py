@@ -11,7 +11,11 @@ one place and speaks them:
   scaled by the same ratio (its ``series_scale``), so an 80 MW wind farm is forecast
   as 80 MW, not as the 50 MW farm whose history it follows;
 * :func:`plain_message` — a case-model message with the field names as the forms show
-  them: ``CSP1: TS E min [MWh_th] = 1200 must be < TS E max [MWh_th] = 1100``.
+  them: ``CSP1: TS E min [MWh_th] = 1200 must be < TS E max [MWh_th] = 1100``;
+  :func:`table_message` says the same of a unit table's cells (``WF1: P max [MW] is
+  empty; enter a number``);
+* :func:`with_period_length` — a new period length whose Γ overrides keep their duration
+  in hours (``WF1 80 quarter-hours → 20 hours``).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from collections.abc import Collection, Mapping
 from typing import Any
 
 from .case import UNIT_KINDS, Case, power_unit
+from .periods import delivery_periods
 
 # field -> (name, unit, help); the form shows "name [unit]".
 FIELDS: dict[str, tuple[str, str, str]] = {
@@ -116,6 +121,14 @@ CAPACITY_FIELDS = {"wind": "p_max_mw", "pv": "p_max_mw", "csp": "solar_field.p_m
 UNIT_WORDS = {"wind": "wind farm", "pv": "PV plant", "csp": "CSP plant", "ed": "electrical demand",
               "td": "thermal demand"}
 LABEL_LIMIT = 120  # characters of a default run label
+# Period lengths [h] as the pages name them: plural, singular.
+PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
+PERIOD_NAME = {1.0: "hour", 0.5: "half-hour", 0.25: "quarter-hour"}
+# A required unit field the case model found missing, i.e. an empty cell of a unit table:
+# ``wind "WF1": p_max_mw is required`` or, for a row without a name, ``units.wind item 2: name is required``.
+REQUIRED_CELL = re.compile(r'^(?:(?:wind|pv|csp|ed|td) "(?P<unit>[^"]+)"|units\.(?P<kind>wind|pv|csp|ed|td) '
+                           r"item (?P<row>\d+)): (?P<field>[a-z_]+(?:\.[a-z_]+)*) is required$")
+CELL_ENTRIES = {"name": "a name", "series": "a history column"}  # what an empty cell asks for; others a number
 
 
 def label(field: str) -> str:
@@ -159,6 +172,50 @@ def follow_capacity(before: Case, after: Case, fixed: Collection[str] = ()) -> C
         if changed:
             changes[kind] = units
     return after.replace(**changes) if changes else after
+
+
+def periods_in_words(count: int, dt_h: float) -> str:
+    """``80, 0.25`` → ``"80 quarter-hours"``; ``1, 1.0`` → ``"1 hour"``."""
+    return f"{count} {(PERIOD_NAME if count == 1 else PERIOD_NAMES)[dt_h]}"
+
+
+def convert_overrides(overrides: Mapping[str, int], old_dt_h: float, new_dt_h: float,
+                      periods: int) -> dict[str, int]:
+    """Γ overrides [periods of ``old_dt_h`` hours] in periods of ``new_dt_h`` hours, each keeping
+    its duration: ``⌊Γ · old_dt_h / new_dt_h + ½⌋``, at most the day's ``periods``.
+
+    ``{"WF1": 80}`` in quarter-hours is ``{"WF1": 20}`` in hours; 5 quarter-hours (1.25 h)
+    become 1 hour, 6 (1.5 h) become 2.
+    """
+    return {source: min(math.floor(gamma * old_dt_h / new_dt_h + 0.5), periods)
+            for source, gamma in overrides.items()}
+
+
+def with_period_length(case: Case, dt_h: float) -> tuple[Case, list[str]]:
+    """``case`` with periods of ``dt_h`` hours and its Γ overrides converted to keep their hours
+    (:func:`convert_overrides`), with what was converted in words:
+    ``["WF1 80 quarter-hours → 20 hours"]``, ``"PV1 5 quarter-hours → 1 hour (1.25 h rounded)"``.
+
+    A Γ override counts periods, so the same number would mean another duration (20 hours
+    becoming 20 quarter-hours) or no longer fit the day (80 quarter-hours in 24 hours).
+    Raises :class:`~rvpp.errors.CaseError` for a period length the case model refuses.
+    """
+    moved = case.replace(dt_h=dt_h)
+    old = case.budgets.override_map
+    if moved.dt_h == case.dt_h or not old:
+        return moved, []
+    periods = len(delivery_periods(moved.delivery_date, moved.timezone, moved.dt_h))
+    new = convert_overrides(old, case.dt_h, moved.dt_h, periods)
+    notes = []
+    for source, gamma in old.items():
+        hours = gamma * case.dt_h
+        note = f"{source} {periods_in_words(gamma, case.dt_h)} → {periods_in_words(new[source], moved.dt_h)}"
+        if new[source] == periods and hours > periods * moved.dt_h:
+            note += f" (at most the day's {periods})"
+        elif not math.isclose(new[source] * moved.dt_h, hours):
+            note += f" ({hours:g} h rounded)"
+        notes.append(note)
+    return moved.replace(budgets={"overrides": new}), notes
 
 
 def describe_edits(origin: Case, edited: Case) -> list[str]:
@@ -226,6 +283,22 @@ def plain_message(message: str) -> str:
     text = re.sub(r"\b([a-z][a-z_]*(?:\.[a-z][a-z_]*)*)(?:\.(\d+))?=", field, text)
     text = re.sub(r"(?<=[ =])-(?=\d)", "−", text)
     return text.replace(">=", "≥").replace("<=", "≤")
+
+
+def table_message(message: str) -> str:
+    """A case-model message about a unit table, in the words of its columns.
+
+    An empty cell of a required field reads ``WF1: P max [MW] is empty; enter a number``
+    (a row without a name: ``wind farm in row 2: Name is empty; enter a name``); any other
+    message as :func:`plain_message` says it. Messages about case files keep ``is required``:
+    there the field is named as the file writes it.
+    """
+    cell = REQUIRED_CELL.match(message)
+    if cell is None:
+        return plain_message(message)
+    where = cell["unit"] if cell["unit"] is not None else f"{UNIT_WORDS[cell['kind']]} in row {cell['row']}"
+    entry = CELL_ENTRIES.get(cell["field"].split(".")[-1], "a number")
+    return f"{where}: {label(cell['field'])} is empty; enter {entry}"
 
 
 # ----------------------------------------------------------------------------- helpers

@@ -145,7 +145,9 @@ def with_unit_table(case: Case, kind: str, table: pd.DataFrame,
 
     Empty cells fall back to the model's defaults (or are reported as required). A CSP
     keeps the breakpoints of the CSP of the same name, else those in ``breakpoints``
-    (name → list of ``(input, efficiency)``), else the template's.
+    (name → list of ``(input, efficiency)``), else the template's. A unit's Γ override
+    and band method (``budgets.overrides``, ``uncertainty.bands``) follow it when its row
+    is renamed (:func:`_renamed`) and leave with it when its row is removed.
     Raises :class:`CaseError` when a value breaks a rule.
     """
     _check_kind(kind)
@@ -159,9 +161,25 @@ def with_unit_table(case: Case, kind: str, table: pd.DataFrame,
                                                       UNIT_TEMPLATES["csp"]["power_block"]["breakpoints"]))
     data = case.to_data()
     data["units"][kind] = units
-    removed = {u.name for u in getattr(case, kind)} - {u.get("name") for u in units}
-    data["budgets"]["overrides"] = {k: v for k, v in data["budgets"]["overrides"].items() if k not in removed}
+    renamed = _renamed([u.name for u in getattr(case, kind)], table)
+    removed = {u.name for u in getattr(case, kind)} - {u.get("name") for u in units} - set(renamed)
+    for section, field in (("budgets", "overrides"), ("uncertainty", "bands")):
+        data[section][field] = {renamed.get(k, k): v for k, v in data[section][field].items() if k not in removed}
     return parse_case(data, case.history)
+
+
+def _renamed(names: list[str], table: pd.DataFrame) -> dict[str, str]:
+    """Old name → new name of the units whose row of :func:`unit_table` got another name.
+
+    A row is known by its index label, the unit's position in ``names`` (a table editor
+    keeps the labels of edited rows when others are deleted or added). It is a rename only
+    when the old name has left the table and the new name was no unit's, so a table
+    indexed afresh never moves a setting to another unit.
+    """
+    given = {label: _plain(name) for label, name in table["name"].items()}
+    return {names[label]: name for label, name in given.items()
+            if isinstance(label, (int, np.integer)) and 0 <= label < len(names) and isinstance(name, str)
+            and name not in names and names[label] not in given.values()}
 
 
 def breakpoint_table(case: Case, csp: str) -> pd.DataFrame:
