@@ -212,3 +212,16 @@ def test_portfolio_names_an_emptied_cell_by_its_column(paper_case, change, messa
     assert message in errors(at)
     assert "is required" not in errors(at)
     assert at.session_state["case"] == paper_case
+
+
+def test_a_run_at_another_period_length_keeps_the_cases_own_overrides_in_hours(paper_case):
+    """``with_options(dt_h=...)`` (the command line's --dt): the case's WF1 Γ of 20 hours is 80
+    quarter-hours, and back; Γ given with the run are already in the new periods."""
+    case = paper_case.replace(budgets={"overrides": {"WF1": 20}})
+    quarter = rvpp.with_options(case, dt_h=0.25)
+    assert quarter.budgets.override_map == {"WF1": 80}
+    assert rvpp.with_options(quarter, dt_h=1.0).budgets.override_map == {"WF1": 20}
+    assert rvpp.with_options(quarter, dt_h=1.0, gammas={"PV1": 3}).budgets.override_map == {"WF1": 20, "PV1": 3}
+    assert rvpp.with_options(case, dt_h=0.25, csp=False).budgets.override_map == {"WF1": 80}
+    assert rvpp.with_options(case, dt_h=0.25, strategy="balanced").budgets.override_map == {}
+    assert prepare(quarter).budgets["WF1"] == 80

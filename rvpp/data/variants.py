@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .case import Case, parse_markets
+from .periods import ALLOWED_DT_H, delivery_periods
 
 SEPARATOR = " · "
 
@@ -52,15 +53,21 @@ class Variant:
     def changes(self, case: Case) -> dict[str, Any]:
         """The :meth:`Case.replace` changes that make this variant of ``case``."""
         changes: dict[str, Any] = {}
+        own = case.budgets.override_map  # the case's own Γ edits, in periods of its period length
         if self.dt_h is not None:
             changes["dt_h"] = self.dt_h
+            if own and self.dt_h in ALLOWED_DT_H and self.dt_h != case.dt_h:  # they keep their hours
+                from .edits import convert_overrides
+
+                periods = len(delivery_periods(case.delivery_date, case.timezone, self.dt_h))
+                own = convert_overrides(own, case.dt_h, self.dt_h, periods)
         budgets: dict[str, Any] = {}
         if self.gamma_fraction is not None:
             budgets = {"fraction": self.gamma_fraction, "overrides": dict(self.gammas)}
         elif self.strategy is not None:
             budgets = {"strategy": self.strategy, "fraction": None, "overrides": dict(self.gammas)}
-        elif self.gammas:
-            budgets = {"overrides": {**case.budgets.override_map, **dict(self.gammas)}}
+        elif self.gammas or own != case.budgets.override_map:
+            budgets = {"overrides": {**own, **dict(self.gammas)}}
         markets: dict[str, Any] = parse_markets(self.markets) if self.markets is not None else {}
         if self.hpa_flat is not None:
             markets["hpa_tariff_eur_per_mwh"] = [self.hpa_flat] * 24
@@ -69,7 +76,7 @@ class Variant:
         if not self.csp and case.csp:
             changes["csp"] = []
             dropped = {c.name for c in case.csp}
-            overrides = budgets.get("overrides", case.budgets.override_map)
+            overrides = budgets.get("overrides", own)
             budgets["overrides"] = {k: v for k, v in overrides.items() if k not in dropped}
         if budgets:
             changes["budgets"] = budgets
