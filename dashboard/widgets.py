@@ -3,6 +3,7 @@ messages, table editors that go through the case model, case summaries and downl
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -11,11 +12,13 @@ import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
 from rvpp.data.edits import plain_message
+from rvpp.data.files import EXCERPT_CHARS, excerpt
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.outputs.economics import economics, explanation
 from rvpp.outputs.export import plan_workbook_bytes
 from rvpp.solving.outcome import Outcome
 from rvpp.outputs.workbook import case_workbook_bytes
+from rvpp.store.engine import LABEL_LENGTH
 
 from . import library, state
 
@@ -27,6 +30,12 @@ PERCENT = 100.0
 KILO = 1000.0
 UNIT_FORMATS = {"[EUR]": "%.0f", "[kEUR]": "%.1f", "[%]": "%.1f", "[s]": "%.2f", "[MWh]": "%.1f", "[h]": "%.2f",
                 "[MW]": "%.0f"}
+LABEL_CHARS = LABEL_LENGTH  # a saved run's label is shown whole (the library keeps none longer)
+# Markdown's special characters, each shown as typed once backslash-escaped: links and images, emphasis,
+# code, headings, lists, tables, raw HTML and autolinks (<), LaTeX ($), entities (&) and Streamlit's own
+# ":" syntax (emoji names, ":color[...]" directives, ":material/...:" icons, whose ":material/" Streamlit
+# reads before markdown undoes the escapes: hence "/" too).
+MARKDOWN_SPECIAL = re.compile(r"[\\`*_\[\]()#+\-.!|<>~$:/&]")
 
 
 def eur(value: float | None) -> str:
@@ -37,6 +46,15 @@ def eur(value: float | None) -> str:
 def keur(value_eur: float | None) -> str:
     """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables."""
     return "–" if value_eur is None else f"{value_eur / KILO:,.1f}".replace("-", "−")
+
+
+def literal(value: Any, limit: int | None = EXCERPT_CHARS) -> str:
+    """User text (a label, a case or file name, an id, a message quoting them) as markdown that shows it
+    as typed and draws nothing else: on one line, cut to ``limit`` characters (``None``: uncut) with
+    control characters as ``?`` (:func:`~rvpp.data.files.excerpt`), every special character escaped."""
+    text = " ".join(str(value).split())
+    text = excerpt(text, len(text) if limit is None else limit)
+    return MARKDOWN_SPECIAL.sub(lambda found: "\\" + found.group(), text)
 
 
 def kpis(result: Result) -> dict[str, tuple[str, str]]:
@@ -198,7 +216,7 @@ def sidebar(case: Case) -> None:
     """Where am I: the case, its day and what was edited, on every page (drawn after the
     page ran, so it shows the page's own edits)."""
     st.caption("Current case")
-    st.markdown(f"**{case.name}** · {case.delivery_date:%d %b %Y}  \n{state.default_label()}")
+    st.markdown(f"**{literal(case.name)}** · {case.delivery_date:%d %b %Y}  \n{state.default_label()}")
     if state.is_requested(state.run_case()):
         st.caption(":material/check: solved — see Results")
 
@@ -211,8 +229,9 @@ def open_linked_run(page) -> None:
     st.session_state[state.OPENED_RUN] = run_id
     try:
         saved = library.load(run_id)
-    except RvppError as err:
-        refusal(err, "The linked run cannot be opened", note="The current case is unchanged.")
+    except RvppError as err:  # the id is the link's own text
+        messages = err.problems if isinstance(err, CaseError) else [literal(err, limit=None)]
+        problems(messages, "The linked run cannot be opened", note="The current case is unchanged.")
         return
     open_run(saved)
     if page.url_path != "results":
@@ -226,7 +245,7 @@ def open_run(saved) -> None:
     state.open_saved(saved)
     if saved.result is not None:
         solving.solver().remember(saved.result)
-    st.toast(f"Opened the saved run \"{saved.info.label}\".", icon=":material/bookmark:")
+    st.toast(f"Opened the saved run \"{literal(saved.info.label, LABEL_CHARS)}\".", icon=":material/bookmark:")
 
 
 def plan_downloads(result: Result, case: Case, key: str) -> None:

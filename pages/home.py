@@ -1,5 +1,7 @@
 """Home: what the tool does, the case at a glance, a one-click balanced plan, loading cases."""
 
+from collections import Counter
+
 import streamlit as st
 
 import rvpp
@@ -12,6 +14,7 @@ from rvpp.outputs.plots import trades_figure
 state.through_app("pages/home.py")
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
+DESCRIPTION_CHARS = 1000  # of a case's description, shown on one line
 HEADLINE = ("Net result [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection [kEUR]")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
@@ -25,6 +28,10 @@ LINKS = (
 
 def load_upload() -> None:
     files = st.session_state.get("home_upload") or []
+    twice = [twice_named(name, n) for name, n in Counter(f.name for f in files).items() if n > 1]
+    if twice:  # one of them would silently replace the other
+        st.session_state["home_load_problems"] = twice
+        return
     try:
         case = read_case_files({f.name: f.getvalue() for f in files})
     except rvpp.CaseError as err:
@@ -32,6 +39,12 @@ def load_upload() -> None:
         return
     state.load(case, source="upload: " + ", ".join(f.name for f in files))
     st.session_state["home_load_problems"] = []
+
+
+def twice_named(name: str, count: int) -> str:
+    """Why ``count`` uploaded files named ``name`` are refused."""
+    both = "two uploaded files are both" if count == 2 else f"{count} uploaded files are all"
+    return f"{both} named {widgets.literal(name)}; upload one"
 
 
 def load_from(load, name: str) -> None:
@@ -58,9 +71,10 @@ case = state.case()
 left, right = st.columns([2, 1], gap="large")
 with left:
     st.subheader("The case")
-    st.markdown(f"**{case.name}** · loaded from `{state.source()}`")
+    st.markdown(f"**{widgets.literal(case.name)}** · loaded from "
+                f"{widgets.literal(state.source(), widgets.LABEL_CHARS)}")
     if case.description:
-        st.caption(case.description)
+        st.caption(widgets.literal(case.description, DESCRIPTION_CHARS))
     st.markdown(f":material/calendar_today: **{case.delivery_date:%A %d %B %Y}** · strategy "
                 f"**{case.budgets.strategy}** · markets **{case.markets.label}** · {case.dt_h * 60:g}-minute periods")
     widgets.case_summary(case)

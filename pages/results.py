@@ -86,11 +86,13 @@ with st.expander("Save this run to the library", icon=":material/bookmark_add:",
                     help="By default: strategy, market set and what you edited since the case was loaded.")
     right.button("Save run", key="results_save", on_click=save, args=(result, edited, run), icon=":material/save:")
     if st.session_state.get("results_save_problem"):
-        widgets.problems([st.session_state["results_save_problem"]], "Not saved", note="Nothing was changed.")
+        widgets.problems([widgets.literal(st.session_state["results_save_problem"], limit=None)], "Not saved",
+                         note="Nothing was changed.")
     elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case
         run_id, label, _ = st.session_state["results_saved"]
-        st.success(f"Saved as **{label}**. It stays in the library across reloads and restarts; "
-                   f"[open it by link]({library.link(run_id)}) or see it on Saved runs.", icon=":material/check:")
+        st.success(f"Saved as **{widgets.literal(label, widgets.LABEL_CHARS)}**. It stays in the library across "
+                   f"reloads and restarts; [open it by link]({library.link(run_id)}) or see it on Saved runs.",
+                   icon=":material/check:")
     st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
 
 st.subheader("Bids")

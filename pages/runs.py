@@ -5,6 +5,8 @@ here (or by its link) becomes the current case, with its plan shown on Results w
 a new solve.
 """
 
+import hashlib
+
 import pandas as pd
 import sqlalchemy as sa
 import streamlit as st
@@ -15,7 +17,7 @@ from rvpp import RvppError
 state.through_app("pages/runs.py")
 
 COMPARE_MAX = 4
-TABLE_KEY = "runs_table"
+TABLE_KEY = "runs_table"  # the table's widget key, followed by the digest of the runs it lists
 COLUMNS = {
     "label": st.column_config.TextColumn("Label", width="medium", pinned=True),
     "saved": st.column_config.TextColumn("Saved (UTC)"),
@@ -38,7 +40,7 @@ def rename(run_id: str, key: str) -> None:
         st.session_state["runs_problem"] = str(err)
         return
     st.session_state["runs_problem"] = None
-    st.session_state["runs_notice"] = f'Renamed to "{info.label}".'
+    st.session_state["runs_notice"] = f'Renamed to "{widgets.literal(info.label, widgets.LABEL_CHARS)}".'
 
 
 def delete(run_ids: list[str]) -> None:
@@ -51,7 +53,6 @@ def delete(run_ids: list[str]) -> None:
         return
     st.session_state["runs_problem"] = None
     st.session_state["runs_notice"] = f"Deleted {len(run_ids)} run{'s' if len(run_ids) > 1 else ''}."
-    st.session_state.pop(TABLE_KEY, None)
 
 
 def open_one(run_id: str) -> None:
@@ -66,6 +67,14 @@ def open_one(run_id: str) -> None:
 def compare(run_ids: list[str]) -> None:
     st.session_state["compare_runs"] = list(run_ids)
     st.session_state["compare_mode"] = "Saved runs"
+
+
+def table_key(runs) -> str:
+    """The table's key for this list of runs. A tick is a row number: when the list changed (a run saved or
+    deleted, in this session or another), the table starts again without ticks rather than move them onto
+    other runs."""
+    listed = hashlib.sha256(" ".join(r.id for r in runs).encode()).hexdigest()[:16]
+    return f"{TABLE_KEY}_{listed}"
 
 
 def where() -> str:
@@ -87,7 +96,8 @@ st.markdown(f"Every run saved on **Results** or **Compare strategies**, with its
             f"its plan. They are kept in {where()}, so they survive a reload, a restart of the server and a crash, "
             "and everyone using this server sees them.")
 if st.session_state.get("runs_problem"):
-    widgets.problems([st.session_state["runs_problem"]], "Not done", note="The library is unchanged.")
+    widgets.problems([widgets.literal(st.session_state["runs_problem"], limit=None)], "Not done",
+                     note="The library is unchanged.")
 if notice := st.session_state.pop("runs_notice", None):
     st.success(notice, icon=":material/check:")
 if not runs:
@@ -107,7 +117,7 @@ table = pd.DataFrame({
 })
 st.caption(f"{len(runs)} saved run{'s' if len(runs) > 1 else ''}, newest first. Tick the boxes at the left of the "
            f"rows to act on them; tick two to {COMPARE_MAX} to compare them.")
-selection = st.dataframe(table, hide_index=True, column_config=COLUMNS, key=TABLE_KEY, on_select="rerun",
+selection = st.dataframe(table, hide_index=True, column_config=COLUMNS, key=table_key(runs), on_select="rerun",
                          selection_mode="multi-row", height=min(38 + 35 * len(runs), 560))
 chosen = [runs[i] for i in selection.selection.rows if i < len(runs)]
 if not chosen:
@@ -116,7 +126,7 @@ if not chosen:
 ids = [r.id for r in chosen]
 if len(chosen) == 1:
     run = chosen[0]
-    st.subheader(run.label)
+    st.subheader(widgets.literal(run.label, widgets.LABEL_CHARS))
     first, second, third = st.columns(3, vertical_alignment="bottom")
     first.button("Open as the current case", key="runs_open_button", type="primary", on_click=open_one,
                  args=(run.id,), icon=":material/open_in_browser:",

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import tempfile
 import uuid
 import zipfile
@@ -30,6 +31,7 @@ import pandas as pd
 import sqlalchemy as sa
 
 from ..data.case import Case, parse_case, save_case, with_options
+from ..data.files import excerpt
 from ..solving.outcome import Outcome
 from ..solving.results import Result
 from .codec import case_data, history_bytes, history_from, jsonable
@@ -37,6 +39,13 @@ from .engine import LABEL_LENGTH, StoreError, connect, get_blob, now, put_blob, 
 
 TABLES = ("market", "units", "csp", "flexibility")
 SAVE_ATTEMPTS = 5  # a save retries when a concurrent save took the same label
+# A label is one line shown in tables, messages and exported files: control characters (C0, DEL and C1, as
+# in a case's names) and the bidirectional overrides and isolates (which make "abc" read "cba") are
+# refused; zero-width spaces and joiners may be part of a label but do not make one.
+_CONTROL_CHARACTER = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+_BIDI_OVERRIDE = re.compile(r"[\u202a-\u202e\u2066-\u2069]")
+_ZERO_WIDTH = dict.fromkeys(map(ord, "\u200b\u200c\u200d\ufeff"))
+_REFUSED = ((_CONTROL_CHARACTER, "control characters"), (_BIDI_OVERRIDE, "bidirectional override characters"))
 LISTED = ("id", "label", "created_at", "updated_at", "case_name", "delivery_date", "strategy", "markets",
           "status", "objective_eur")
 
@@ -116,7 +125,7 @@ class RunLibrary:
         with self.engine.connect() as connection:
             row = connection.execute(query).first()
         if row is None:
-            raise StoreError(f"no saved run has the id {run_id!r}; it may have been deleted")
+            raise _no_run(run_id)
         return RunInfo(**row._asdict())
 
     def load(self, run_id: str) -> SavedRun:
@@ -124,7 +133,7 @@ class RunLibrary:
         with self.engine.connect() as connection:
             row = connection.execute(sa.select(runs).where(runs.c.id == run_id)).first()
             if row is None:
-                raise StoreError(f"no saved run has the id {run_id!r}; it may have been deleted")
+                raise _no_run(run_id)
             history = get_blob(connection, row.history_digest)
             tables = get_blob(connection, row.tables_digest) if row.tables_digest else None
         info = RunInfo(**{k: getattr(row, k) for k in LISTED})
@@ -142,14 +151,14 @@ class RunLibrary:
             done = connection.execute(runs.update().where(runs.c.id == run_id)
                                       .values(label=label, updated_at=now())).rowcount
         if not done:
-            raise StoreError(f"no saved run has the id {run_id!r}; it may have been deleted")
+            raise _no_run(run_id)
         return self.info(run_id)
 
     def delete(self, run_id: str) -> None:
         with self.engine.begin() as connection:
             done = connection.execute(runs.delete().where(runs.c.id == run_id)).rowcount
         if not done:
-            raise StoreError(f"no saved run has the id {run_id!r}; it may have been deleted")
+            raise _no_run(run_id)
 
     def export_zip(self, run_id: str) -> bytes:
         """The run as a zip: its case folder (``case/``) and its plan exports (``plan/``)."""
@@ -180,12 +189,19 @@ def solved_case(case: Case, settings: Mapping[str, Any]) -> Case:
 
 
 def _clean_label(label: str) -> str:
+    for pattern, kind in _REFUSED:
+        if found := pattern.search(str(label)):
+            raise StoreError(f"the label must not contain {kind} (found U+{ord(found.group()):04X})")
     text = " ".join(str(label).split())
-    if not text:
+    if not text.translate(_ZERO_WIDTH).strip():
         raise StoreError("a saved run needs a label; the label is empty")
     if len(text) > LABEL_LENGTH - 8:
         raise StoreError(f"the label has {len(text)} characters; at most {LABEL_LENGTH - 8} are allowed")
     return text
+
+
+def _no_run(run_id: str) -> StoreError:
+    return StoreError(f"no saved run has the id {excerpt(run_id)!r}; it may have been deleted")
 
 
 def _free_label(label: str, taken: set[str]) -> str:
