@@ -20,6 +20,7 @@ import rvpp
 from rvpp import Case, CaseError
 from rvpp.data.case import parse_case
 from rvpp.data.edits import run_label
+from rvpp.data.files import excerpt
 from rvpp.errors import CasePathError
 from rvpp.store import SavedRun
 
@@ -47,8 +48,18 @@ def _load_cached(folder: str, stamp: tuple) -> Case:
 def _load(folder: str) -> Case:
     """Parse a case folder once per version of its files; sessions share the immutable case."""
     path = Path(folder)
-    stamp = tuple(sorted((p.name, p.stat().st_mtime_ns) for p in path.iterdir())) if path.is_dir() else ()
+    stamp = tuple(sorted((p.name, _modified_ns(p)) for p in path.iterdir())) if path.is_dir() else ()
     return _load_cached(folder, stamp)
+
+
+def _modified_ns(path: Path) -> int | None:
+    """When the file at ``path`` last changed [ns since the epoch]; ``None`` for an entry that cannot be
+    followed, such as a link to nothing (an editor's lock file: Emacs' ``.#case.yaml``): the case does
+    not read it, or reports it by name if it does."""
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return None
 
 
 def init() -> None:
@@ -104,7 +115,15 @@ def load_folder(folder: str | Path) -> Case:
         raise CasePathError(
             "loading a case folder from the server's disk is turned off; upload the case instead (the server's "
             f"operator can turn folders on by starting it with {SERVER_FOLDERS}=1)")
-    case = _load(str(Path(folder).resolve()))
+    try:
+        case = _load(str(Path(folder).resolve()))
+    except ValueError:
+        if "\x00" not in str(folder):
+            raise
+        # the system's path functions refuse a NUL character ("embedded null byte")
+        raise CasePathError(f"case folder {excerpt(folder)!r}: a path cannot hold a NUL character") from None
+    except OSError as err:  # a name too long, a folder that may not be listed
+        raise CasePathError(f"case folder {excerpt(folder)!r} cannot be read: {err.strerror or err}") from None
     load(case, source=str(folder))
     return case
 

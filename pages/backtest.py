@@ -97,6 +97,9 @@ def launch_backtest(run, first, last, strategies, fractions_text, perfect, end_t
         settings = BacktestSettings(first, last, variants_of(strategies, fractions, perfect),
                                     storage_end=CARRY if end_target is None else float(end_target))
         launched = launch.start(run, settings, bt.store(), label=label.strip())
+    except launch.AlreadyRunning as err:
+        already_running(err)
+        return
     except RvppError as err:
         st.session_state["backtest_problem"] = str(err)
         return
@@ -105,6 +108,15 @@ def launch_backtest(run, first, last, strategies, fractions_text, perfect, end_t
     st.session_state["backtest_notice"] = (
         f"Started in the background (process {launched.pid}). It shows below with its progress as soon as its "
         "process has read the case, within a few seconds; you may leave this page meanwhile.")
+
+
+def already_running(err: launch.AlreadyRunning) -> None:
+    """A second start of a running backtest (a double click, another tab): show the running one."""
+    st.session_state["backtest_problem"] = None
+    st.session_state[CHOSEN] = err.backtest_id
+    st.session_state["backtest_notice"] = (
+        f"This backtest is already running (process {err.pid}); it was not started a second time. It shows "
+        "below with its progress.")
 
 
 def stop(ident: str) -> None:
@@ -116,8 +128,9 @@ def resume(ident: str) -> None:
     store = bt.store()
     try:
         case, stored = store.load(ident)
-        label = next((b.label for b in store.list() if b.id == ident), "")
-        launch.start(case, BacktestSettings.from_stored(stored), store, label=label)
+        launch.start(case, BacktestSettings.from_stored(stored), store)  # the stored backtest keeps its label
+    except launch.AlreadyRunning as err:
+        already_running(err)
     except RvppError as err:
         st.session_state["backtest_problem"] = str(err)
 

@@ -86,7 +86,8 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
                         help="worker processes of a local pool or cluster (default: cores; a local pool uses "
                             "at most one per core)")
     parser.add_argument("--store", help="store URL (default: RVPP_STORE_URL or the local rvpp-data folder)")
-    parser.add_argument("--label", default="", help="a name for the backtest in the store")
+    parser.add_argument("--label", type=_label, default="",
+                        help="a name for the backtest in the store (no control characters)")
     parser.add_argument("--out", type=path_option,
                         help="also export records, aggregates and inputs to this folder (a new or empty folder, "
                              "or an earlier export, which is replaced)")
@@ -100,6 +101,15 @@ def _strategy(name: str) -> str:
     if name not in STRATEGIES:
         raise argparse.ArgumentTypeError(f"unknown strategy {excerpt(name)!r}; choose from {', '.join(STRATEGIES)}")
     return name
+
+
+def _label(text: str) -> str:
+    from .launch import check_label  # the launch's rule; it imports the store, so only when a label is given
+
+    try:
+        return check_label(text)
+    except BacktestError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _storage_end(text: str) -> str | float:
@@ -257,10 +267,12 @@ def run_export_command(args: argparse.Namespace) -> int:
 
 def run_list_command(args: argparse.Namespace) -> int:
     from ..store import BacktestStore
+    from ..store.engine import LABEL_LENGTH
 
     store = BacktestStore(args.store)
     for info in store.list():
         progress = store.progress(info.id)
         state = progress.state if progress else "not run"
-        print(f"{info.id}  {info.keys_done}/{info.keys_total}  {state:<11}  {info.created_at[:19]}  {info.label}")
+        print(f"{info.id}  {info.keys_done}/{info.keys_total}  {state:<11}  {info.created_at[:19]}  "
+              f"{excerpt(info.label, LABEL_LENGTH)}")  # a label stored before the rule: shown, never obeyed
     return 0

@@ -5,28 +5,44 @@ in a new session (it survives the dashboard's rerun, a closed tab or a server re
 and returns the backtest's id at once. The process writes its progress into the store
 (:meth:`rvpp.store.BacktestStore.set_progress`), so any page can follow it with
 :func:`status` and read its records while it runs; :func:`stop` ends it (the days
-already settled stay; starting again resumes).
+already settled stay; starting again resumes). A backtest that runs already is not
+started twice (:class:`AlreadyRunning`).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..data.case import Case, load_case, save_case
+from ..data.files import excerpt
 from ..store import BacktestStore
 from ..store.backtests import BacktestProgress, backtest_id
 from ..store.engine import DEFAULT_DIR, DIR_VARIABLE, URL_VARIABLE
 from .settings import CARRY, FRACTION, PERFECT, BacktestError, BacktestSettings
 
 ROOT = Path(__file__).resolve().parents[2]
+# What a label may not hold: C0, DEL and C1 control characters (refused in a case's names too,
+# rvpp.data.case: a terminal obeys them) and the bidirectional embeddings, overrides and isolates
+# U+202A..U+202E and U+2066..U+2069, which reorder the text shown after them.
+_CONTROL_CHARACTER = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+_BIDI_OVERRIDE = re.compile(r"[\u202a-\u202e\u2066-\u2069]")
+
+# The processes this server started, by backtest id, until their progress row speaks for them, and
+# the lock that makes "is it running? then start it" one step for the server's sessions (a double
+# click, two tabs). Two servers (or a server and the command line) on the same store are not covered:
+# each sees the other's process only once it wrote its progress row, a second or two after starting.
+_STARTED: dict[str, subprocess.Popen] = {}
+_STARTING = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -36,6 +52,28 @@ class Launched:
     backtest_id: str
     pid: int
     log: Path
+
+
+class AlreadyRunning(BacktestError):
+    """The backtest runs already (the same case and settings give the same id): a second process
+    would settle the same days into the same records."""
+
+    def __init__(self, ident: str, pid: int):
+        self.backtest_id, self.pid = ident, pid
+        super().__init__(f"backtest {ident} is already running (process {pid}); follow it, or stop it "
+                         "before starting it again")
+
+
+def check_label(label: str) -> str:
+    """``label`` if a backtest may be stored under it; :class:`BacktestError` naming the first
+    character refused (a control character or a bidirectional override)."""
+    if found := _CONTROL_CHARACTER.search(label):
+        rule = "control characters"
+    elif found := _BIDI_OVERRIDE.search(label):
+        rule = "bidirectional overrides"
+    else:
+        return label
+    raise BacktestError(f"label {excerpt(label)!r} must not contain {rule} (found U+{ord(found.group()):04X})")
 
 
 def command_line(settings: BacktestSettings, case_folder: Path, label: str = "", workers: int | None = None
@@ -67,7 +105,7 @@ def command_line(settings: BacktestSettings, case_folder: Path, label: str = "",
     if not settings.audit:
         args.append("--no-audit")
     if label:
-        args += ["--label", label]
+        args.append(f"--label={label}")  # one argument: a label such as "-draft" is not read as an option
     if workers:
         args += ["--workers", str(workers)]
     return args
@@ -79,8 +117,11 @@ def start(case: Case, settings: BacktestSettings, store: BacktestStore | None = 
 
     The case is saved under ``<RVPP_DATA_DIR>/backtests/<id>/case`` and reloaded first, so
     the id is that of the case the process will read (a case edited in memory is saved
-    as the CSV files would hold it).
+    as the CSV files would hold it). Refused with :class:`AlreadyRunning` while a process
+    runs that id, and with :class:`BacktestError` for a label :func:`check_label` refuses,
+    before anything is written.
     """
+    check_label(label)
     store = store or BacktestStore()
     settings.check_case(case)
     backtests = Path(os.environ.get(DIR_VARIABLE, "").strip() or DEFAULT_DIR).resolve() / "backtests"
@@ -89,23 +130,44 @@ def start(case: Case, settings: BacktestSettings, store: BacktestStore | None = 
     try:
         save_case(case, staging)
         ident = backtest_id(load_case(staging), settings.stored())
-        folder = backtests / ident
-        folder.mkdir(exist_ok=True)
-        case_folder = folder / "case"
-        if case_folder.exists():  # the same backtest started before: same inputs, keep the first copy
-            shutil.rmtree(staging)
-        else:
-            staging.rename(case_folder)
+        with _STARTING:
+            if (pid := _running_pid(ident, store)) is not None:
+                raise AlreadyRunning(ident, pid)
+            folder = backtests / ident
+            folder.mkdir(exist_ok=True)
+            case_folder = folder / "case"
+            if case_folder.exists():  # the same backtest started before: same inputs, keep the first copy
+                shutil.rmtree(staging)
+            else:
+                staging.rename(case_folder)
+            log = folder / "backtest.log"
+            url = store.engine.url.render_as_string(hide_password=False)
+            with open(log, "ab") as output:
+                process = subprocess.Popen(command_line(settings, case_folder, label, workers), cwd=ROOT,
+                                           stdin=subprocess.DEVNULL, stdout=output, stderr=output,
+                                           start_new_session=True,
+                                           env={**os.environ, "PYTHONPATH": str(ROOT), URL_VARIABLE: url})
+            _STARTED[ident] = process
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-    log = folder / "backtest.log"
-    url = store.engine.url.render_as_string(hide_password=False)
-    with open(log, "ab") as output:
-        process = subprocess.Popen(command_line(settings, case_folder, label, workers), cwd=ROOT,
-                                   stdin=subprocess.DEVNULL, stdout=output, stderr=output, start_new_session=True,
-                                   env={**os.environ, "PYTHONPATH": str(ROOT), URL_VARIABLE: url})
     return Launched(ident, process.pid, log)
+
+
+def _running_pid(ident: str, store: BacktestStore) -> int | None:
+    """The process running ``ident``: the one its progress row names while that runs (judged alive as
+    :meth:`rvpp.store.BacktestStore.progress` does), or one this server started that has not written
+    its row yet; ``None`` if none runs."""
+    for started, process in list(_STARTED.items()):  # forget the processes that ended (and reap them)
+        if process.poll() is not None:
+            del _STARTED[started]
+    progress = status(ident, store)
+    if progress is not None and progress.running:
+        return progress.pid
+    process = _STARTED.get(ident)
+    if process is None or (progress is not None and progress.pid == process.pid):
+        return None  # none started here, or it wrote its row, which says it ended
+    return process.pid
 
 
 def status(ident: str, store: BacktestStore | None = None) -> BacktestProgress | None:
