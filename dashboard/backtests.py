@@ -22,6 +22,8 @@ from rvpp.data.variants import Variant
 from rvpp.store import BacktestStore, StoredRecommendation, default_url
 from rvpp.store.backtests import BacktestProgress
 
+from .widgets import literal
+
 RECORDS_KEPT = 8  # record tables kept in memory (a year of five variants is a few MB)
 # The command line's option names as the Backtest page's fields show them.
 FORM_WORDS = {"--from": "First day", "--to": "Last day", "--storage-end": "Storage end target",
@@ -107,5 +109,5 @@ def recommendation_note(rec: StoredRecommendation) -> str:
     """Where the recommendation comes from, in one line."""
     criterion = "mean daily net cost" if rec.criterion == "mean" else "CVaR 95 % of the daily net cost"
     return (f"Γ = {rec.fraction:g} of the day for every source, chosen on the Backtest page from case "
-            f"**{rec.case_name}** by the {criterion} over the training days {rec.train[0]}..{rec.train[1]} "
+            f"**{literal(rec.case_name)}** by the {criterion} over the training days {rec.train[0]}..{rec.train[1]} "
             f"(test days {rec.test[0]}..{rec.test[1]}).")

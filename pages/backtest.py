@@ -204,7 +204,7 @@ latest = covered[-1]
 default_last = min(latest, max(earliest, run.delivery_date))
 default_first = max(earliest, default_last - dt.timedelta(days=DEFAULT_DAYS - 1))
 
-with st.expander(f"Start a backtest of the current case ({run.name})", icon=":material/play_circle:",
+with st.expander(f"Start a backtest of the current case ({widgets.literal(run.name)})", icon=":material/play_circle:",
                  expanded=False):
     st.caption(f"The days can run from {earliest} (the first day with the {run.uncertainty.window_days} days of "
                f"history its bands need) to {latest} (the last day with observations to settle against). It runs "

@@ -82,7 +82,8 @@ if mode == MODES[1]:
                  if saved.result is not None and saved.result.has_plan}
     missing = [label for label in opened if label not in with_plan]
     if missing:
-        st.warning("Without a plan, left out: " + ", ".join(missing), icon=":material/warning:")
+        st.warning("Without a plan, left out: " + ", ".join(widgets.literal(label) for label in missing),
+                   icon=":material/warning:")
     if len(with_plan) >= 2:
         side_by_side(with_plan, baseline=next(iter(with_plan)))
     st.stop()

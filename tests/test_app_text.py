@@ -244,3 +244,13 @@ def test_a_missing_run_is_named_by_the_start_of_its_id(run_library):
     with pytest.raises(StoreError, match="no saved run has the id") as refused:
         RunLibrary(run_library).load("x" * 10_000)
     assert len(str(refused.value)) < 200
+
+
+def test_the_recommendation_note_shows_a_case_name_as_typed():
+    from dashboard.backtests import recommendation_note
+    from rvpp.store import StoredRecommendation
+
+    rec = StoredRecommendation(1, "b" * 64, "2025-06-01T00:00:00+00:00", "x [sign in](https://evil.example)", 0.25,
+                               "mean", ("2025-04-01", "2025-04-30"), ("2025-05-01", "2025-05-31"), "holds")
+    note = recommendation_note(rec)
+    assert "](" not in note and "sign in" in note and "evil" in note
