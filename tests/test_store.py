@@ -114,6 +114,17 @@ def test_runs_share_one_copy_of_a_history_and_deleted_runs_are_gone(url, balance
     with pytest.raises(StoreError, match="no saved run has the id"):
         library.delete(a.id)
 
+    def kinds() -> list[tuple]:
+        with library.engine.connect() as connection:
+            return [tuple(k) for k in connection.execute(
+                sa.text("SELECT kind, count(*) FROM blobs GROUP BY kind ORDER BY kind")).all()]
+
+    # a's plan tables went with it; the history b shares stays, and goes with b.
+    assert kinds() == [("history.parquet", 1)]
+    assert library.load(b.id).case.history.fingerprint == balanced.case.history.fingerprint
+    library.delete(b.id)
+    assert kinds() == []
+
 
 def test_an_exported_run_holds_its_case_folder_and_plan_files(url, balanced, tmp_path):
     from rvpp.outputs.bundle import read_case_files
@@ -303,6 +314,8 @@ def test_a_backtest_reopens_with_its_case_and_keeps_its_progress(url, paper_case
         store.load("nope")
     store.delete(ident)
     assert store.progress(ident) is None
+    with store.engine.connect() as connection:  # its history went with it
+        assert connection.execute(sa.text("SELECT count(*) FROM blobs")).scalar() == 0
 
 
 def test_the_latest_remembered_recommendation_is_read_back_and_goes_with_its_backtest(url, paper_case):

@@ -21,9 +21,10 @@ import pandas as pd
 import sqlalchemy as sa
 
 from ..data.case import Case, parse_case
+from ..data.files import excerpt
 from .codec import case_data, history_bytes, history_from, jsonable
-from .engine import (StoreError, backtest_progress, backtest_records, backtests, connect, get_blob, now,
-                     put_blob, recommendations)
+from .engine import (StoreError, backtest_progress, backtest_records, backtests, connect, drop_unused_blobs,
+                     get_blob, now, put_blob, recommendations)
 
 STALE_AFTER_S = 600.0  # a run on another machine silent this long is taken as stopped [s]
 
@@ -231,12 +232,14 @@ class BacktestStore:
                                     (row.test_first, row.test_last), row.verdict)
 
     def delete(self, ident: str) -> None:
+        """Delete a backtest, its records and its stored history once nothing else shares it."""
         with self.engine.begin() as connection:
             connection.execute(recommendations.delete().where(recommendations.c.backtest_id == ident))
             connection.execute(backtest_records.delete().where(backtest_records.c.backtest_id == ident))
             connection.execute(backtest_progress.delete().where(backtest_progress.c.backtest_id == ident))
             if not connection.execute(backtests.delete().where(backtests.c.id == ident)).rowcount:
-                raise StoreError(f"no backtest has the id {ident!r}")
+                raise StoreError(f"no backtest has the id {excerpt(ident)!r}")
+            drop_unused_blobs(connection)
 
 
 def pending(keys: Iterable[RecordKey], done: set[RecordKey]) -> list[RecordKey]:

@@ -35,7 +35,7 @@ from ..data.files import excerpt
 from ..solving.outcome import Outcome
 from ..solving.results import Result
 from .codec import case_data, history_bytes, history_from, jsonable
-from .engine import LABEL_LENGTH, StoreError, connect, get_blob, now, put_blob, runs
+from .engine import LABEL_LENGTH, StoreError, connect, drop_unused_blobs, get_blob, now, put_blob, runs
 
 TABLES = ("market", "units", "csp", "flexibility")
 SAVE_ATTEMPTS = 5  # a save retries when a concurrent save took the same label
@@ -155,8 +155,10 @@ class RunLibrary:
         return self.info(run_id)
 
     def delete(self, run_id: str) -> None:
+        """Delete a run, and its stored history and tables once no other run or backtest shares them."""
         with self.engine.begin() as connection:
             done = connection.execute(runs.delete().where(runs.c.id == run_id)).rowcount
+            drop_unused_blobs(connection)
         if not done:
             raise _no_run(run_id)
 
