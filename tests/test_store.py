@@ -232,6 +232,31 @@ def test_opening_a_new_store_that_another_process_is_creating_tries_once_more(mo
     assert len(calls) == 2
 
 
+def test_a_database_of_another_program_is_refused_and_left_as_it_was(tmp_path):
+    import sqlite3
+
+    path = tmp_path / "theirs.sqlite3"
+    with sqlite3.connect(path) as theirs:
+        theirs.execute("CREATE TABLE runs (id TEXT, name TEXT, started TEXT)")
+    with pytest.raises(StoreError, match="is not an rvpp store: its table 'runs' has no column"):
+        RunLibrary(f"sqlite:///{path}")
+    with sqlite3.connect(path) as theirs:
+        assert theirs.execute("SELECT name FROM sqlite_master WHERE type = 'table'").fetchall() == [("runs",)]
+
+
+def test_a_refusal_of_the_database_is_a_store_error_naming_the_store(tmp_path, balanced):
+    import sqlite3
+
+    library = RunLibrary(f"sqlite:///{tmp_path / 'store.sqlite3'}")
+    info = library.save("a", balanced.case, balanced)
+    with sqlite3.connect(tmp_path / "store.sqlite3") as other:  # e.g. another program at work on the file
+        other.execute("DROP TABLE runs")
+    for call in (library.list, lambda: library.load(info.id)):
+        with pytest.raises(StoreError, match=r"the store at sqlite:///.*store.sqlite3 refused the operation "
+                                             r"\(no such table: runs\)"):
+            call()
+
+
 def test_the_default_store_lives_in_the_data_folder_from_the_environment(monkeypatch, tmp_path):
     from rvpp.store import default_url
 

@@ -176,6 +176,7 @@ def connect(url: str | None = None) -> sa.Engine:
                          f"({exc.strerror or exc})") from None
     for attempt in (1, 2):
         try:
+            _check_tables(engine, shown)
             metadata.create_all(engine)
             break
         except sa.exc.SQLAlchemyError as exc:
@@ -184,7 +185,41 @@ def connect(url: str | None = None) -> sa.Engine:
             if attempt == 2:
                 raise StoreError(f"cannot open the store at {shown}: "
                                  f"{exc.__class__.__name__}: {excerpt(getattr(exc, 'orig', exc), 200)}") from None
+    _name_database_errors(engine, shown)
     return engine
+
+
+def _check_tables(engine: sa.Engine, shown: str) -> None:
+    """Refuse a database whose tables of rvpp's names lack rvpp's columns (a file of another
+    program), before anything is created in it. A store of an older version, which lacks only
+    tables added since, is fine: they are created."""
+    inspector = sa.inspect(engine)
+    present = set(inspector.get_table_names())
+    for table in metadata.sorted_tables:
+        if table.name in present:
+            missing = {c.name for c in table.columns} - {c["name"] for c in inspector.get_columns(table.name)}
+            if missing:
+                raise StoreError(f"the database at {shown} is not an rvpp store: its table {table.name!r} has no "
+                                 f"column {sorted(missing)[0]!r}; give another with {URL_VARIABLE} or "
+                                 f"{DIR_VARIABLE}")
+
+
+def _name_database_errors(engine: sa.Engine, shown: str) -> None:
+    """Have the database's refusals (a full disk, a read-only file, a file of another program's
+    tables, a value the column cannot hold) reach the user as :class:`StoreError` naming the
+    store, not as a driver's traceback. A taken key (``IntegrityError``) is left to the caller,
+    which picks another label; a lost connection is left to the pool, which reconnects."""
+
+    @sa.event.listens_for(engine, "handle_error")
+    def _named(context) -> StoreError | None:
+        error = context.sqlalchemy_exception
+        if context.is_disconnect or error is None or isinstance(error, sa.exc.IntegrityError):
+            return None
+        if isinstance(error, sa.exc.DBAPIError):
+            return StoreError(f"the store at {shown} refused the operation "
+                              f"({excerpt(context.original_exception, 200)}); if it is not rvpp's store, "
+                              f"give another with {URL_VARIABLE} or {DIR_VARIABLE}")
+        return None
 
 
 def _sqlite_engine(url: sa.URL) -> sa.Engine:

@@ -144,12 +144,16 @@ class RunLibrary:
     def rename(self, run_id: str, label: str) -> RunInfo:
         """Give a run a new label; refused if another run has it."""
         label = _clean_label(label)
-        with self.engine.begin() as connection:
-            other = connection.execute(sa.select(runs.c.id).where(runs.c.label == label)).scalar_one_or_none()
-            if other is not None and other != run_id:
-                raise StoreError(f'the label "{label}" is already used by another saved run; choose another')
-            done = connection.execute(runs.update().where(runs.c.id == run_id)
-                                      .values(label=label, updated_at=now())).rowcount
+        taken = StoreError(f'the label "{label}" is already used by another saved run; choose another')
+        try:
+            with self.engine.begin() as connection:
+                other = connection.execute(sa.select(runs.c.id).where(runs.c.label == label)).scalar_one_or_none()
+                if other is not None and other != run_id:
+                    raise taken
+                done = connection.execute(runs.update().where(runs.c.id == run_id)
+                                          .values(label=label, updated_at=now())).rowcount
+        except sa.exc.IntegrityError:  # another session gave a run the same label meanwhile
+            raise taken from None
         if not done:
             raise _no_run(run_id)
         return self.info(run_id)
