@@ -327,12 +327,13 @@ def test_a_backtest_reopens_with_its_case_and_keeps_its_progress(url, paper_case
     assert store.record_map(ident) == {key: {"status": "optimal", "net_cost_eur": 1.5,
                                              "end_state": {"CSP1": {"e_mwh_th": 110.0}}}}
     assert store.progress(ident) is None
-    store.set_progress(ident, "running", 1, 4, None, started_at="2025-01-01T00:00:00+00:00")
+    started = dt.datetime.now(dt.timezone.utc).isoformat()  # this process runs it, started before
+    store.set_progress(ident, "running", 1, 4, None, started_at=started)
     store.set_progress(ident, "running", 2, 4, 30.0)
     progress = store.progress(ident)
     assert (progress.state, progress.done, progress.total, progress.eta_s, progress.pid) == ("running", 2, 4, 30.0,
                                                                                           os.getpid())
-    assert progress.started_at == "2025-01-01T00:00:00+00:00"
+    assert progress.started_at == started
     store.set_progress(ident, "finished", 4, 4, 0.0)
     assert store.progress(ident).state == "finished"
     with pytest.raises(StoreError, match="no backtest has the id"):
@@ -372,3 +373,24 @@ def test_a_running_backtest_whose_process_is_gone_reads_stopped(tmp_path, paper_
         connection.execute(sa.text("UPDATE backtest_progress SET pid = :pid"), {"pid": gone.pid})
     progress = store.progress(ident)
     assert progress.state == "stopped" and progress.eta_s is None and "resume" in progress.message
+
+
+def test_a_running_row_whose_process_number_was_given_again_reads_stopped(tmp_path, paper_case):
+    """After a restart the row's process number may belong to a later process: not the backtest's,
+    and never to be stopped in its name."""
+    from rvpp.backtest import launch
+
+    store = BacktestStore(f"sqlite:///{tmp_path / 'store.sqlite3'}")
+    ident = store.open(paper_case, {"x": 1}, keys_total=2)
+    store.set_progress(ident, "running", 1, 2, 5.0,
+                       started_at=(dt.datetime.now(dt.timezone.utc) - dt.timedelta(minutes=5)).isoformat())
+    later = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"], start_new_session=True)
+    try:
+        with store.engine.begin() as connection:
+            connection.execute(sa.text("UPDATE backtest_progress SET pid = :pid"), {"pid": later.pid})
+        assert store.progress(ident).state == "stopped"
+        assert launch.stop(ident, store) is False
+        assert later.poll() is None  # not signalled
+    finally:
+        later.kill()
+        later.wait()

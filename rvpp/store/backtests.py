@@ -257,9 +257,24 @@ def _alive(info: BacktestProgress) -> bool:
             return False
         except PermissionError:
             return True
-        return not _zombie(info.pid)
+        # A process started after the run it would be: its number was given again (after a restart).
+        return not _zombie(info.pid) and not _started_after(info.pid, info.started_at)
     updated = dt.datetime.fromisoformat(info.updated_at)
     return (dt.datetime.now(dt.timezone.utc) - updated).total_seconds() < STALE_AFTER_S
+
+
+def _started_after(pid: int, instant: str) -> bool:
+    """Whether process ``pid`` started more than a second after ``instant`` (ISO 8601), from
+    ``/proc`` (Linux; False where its start time cannot be read)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="utf-8") as stat:
+            ticks = int(stat.read().rsplit(")", 1)[1].split()[19])  # field 22: start time after boot
+        with open("/proc/stat", encoding="utf-8") as system:
+            boot = next(int(line.split()[1]) for line in system if line.startswith("btime "))
+        started = boot + ticks / os.sysconf("SC_CLK_TCK")
+        return started > dt.datetime.fromisoformat(instant).timestamp() + 1.0
+    except (OSError, ValueError, IndexError, StopIteration):
+        return False
 
 
 def _zombie(pid: int) -> bool:
