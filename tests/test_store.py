@@ -257,6 +257,26 @@ def test_a_refusal_of_the_database_is_a_store_error_naming_the_store(tmp_path, b
             call()
 
 
+def test_a_damaged_saved_run_is_named_not_a_traceback(tmp_path, balanced):
+    url = f"sqlite:///{tmp_path / 'store.sqlite3'}"
+    library = RunLibrary(url)
+    bad_table, bad_result = library.save("t", balanced.case, balanced), library.save("r", balanced.case, None)
+    with library.engine.begin() as connection:  # a byte of the plan tables flipped; a result cut short
+        digest = connection.execute(sa.text("SELECT tables_digest FROM runs WHERE id = :i"),
+                                    {"i": bad_table.id}).scalar()
+        data = bytearray(connection.execute(sa.text("SELECT data FROM blobs WHERE digest = :d"), {"d": digest}).scalar())
+        data[len(data) // 2] ^= 0xFF
+        connection.execute(sa.text("UPDATE blobs SET data = :b WHERE digest = :d"), {"b": bytes(data), "d": digest})
+    second = RunLibrary(url)
+    with second.engine.begin() as connection:
+        connection.execute(sa.text("""UPDATE runs SET result = '{"status": "weird"}' WHERE id = :i"""),
+                           {"i": bad_result.id})
+    with pytest.raises(StoreError, match=r"a stored table \(\w+\) is damaged: its content no longer matches"):
+        second.load(bad_table.id)
+    with pytest.raises(StoreError, match=r"the saved run '\w+' is damaged and cannot be opened \(\w+Error"):
+        second.load(bad_result.id)
+
+
 def test_the_default_store_lives_in_the_data_folder_from_the_environment(monkeypatch, tmp_path):
     from rvpp.store import default_url
 

@@ -23,6 +23,7 @@ import hashlib
 import os
 import re
 import urllib.parse
+import zipfile
 from pathlib import Path
 
 import sqlalchemy as sa
@@ -124,6 +125,11 @@ recommendations = sa.Table(
 
 class StoreError(RvppError):
     """The store cannot be opened or refuses an operation (unknown run, label taken, ...)."""
+
+
+# What decoding a damaged stored value raises: bad JSON or Parquet (ValueError, pyarrow's errors
+# among them), a missing or mistyped field, a cut zip.
+DAMAGED = (ValueError, TypeError, KeyError, AttributeError, IndexError, EOFError, OSError, zipfile.BadZipFile)
 
 
 def default_url() -> str:
@@ -253,9 +259,12 @@ def put_blob(connection: sa.Connection, kind: str, data: bytes) -> str:
 
 
 def get_blob(connection: sa.Connection, digest: str) -> bytes:
+    """A stored value, checked against its digest."""
     data = connection.execute(sa.select(blobs.c.data).where(blobs.c.digest == digest)).scalar_one_or_none()
     if data is None:
         raise StoreError(f"the store has lost a stored table ({digest[:12]}); the run cannot be opened")
+    if hashlib.sha256(data).hexdigest() != digest:
+        raise StoreError(f"a stored table ({digest[:12]}) is damaged: its content no longer matches its digest")
     return bytes(data)
 
 
