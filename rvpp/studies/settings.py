@@ -8,6 +8,7 @@ import numbers
 from dataclasses import dataclass, field, replace
 
 from ..data.case import STRATEGIES, parse_markets
+from ..data.history import MAX_QUANTITY
 from ..errors import CaseError, RvppError
 from ..settle.recourse import Penalties
 
@@ -16,6 +17,8 @@ MARKET_SETS_WITHOUT_CSP = ("DAM+HPA", "DAM+SRM+HPA")  # paper Table 11 (heat nee
 HPA_FLAT_PRICES = (70.0, 60.0, 50.0)  # paper Table 12 [EUR/MWh_th]
 SCENARIO_COUNTS = (5, 10, 15, 20, 25)  # paper Table 14
 MAX_SCENARIOS = 100  # one MILP holds a copy of the day per scenario; 25 take a minute, 100 many hours
+MAX_GRID = 100  # values of one list (Γ, tariffs, market sets, fractions): each is at least one solve per day
+MAX_TEST_DAYS = 366
 TEST_DAYS = 30
 SEED = 20250318
 SP_TIME_LIMIT_S = 600.0
@@ -80,10 +83,17 @@ class StudySettings:
                     parse_markets(markets)
                 except CaseError as err:
                     problems.append(f"{name}: {err}")
-        problems += [f"hpa_flat_prices: {p} must be a finite number >= 0 [EUR/MWh_th]"
-                     for p in self.hpa_flat_prices if not (math.isfinite(p) and p >= 0)]
+        problems += [f"hpa_flat_prices: {p} must be a number in [0, {MAX_QUANTITY:g}] [EUR/MWh_th]"
+                     for p in self.hpa_flat_prices if not (math.isfinite(p) and 0 <= p <= MAX_QUANTITY)]
+        for name in ("gammas", "market_sets", "market_sets_without_csp", "hpa_flat_prices", "backtest_fractions"):
+            values = getattr(self, name) or ()
+            if len(values) > MAX_GRID:
+                problems.append(f"{name} has {len(values)} values; a study takes at most {MAX_GRID}, each solved "
+                                "on its own")
         if self.test_days < 1:
             problems.append(f"test_days={self.test_days} must be at least 1")
+        elif self.test_days > MAX_TEST_DAYS:
+            problems.append(f"test_days={self.test_days} must be at most {MAX_TEST_DAYS} (a year)")
         problems += [f"scenario_counts: N={n} must be at least 1" for n in self.scenario_counts if n < 1]
         problems += [f"scenario_counts: N={n:g} must be at most {MAX_SCENARIOS} (the stochastic benchmark solves "
                      "one model with a copy of the day per scenario)" for n in self.scenario_counts
