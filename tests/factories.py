@@ -108,3 +108,29 @@ def wait_for(predicate, timeout_s: float = 600.0, every_s: float = 0.3):
             return value
         time.sleep(every_s)
     raise AssertionError("timed out")
+
+
+APP = str(ROOT / "app.py")
+APP_TIMEOUT_S = 180  # a generous ceiling for a page run that may solve (never a performance assertion)
+
+
+def open_app(page: str | None = None, run: str | None = None):
+    """The dashboard run once in AppTest (opened by the link of saved run ``run``), then on ``page``;
+    checked to have raised nothing."""
+    from streamlit.testing.v1 import AppTest
+
+    at = AppTest.from_file(APP, default_timeout=APP_TIMEOUT_S)
+    if run is not None:
+        at.query_params["run"] = run
+    at.run()
+    if page:
+        at.switch_page(f"pages/{page}.py").run()
+    assert not at.exception, at.exception
+    return at
+
+
+def click(at, key: str):
+    """Press the button ``key`` and check the run raised nothing."""
+    at.button(key=key).click().run()
+    assert not at.exception, at.exception
+    return at

@@ -27,7 +27,7 @@ from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
 from rvpp.store import RunLibrary
-from tests.factories import wait_for
+from tests.factories import click, open_app, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
@@ -48,20 +48,6 @@ def run_library(tmp_path, monkeypatch):
 
 
 # ----------------------------------------------------------------------------- helpers
-
-
-def open_app(page: str | None = None) -> AppTest:
-    at = AppTest.from_file(APP, default_timeout=TIMEOUT_S).run()
-    if page:
-        at.switch_page(f"pages/{page}.py").run()
-    assert not at.exception, at.exception
-    return at
-
-
-def click(at: AppTest, key: str) -> AppTest:
-    at.button(key=key).click().run()
-    assert not at.exception, at.exception
-    return at
 
 
 def number(text: str) -> float:

@@ -7,17 +7,14 @@ from __future__ import annotations
 import io
 import re
 import zipfile
-from pathlib import Path
 
 import pytest
 from streamlit.testing.v1 import AppTest
 
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.store import RunLibrary, StoreError
+from tests.factories import click, open_app
 
-ROOT = Path(__file__).resolve().parent.parent
-APP = str(ROOT / "app.py")
-TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
 # A label that would draw a sign-in link, a remote image, an icon, coloured text, an autolink and LaTeX.
 HOSTILE = ("x` [Session expired: sign in again](https://evil.example/login) ![](https://evil.example/p.png) `y "
            ":material/home: :red[alert] <https://evil.example> $x$ :smile:")
@@ -31,23 +28,6 @@ def run_library(tmp_path, monkeypatch):
     monkeypatch.delenv("RVPP_STORE_URL", raising=False)
     monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
     return f"sqlite:///{tmp_path / 'rvpp-data' / 'rvpp.sqlite3'}"
-
-
-def open_app(page: str | None = None, run: str | None = None) -> AppTest:
-    at = AppTest.from_file(APP, default_timeout=TIMEOUT_S)
-    if run is not None:
-        at.query_params["run"] = run
-    at.run()
-    if page:
-        at.switch_page(f"pages/{page}.py").run()
-    assert not at.exception, at.exception
-    return at
-
-
-def click(at: AppTest, key: str) -> AppTest:
-    at.button(key=key).click().run()
-    assert not at.exception, at.exception
-    return at
 
 
 def tick(at: AppTest, *rows: int) -> AppTest:

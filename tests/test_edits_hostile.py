@@ -5,7 +5,6 @@ and an emptied cell. Library functions first, then the pages through Streamlit's
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,9 +15,7 @@ from rvpp.data import edits
 from rvpp.data.history import PRICE_COLUMNS, History
 from rvpp.outputs import workbook
 from rvpp.solving.problem import prepare
-
-APP = str(Path(__file__).resolve().parent.parent / "app.py")
-TIMEOUT_S = 180  # a generous ceiling for a page run (never a performance assertion)
+from tests.factories import open_app
 
 
 @pytest.fixture(autouse=True)
@@ -26,13 +23,6 @@ def run_library(tmp_path, monkeypatch):
     """Every test saves into a store of its own (the dashboard reads the environment at each call)."""
     monkeypatch.delenv("RVPP_STORE_URL", raising=False)
     monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
-
-
-def open_app(page: str) -> AppTest:
-    at = AppTest.from_file(APP, default_timeout=TIMEOUT_S).run()
-    at.switch_page(f"pages/{page}.py").run()
-    assert not at.exception, at.exception
-    return at
 
 
 def edit(at: AppTest, key: str, **change) -> AppTest:
