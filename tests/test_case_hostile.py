@@ -348,3 +348,12 @@ def test_the_home_page_explains_a_bad_tag_and_a_section_given_as_a_value(small_c
 def test_a_case_downloaded_as_a_zip_stays_in_one_folder_whatever_its_name(paper_case, name, folder):
     with zipfile.ZipFile(io.BytesIO(case_zip_bytes(paper_case.replace(name=name)))) as archive:
         assert sorted(archive.namelist()) == [f"{folder}/case.yaml", f"{folder}/history.csv"]
+
+
+@pytest.mark.parametrize("field", ["series", "forecast_series"])
+def test_a_unit_cannot_follow_a_price_column(paper_case, field):
+    wind = [unit.model_dump() for unit in paper_case.wind]
+    wind[0][field] = "price_da"
+    with pytest.raises(CaseError, match="^wind \"WF1\": follows the price column 'price_da'; a unit follows a "
+                                        "column of output, demand or heat"):
+        paper_case.replace(wind=wind)

@@ -677,7 +677,11 @@ class Case(_Frozen):
                                 f"{', '.join(PRICE_COLUMNS)} and the unit names ({', '.join(names)})")
         columns = set(self.history.columns)
         for kind, unit in self.units():
-            if unit.column not in columns:
+            if unit.column in PRICE_COLUMNS or unit.forecast_column in PRICE_COLUMNS:
+                problems.append(f'{kind} "{unit.name}": follows the price column '
+                                f"{unit.column if unit.column in PRICE_COLUMNS else unit.forecast_column!r}; a unit "
+                                "follows a column of output, demand or heat, not a price [EUR/MWh]")
+            elif unit.column not in columns:
                 problems.append(f'{kind} "{unit.name}": history column {excerpt(unit.column)!r} is missing from '
                                 f"{self.history.source} (columns: {excerpt_names(sorted(columns), 20)})")
         for price in PRICE_COLUMNS:
