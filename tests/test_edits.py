@@ -103,7 +103,7 @@ def test_a_run_label_names_strategy_markets_and_edits(paper_case):
 
 
 def test_study_settings_are_named_as_the_study_pages_show_them():
-    assert plain_message("study settings: hpa_flat_prices: -5.0 must be a finite number >= 0 [EUR/MWh_th]") == \
-        "study settings: Flat HPA tariffs [EUR/MWh_th]: −5.0 must be a finite number ≥ 0 [EUR/MWh_th]"
+    assert plain_message("study settings: hpa_flat_prices: -5.0 must be a number in [0, 1e+06] [EUR/MWh_th]") == \
+        "study settings: Flat HPA tariffs [EUR/MWh_th]: −5.0 must be a number in [0, 1e+06] [EUR/MWh_th]"
     assert plain_message("study settings: test_days=0 must be at least 1; scenario_counts: N=0 must be at least 1") \
         == "study settings: Test days = 0 must be at least 1; Scenario counts N: N = 0 must be at least 1"
