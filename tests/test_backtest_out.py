@@ -211,3 +211,14 @@ def test_a_backtest_without_a_recorded_day_is_refused_by_name(paper_case, tmp_pa
     assert code == 1
     assert err == f"error: backtest {ident} has no day recorded yet: nothing to export (see backtest list)\n"
     assert not (tmp_path / "out").exists()
+
+
+def test_commands_that_read_a_store_refuse_a_path_that_holds_none(tmp_path, capsys):
+    """A mistyped --store of backtest list or export is said so, not answered from a new, empty store."""
+    url = f"sqlite:///{tmp_path / 'typo' / 'store.sqlite3'}"
+    for args in (["list", "--store", url], ["export", "b" * 64, "--store", url, "--out", str(tmp_path / "out")]):
+        code, err = run(capsys, *args)
+        assert code == 1
+        assert err == (f"error: store URL {url!r}: no store there ({tmp_path / 'typo' / 'store.sqlite3'} does not "
+                       "exist); check the path (a store is made by the first saved run or backtest)\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

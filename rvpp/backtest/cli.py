@@ -260,7 +260,7 @@ def run_export_command(args: argparse.Namespace) -> int:
     from .export import export
 
     check_out(args.out)
-    export(BacktestStore(args.store), args.ident, args.out)
+    export(BacktestStore(args.store, existing=args.store is not None), args.ident, args.out)
     print(f"wrote {args.out}", file=sys.stderr)
     return 0
 
@@ -269,7 +269,7 @@ def run_list_command(args: argparse.Namespace) -> int:
     from ..store import BacktestStore
     from ..store.engine import LABEL_LENGTH
 
-    store = BacktestStore(args.store)
+    store = BacktestStore(args.store, existing=args.store is not None)  # a typed path must hold a store
     for info in store.list():
         progress = store.progress(info.id)
         state = progress.state if progress else "not run"

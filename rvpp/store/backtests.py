@@ -104,8 +104,9 @@ def backtest_id(case: Case, settings: Mapping[str, Any]) -> str:
 class BacktestStore:
     """Backtests and their records in the store at ``url`` (default: the environment's)."""
 
-    def __init__(self, url: str | None = None, engine: sa.Engine | None = None):
-        self.engine = engine or connect(url)
+    def __init__(self, url: str | None = None, engine: sa.Engine | None = None, existing: bool = False):
+        """``existing``: the store at ``url`` must already be there (see :func:`~.engine.connect`)."""
+        self.engine = engine or connect(url, existing=existing)
 
     def open(self, case: Case, settings: Mapping[str, Any], keys_total: int, label: str = "") -> str:
         """Create the backtest if it is new; return its id either way."""

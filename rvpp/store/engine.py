@@ -148,8 +148,11 @@ def masked(url: str) -> str:
     return re.sub(r"(:/*[^:/@\s]*:)[^/]*@", r"\1***@", url)
 
 
-def connect(url: str | None = None) -> sa.Engine:
-    """An engine on ``url`` (default: :func:`default_url`) with the schema created."""
+def connect(url: str | None = None, existing: bool = False) -> sa.Engine:
+    """An engine on ``url`` (default: :func:`default_url`) with the schema created.
+
+    ``existing``: the store must already be there (an SQLite file that exists): a command that
+    only reads refuses a mistyped path instead of making an empty store there."""
     given = "store URL " if url else f"{URL_VARIABLE}="  # named as the user gave it
     url = url or default_url()
     try:
@@ -169,6 +172,9 @@ def connect(url: str | None = None) -> sa.Engine:
     if backend == "sqlite" and parsed.database in (None, "", ":memory:"):
         raise StoreError(f"{given}{masked(url)!r} names no file: a store in memory keeps nothing; give a file, "
                          "e.g. sqlite:///runs.sqlite3")
+    if existing and backend == "sqlite" and not Path(parsed.database).is_file():
+        raise StoreError(f"{given}{shown!r}: no store there ({excerpt(parsed.database, 200)} does not exist); "
+                         "check the path (a store is made by the first saved run or backtest)")
     try:
         if backend == "sqlite":
             engine = _sqlite_engine(parsed)
