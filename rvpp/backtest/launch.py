@@ -12,7 +12,6 @@ started twice (:class:`AlreadyRunning`).
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import signal
 import socket
@@ -24,18 +23,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..data.case import Case, load_case, save_case
-from ..data.files import excerpt
+from ..data.files import BIDI_CONTROLS, CONTROL_CHARACTERS, excerpt, refused_character
 from ..store import BacktestStore
 from ..store.backtests import BacktestProgress, backtest_id
 from ..store.engine import DEFAULT_DIR, DIR_VARIABLE, URL_VARIABLE
 from .settings import CARRY, FRACTION, PERFECT, BacktestError, BacktestSettings
 
 ROOT = Path(__file__).resolve().parents[2]
-# What a label may not hold: C0, DEL and C1 control characters (refused in a case's names too,
-# rvpp.data.case: a terminal obeys them) and the bidirectional embeddings, overrides and isolates
-# U+202A..U+202E and U+2066..U+2069, which reorder the text shown after them.
-_CONTROL_CHARACTER = re.compile(r"[\x00-\x1f\x7f-\x9f]")
-_BIDI_OVERRIDE = re.compile(r"[\u202a-\u202e\u2066-\u2069]")
+# What a label may not hold (refused in a case's names and a saved run's label too).
+_REFUSED = ((CONTROL_CHARACTERS, "control characters"), (BIDI_CONTROLS, "bidirectional overrides"))
 
 # The processes this server started, by backtest id, until their progress row speaks for them, and
 # the lock that makes "is it running? then start it" one step for the server's sessions (a double
@@ -67,13 +63,9 @@ class AlreadyRunning(BacktestError):
 def check_label(label: str) -> str:
     """``label`` if a backtest may be stored under it; :class:`BacktestError` naming the first
     character refused (a control character or a bidirectional override)."""
-    if found := _CONTROL_CHARACTER.search(label):
-        rule = "control characters"
-    elif found := _BIDI_OVERRIDE.search(label):
-        rule = "bidirectional overrides"
-    else:
-        return label
-    raise BacktestError(f"label {excerpt(label)!r} must not contain {rule} (found U+{ord(found.group()):04X})")
+    if refused := refused_character(label, _REFUSED):
+        raise BacktestError(f"label {excerpt(label)!r} must not contain {refused}")
+    return label
 
 
 def command_line(settings: BacktestSettings, case_folder: Path, label: str = "", workers: int | None = None

@@ -25,7 +25,8 @@ from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fi
 from pydantic_core import PydanticCustomError
 
 from ..errors import CaseError, CaseFileError, CasePathError, require
-from .files import MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file, relative_path
+from .files import (CONTROL_CHARACTERS, MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file,
+                    refused_character, relative_path)
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
@@ -42,10 +43,9 @@ def _not_true_false(kind: str) -> BeforeValidator:
     return BeforeValidator(check)
 
 
-# Control characters (C0, DEL and C1: a YAML escape such as "\x01" or "\e") in text that is shown
-# and exported: Excel refuses them in a cell and a terminal obeys them. Ordinary Unicode letters,
-# spaces and joiners are fine; prose keeps its tabs and line breaks. (pydantic refuses lone surrogates.)
-_CONTROL_CHARACTER = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+# Control characters (a YAML escape such as "\x01" or "\e", files.CONTROL_CHARACTERS) in text that
+# is shown and exported. Ordinary Unicode letters, spaces and joiners are fine; prose keeps its tabs
+# and line breaks. (pydantic refuses lone surrogates.)
 _CONTROL_IN_PROSE = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]")
 
 
@@ -53,9 +53,8 @@ def _printable(pattern: re.Pattern) -> AfterValidator:
     """Refuse text holding a character that ``pattern`` matches, naming its code point."""
 
     def check(value: str) -> str:
-        found = pattern.search(value)
-        if found:
-            raise ValueError(f"must not contain control characters (found U+{ord(found.group()):04X})")
+        if refused := refused_character(value, ((pattern, "control characters"),)):
+            raise ValueError(f"must not contain {refused}")
         return value
 
     return AfterValidator(check)
@@ -66,7 +65,7 @@ WholeNumber = Annotated[int, _not_true_false("int_type")]
 Fraction = Annotated[Number, Field(ge=0.0, le=1.0)]
 NonNegative = Annotated[Number, Field(ge=0.0, le=MAX_QUANTITY)]
 Positive = Annotated[Number, Field(gt=0.0, le=MAX_QUANTITY)]
-ONE_LINE, PROSE = _printable(_CONTROL_CHARACTER), _printable(_CONTROL_IN_PROSE)  # after any length rule
+ONE_LINE, PROSE = _printable(CONTROL_CHARACTERS), _printable(_CONTROL_IN_PROSE)  # after any length rule
 Text = Annotated[str, ONE_LINE]  # a name, a column
 Prose = Annotated[str, PROSE]  # a description: lines and tabs allowed
 UnitName = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,39}$")]

@@ -104,6 +104,22 @@ def excerpt(value: Any, limit: int = EXCERPT_CHARS) -> str:
     return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
+# Characters that text shown, stored or exported may not hold: control characters (C0, DEL and C1:
+# a terminal obeys them, Excel refuses them in a cell) and the bidirectional embeddings, overrides
+# and isolates (U+202A..U+202E, U+2066..U+2069), which reorder the text shown after them.
+CONTROL_CHARACTERS = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+BIDI_CONTROLS = re.compile(r"[\u202a-\u202e\u2066-\u2069]")
+
+
+def refused_character(text: str, rules) -> str | None:
+    """What ``text`` may not hold, for a message: ``"control characters (found U+001B)"`` for the
+    first ``(pattern, what)`` of ``rules`` that it matches; ``None`` if it matches none."""
+    for pattern, what in rules:
+        if found := pattern.search(text):
+            return f"{what} (found U+{ord(found.group()):04X})"
+    return None
+
+
 def excerpt_names(names, shown: int = 8) -> str:
     """Names for a message (e.g. a CSV header): the first ``shown``, each cut short, quoted."""
     names = list(names)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import io
 import json
-import re
 import tempfile
 import uuid
 import zipfile
@@ -31,7 +30,7 @@ import pandas as pd
 import sqlalchemy as sa
 
 from ..data.case import Case, parse_case, save_case, with_options
-from ..data.files import excerpt
+from ..data.files import BIDI_CONTROLS, CONTROL_CHARACTERS, excerpt, refused_character
 from ..errors import CaseError
 from ..solving.outcome import Outcome
 from ..solving.results import Result
@@ -40,13 +39,11 @@ from .engine import DAMAGED, LABEL_LENGTH, StoreError, connect, drop_unused_blob
 
 TABLES = ("market", "units", "csp", "flexibility")
 SAVE_ATTEMPTS = 5  # a save retries when a concurrent save took the same label
-# A label is one line shown in tables, messages and exported files: control characters (C0, DEL and C1, as
-# in a case's names) and the bidirectional overrides and isolates (which make "abc" read "cba") are
-# refused; zero-width spaces and joiners may be part of a label but do not make one.
-_CONTROL_CHARACTER = re.compile(r"[\x00-\x1f\x7f-\x9f]")
-_BIDI_OVERRIDE = re.compile(r"[\u202a-\u202e\u2066-\u2069]")
+# A label is one line shown in tables, messages and exported files: control characters (as in a case's
+# names) and the bidirectional overrides and isolates (which make "abc" read "cba") are refused;
+# zero-width spaces and joiners may be part of a label but do not make one.
 _ZERO_WIDTH = dict.fromkeys(map(ord, "\u200b\u200c\u200d\ufeff"))
-_REFUSED = ((_CONTROL_CHARACTER, "control characters"), (_BIDI_OVERRIDE, "bidirectional override characters"))
+_REFUSED = ((CONTROL_CHARACTERS, "control characters"), (BIDI_CONTROLS, "bidirectional override characters"))
 LISTED = ("id", "label", "created_at", "updated_at", "case_name", "delivery_date", "strategy", "markets",
           "status", "objective_eur")
 
@@ -202,9 +199,8 @@ def solved_case(case: Case, settings: Mapping[str, Any]) -> Case:
 
 
 def _clean_label(label: str) -> str:
-    for pattern, kind in _REFUSED:
-        if found := pattern.search(str(label)):
-            raise StoreError(f"the label must not contain {kind} (found U+{ord(found.group()):04X})")
+    if refused := refused_character(str(label), _REFUSED):
+        raise StoreError(f"the label must not contain {refused}")
     text = " ".join(str(label).split())
     if not text.translate(_ZERO_WIDTH).strip():
         raise StoreError("a saved run needs a label; the label is empty")
