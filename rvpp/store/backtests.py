@@ -22,9 +22,8 @@ import sqlalchemy as sa
 
 from ..data.case import Case, parse_case
 from ..data.files import excerpt
-from ..errors import CaseError
 from .codec import case_data, history_bytes, history_from, jsonable
-from .engine import (DAMAGED, StoreError, backtest_progress, backtest_records, backtests, connect,
+from .engine import (StoreError, backtest_progress, backtest_records, backtests, connect, decoding,
                      drop_unused_blobs, get_blob, now, put_blob, recommendations)
 
 STALE_AFTER_S = 600.0  # a run on another machine silent this long is taken as stopped [s]
@@ -161,13 +160,8 @@ class BacktestStore:
             if row is None:
                 raise StoreError(f"no backtest has the id {ident!r}; it may have been deleted")
             history = get_blob(connection, row.history_digest)
-        try:
+        with decoding(f"the backtest {excerpt(ident)!r} in the store"):
             return parse_case(row.case, history_from(history, "history")), dict(row.settings)
-        except CaseError:
-            raise
-        except DAMAGED as exc:
-            raise StoreError(f"the backtest {excerpt(ident)!r} is damaged in the store and cannot be opened "
-                             f"({type(exc).__name__}: {excerpt(exc, 120)})") from None
 
     def set_progress(self, ident: str, state: str, done: int, total: int, eta_s: float | None = None,
                      message: str = "", started_at: str | None = None) -> None:

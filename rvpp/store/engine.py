@@ -24,6 +24,8 @@ import os
 import re
 import urllib.parse
 import zipfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import sqlalchemy as sa
@@ -128,8 +130,19 @@ class StoreError(RvppError):
 
 
 # What decoding a damaged stored value raises: bad JSON or Parquet (ValueError, pyarrow's errors
-# among them), a missing or mistyped field, a cut zip.
+# among them), a missing or mistyped field, a cut zip. (A case that breaks a rule raises CaseError.)
 DAMAGED = (ValueError, TypeError, KeyError, AttributeError, IndexError, EOFError, OSError, zipfile.BadZipFile)
+
+
+@contextmanager
+def decoding(what: str, advice: str = "") -> Iterator[None]:
+    """Name ``what`` (a saved run, a backtest) as damaged when decoding its stored values fails,
+    instead of the decoder's own traceback."""
+    try:
+        yield
+    except DAMAGED as exc:
+        raise StoreError(f"{what} is damaged and cannot be opened ({type(exc).__name__}: {excerpt(exc, 120)})"
+                         f"{advice}") from None
 
 
 def default_url() -> str:

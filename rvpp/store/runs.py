@@ -31,11 +31,11 @@ import sqlalchemy as sa
 
 from ..data.case import Case, parse_case, save_case, with_options
 from ..data.files import BIDI_CONTROLS, CONTROL_CHARACTERS, excerpt, refused_character
-from ..errors import CaseError
 from ..solving.outcome import Outcome
 from ..solving.results import Result
 from .codec import case_data, history_bytes, history_from, jsonable
-from .engine import DAMAGED, LABEL_LENGTH, StoreError, connect, drop_unused_blobs, get_blob, now, put_blob, runs
+from .engine import (LABEL_LENGTH, StoreError, connect, decoding, drop_unused_blobs, get_blob, now, put_blob,
+                     runs)
 
 TABLES = ("market", "units", "csp", "flexibility")
 SAVE_ATTEMPTS = 5  # a save retries when a concurrent save took the same label
@@ -134,16 +134,11 @@ class RunLibrary:
                 raise _no_run(run_id)
             history = get_blob(connection, row.history_digest)
             tables = get_blob(connection, row.tables_digest) if row.tables_digest else None
-        try:
+        with decoding(f"the saved run {excerpt(run_id)!r}", "; delete it"):
             info = RunInfo(**{k: getattr(row, k) for k in LISTED})
             case = parse_case(row.case, history_from(history, row.settings.get("history_source", "history")))
             result = _result_from(solved_case(case, row.settings), row.result, tables) if row.result else None
             return SavedRun(info=info, case=case, settings=dict(row.settings), result=result)
-        except CaseError:
-            raise
-        except DAMAGED as exc:
-            raise StoreError(f"the saved run {excerpt(run_id)!r} is damaged and cannot be opened "
-                             f"({type(exc).__name__}: {excerpt(exc, 120)}); delete it") from None
 
     def rename(self, run_id: str, label: str) -> RunInfo:
         """Give a run a new label; refused if another run has it."""
