@@ -203,8 +203,8 @@ def _parser() -> argparse.ArgumentParser:
     solve.add_argument("--dt", type=choice_of(ALLOWED_DT_H, "h"), help="period length in hours: 1, 0.5 or 0.25")
     solve.add_argument("--time-limit", type=Number(0, MAX_QUANTITY, low_open=True, unit="s"), metavar="S",
                        help="solver time limit in seconds")
-    solve.add_argument("--gap", type=Number(0, 1, high_open=True), help="relative MIP gap in [0, 1) (default: the case's solver.rel_gap, 1e-4 in the "
-                            "bundled case)")
+    solve.add_argument("--gap", type=Number(0, 1, high_open=True),
+                       help="relative MIP gap in [0, 1) (default: the case's solver.rel_gap, 1e-4 in the bundled case)")
     solve.add_argument("--threads", type=Number(0, MAX_THREADS, whole=True),
                        help="HiGHS threads (0 = HiGHS default)")
     solve.add_argument("--out", type=path_option, default=Path("out"), help="output folder (default: ./out)")
