@@ -1,4 +1,4 @@
-"""Shared fixtures: the paper case and cached solves of it."""
+"""Shared fixtures: the paper case and cached solves of it, and a data folder of a test's own."""
 
 from __future__ import annotations
 
@@ -36,3 +36,19 @@ def paper_solve(paper_case):
 def cyclic_solve(paper_case):
     """The same with a cyclic storage day (:func:`tests.factories.cyclic_storage`)."""
     return cached_solves(cyclic_storage(paper_case))
+
+
+@pytest.fixture
+def data_dir(tmp_path, monkeypatch):
+    """A data folder of this test's own (the store, the run library and a launched backtest read the
+    environment at each call); the folder itself is made by the first write."""
+    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
+    folder = tmp_path / "rvpp-data"
+    monkeypatch.setenv("RVPP_DATA_DIR", str(folder))
+    return folder
+
+
+@pytest.fixture
+def run_library(data_dir):
+    """The URL of the run library in this test's own data folder (:func:`data_dir`)."""
+    return f"sqlite:///{data_dir / 'rvpp.sqlite3'}"

@@ -134,3 +134,14 @@ def click(at, key: str):
     at.button(key=key).click().run()
     assert not at.exception, at.exception
     return at
+
+
+def one_day_backtest_form(at, day, label: str):
+    """The Backtest page's form filled for one day of the deterministic plan, without the
+    perfect-information plan, labelled ``label`` (not yet started)."""
+    at.date_input(key="backtest_first").set_value(day)
+    at.date_input(key="backtest_last").set_value(day)
+    at.multiselect(key="backtest_strategies").set_value(["deterministic"])
+    at.checkbox(key="backtest_perfect").uncheck()
+    at.text_input(key="backtest_label").input(label)
+    return at

@@ -23,7 +23,8 @@ from rvpp.backtest import BacktestSettings, variants_of
 from rvpp.backtest.engine import run_backtest
 from rvpp.backtest.launch import status, stop
 from rvpp.store import BacktestStore
-from tests.test_app import NET, TIMEOUT_S, case_of, click, figures, number, open_app, shown_kpis, trace, values
+from tests.factories import click, one_day_backtest_form, open_app
+from tests.test_app import NET, TIMEOUT_S, case_of, figures, number, shown_kpis, trace, values
 
 FIRST, LAST = dt.date(2025, 5, 2), dt.date(2025, 5, 4)
 FRACTION = 0.25
@@ -43,11 +44,7 @@ def recorded(paper_case, tmp_path_factory):
     return folder, ident
 
 
-@pytest.fixture(autouse=True)
-def data_dir(tmp_path, monkeypatch):
-    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
-    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
-    return tmp_path / "rvpp-data"
+pytestmark = pytest.mark.usefixtures("data_dir")  # every test writes into a data folder of its own
 
 
 @pytest.fixture
@@ -171,12 +168,7 @@ def test_the_recommended_strategy_is_offered_only_once_remembered_and_solves_wit
 
 @pytest.mark.slow
 def test_a_backtest_started_on_the_page_runs_in_its_own_process(data_dir):
-    at = open_app("backtest")
-    at.date_input(key="backtest_first").set_value(LAST)
-    at.date_input(key="backtest_last").set_value(LAST)
-    at.multiselect(key="backtest_strategies").set_value(["deterministic"])
-    at.checkbox(key="backtest_perfect").uncheck()
-    at.text_input(key="backtest_label").input("one day")
+    at = one_day_backtest_form(open_app("backtest"), LAST, "one day")
     click(at, "backtest_start")
     assert not at.error and "Started in the background" in at.info[0].value
     store = BacktestStore(f"sqlite:///{data_dir / STORE_FILE}")

@@ -22,12 +22,7 @@ HOSTILE_FILE = "x](https://evil.example) ![](https://evil.example/p.png).zip"
 EMOJI_NAME = re.compile(r":(?!material/|streamlit:)[\w+-][\w_+-]*:")
 
 
-@pytest.fixture(autouse=True)
-def run_library(tmp_path, monkeypatch):
-    """Every test saves into a store of its own (the dashboard reads the environment at each call)."""
-    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
-    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
-    return f"sqlite:///{tmp_path / 'rvpp-data' / 'rvpp.sqlite3'}"
+pytestmark = pytest.mark.usefixtures("run_library")  # every test saves into a store of its own
 
 
 def tick(at: AppTest, *rows: int) -> AppTest:

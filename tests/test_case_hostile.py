@@ -28,7 +28,7 @@ from rvpp.errors import CaseError, CaseFileError, CasePathError
 from rvpp.outputs import workbook
 from rvpp.outputs.bundle import case_zip_bytes, read_case_files
 
-from tests.factories import PAPER
+from tests.factories import PAPER, click, open_app
 
 CASE_YAML = (PAPER / "case.yaml").read_text(encoding="utf-8")
 RAW = yaml.safe_load(CASE_YAML)
@@ -324,12 +324,9 @@ def test_numbers_written_as_text_still_count(short_history):
 # ----------------------------------------------------------------------------- the dashboard's upload
 
 
-def test_the_home_page_explains_a_bad_tag_and_a_section_given_as_a_value(small_case, short_csv, tmp_path,
-                                                                         monkeypatch):
-    from tests.test_app import click, errors, open_app
+def test_the_home_page_explains_a_bad_tag_and_a_section_given_as_a_value(small_case, short_csv, data_dir):
+    from tests.test_app import errors
 
-    monkeypatch.delenv("RVPP_STORE_URL", raising=False)  # as tests/test_app.py: a store of its own
-    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
     at = open_app()
     before = at.session_state["case"]
     at.file_uploader(key="home_upload").set_value([("case.yaml", with_name("!!float abc"), "text/yaml"),

@@ -18,11 +18,7 @@ from rvpp.solving.problem import prepare
 from tests.factories import open_app
 
 
-@pytest.fixture(autouse=True)
-def run_library(tmp_path, monkeypatch):
-    """Every test saves into a store of its own (the dashboard reads the environment at each call)."""
-    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
-    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "rvpp-data"))
+pytestmark = pytest.mark.usefixtures("run_library")  # every test saves into a store of its own
 
 
 def edit(at: AppTest, key: str, **change) -> AppTest:

@@ -23,7 +23,8 @@ from rvpp.cli import _parser, main
 from rvpp.data.files import excerpt
 from rvpp.errors import CasePathError
 from rvpp.store import BacktestStore
-from tests.test_app import case_of, click, errors, open_app
+from tests.factories import click, one_day_backtest_form, open_app
+from tests.test_app import case_of, errors
 
 DAY = dt.date(2025, 5, 2)
 HOSTILE_LABELS = [("draft\x00", "0000"), ("bt\x1b]0;owned\x07\x1b[2J", "001B"), ("next\x85line", "0085"),
@@ -41,12 +42,7 @@ def store(tmp_path):
     return BacktestStore(f"sqlite:///{tmp_path / 'store.sqlite3'}")
 
 
-@pytest.fixture(autouse=True)
-def data_dir(tmp_path, monkeypatch):
-    """Every test writes into a data folder of its own (the launch and the pages read the environment)."""
-    monkeypatch.delenv("RVPP_STORE_URL", raising=False)
-    monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "data"))
-    return tmp_path / "data"
+pytestmark = pytest.mark.usefixtures("data_dir")  # every test writes into a data folder of its own
 
 
 @pytest.fixture
@@ -172,12 +168,7 @@ def test_two_starts_at_once_start_one_process(paper_case, settings, store, proce
 
 
 def test_the_page_refuses_a_hostile_label_and_a_second_start(processes, data_dir):
-    at = open_app("backtest")
-    at.date_input(key="backtest_first").set_value(DAY)
-    at.date_input(key="backtest_last").set_value(DAY)
-    at.multiselect(key="backtest_strategies").set_value(["deterministic"])
-    at.checkbox(key="backtest_perfect").uncheck()
-    at.text_input(key="backtest_label").input("bt\x1b[2J")
+    at = one_day_backtest_form(open_app("backtest"), DAY, "bt\x1b[2J")
     click(at, "backtest_start")
     assert "must not contain control characters (found U+001B)" in errors(at)
     assert not processes and not (data_dir / "backtests").exists()
