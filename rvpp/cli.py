@@ -23,8 +23,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from .data.case import (FIRST_DATE, LAST_DATE, MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets,
-                        with_options)
+from .data.case import (FIRST_DATE, ISO_DATE, LAST_DATE, MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case,
+                        parse_markets, with_options)
 from .data.files import excerpt
 from .data.periods import ALLOWED_DT_H
 from .data.variants import describe
@@ -130,7 +130,7 @@ def date_option(text: str) -> str:
     """An argparse ``type`` for a delivery date: ``YYYY-MM-DD``, a day of the calendar, within the
     dates rvpp plans; refused in the option's words (``--date: '2025-02-30' is not a day ...``)."""
     try:
-        day = dt.date.fromisoformat(text) if re.fullmatch(r"\d{4}-\d{2}-\d{2}", text) else None
+        day = dt.date.fromisoformat(text) if ISO_DATE.fullmatch(text) else None
     except ValueError:
         day = None
     if day is None:

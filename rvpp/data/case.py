@@ -101,7 +101,7 @@ TAG_MEANS = {"int": "a whole number", "float": "a number", "bool": "true or fals
 CONSTRUCTION_ERRORS = (ValueError, TypeError, AttributeError, IndexError, KeyError, OverflowError, RecursionError)
 HOURS_PER_DAY = 24
 FIRST_DATE, LAST_DATE = dt.date(1900, 1, 1), dt.date(2199, 12, 31)  # delivery dates rvpp plans
-_ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
+ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
 _ISO_TIME = re.compile(r"\d{4}-\d{2}-\d{2}[Tt ]\d")  # a date followed by a time of day
 MAX_THREADS = 1024  # HiGHS threads or worker processes; more is a typo, not a machine
 MAX_START_NAMES = 50_000  # integer variables a MIP start may name (4 CSPs at 15 minutes have about 3,700)
@@ -625,7 +625,7 @@ class Case(_Frozen):
         nor with a time of day, even midnight (a plan covers a whole delivery day)."""
         if isinstance(value, dt.datetime) or (isinstance(value, str) and _ISO_TIME.match(value)):
             raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18, without a time of day")
-        if isinstance(value, (int, float)) or (isinstance(value, str) and not _ISO_DATE.fullmatch(value)):
+        if isinstance(value, (int, float)) or (isinstance(value, str) and not ISO_DATE.fullmatch(value)):
             raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18")
         return value
 
