@@ -34,7 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.common import header, write_result  # noqa: E402
 from rvpp import load_case  # noqa: E402
 from rvpp.backtest import BacktestSettings, metrics, run_backtest, variants_of  # noqa: E402
-from rvpp.cli import Number  # noqa: E402
+from rvpp.cli.options import Number  # noqa: E402
 from rvpp.data.case import STRATEGIES  # noqa: E402
 from rvpp.solving.parallel import default_workers, open_executor  # noqa: E402
 from rvpp.store import BacktestStore  # noqa: E402

@@ -17,7 +17,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import header, write_result  # noqa: E402
-from rvpp.cli import Number  # noqa: E402
+from rvpp.cli.options import Number  # noqa: E402
 from rvpp.data import synth  # noqa: E402
 
 TARGET_S = 15.0  # a fresh machine rebuilds the default history within this

@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import CASE, DAYS, QUICK_DAYS, STRATEGIES, header, summary, write_result  # noqa: E402
 from rvpp import load_case, solve, with_options  # noqa: E402
-from rvpp.solving.problem import prepare, tied_budgets  # noqa: E402
+from rvpp.uncertainty.problem import prepare, tied_budgets  # noqa: E402
 
 # Targets [s] of build + solve + extract per strategy: median and worst day.
 TARGETS = {1.0: {"median": 0.3, "max": 1.0}, 0.25: {"median": 2.0, "max": 5.0}}
@@ -63,7 +63,7 @@ def year_pairs(year: int = TIE_YEAR) -> list[tuple[str, str]]:
 def tie_days(base, dt_h: float, pairs: list[tuple[str, str]]) -> list[tuple[str, str]]:
     """The ``pairs`` where the case's budgets leave the solver to place some deviations: tied
     deviations straddle the Γ boundary of a source (paper mode, top-Γ). Read from the bands,
-    as :func:`rvpp.solving.robust.budget_choices` reads it from a built model, without building
+    as :func:`rvpp.model.robust.budget_choices` reads it from a built model, without building
     a model for each of the year's pairs."""
     return [(day, strategy) for day, strategy in pairs
             if tied_budgets(prepare(with_options(base, strategy=strategy, dt_h=dt_h, date=day)))]

@@ -2,7 +2,7 @@
 
 For every N, the N whole days the study samples from the training window of the
 default day (same seed as ``rvpp.studies.stochastic``) are solved by
-``rvpp.settle.recourse.solve_stochastic`` with a relative gap of 0.5 % and a time limit
+``rvpp.settle.stochastic.solve_stochastic`` with a relative gap of 0.5 % and a time limit
 of 120 s; the JSON holds each N's status, gap, bound, wall time, HiGHS's node and
 LP-iteration counts, next to the paper's CPLEX times. Writes
 ``benchmarks/results/stochastic.json``.
@@ -22,7 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import CASE, header, write_result  # noqa: E402
 from rvpp import load_case, with_options  # noqa: E402
-from rvpp.settle.recourse import Penalties, solve_stochastic  # noqa: E402
+from rvpp.settle.recourse import Penalties
+from rvpp.settle.stochastic import solve_stochastic
 from rvpp.studies.evaluation import realizations, sample_days, training_days  # noqa: E402
 from rvpp.studies.settings import SCENARIO_COUNTS, StudySettings  # noqa: E402
 

@@ -28,7 +28,7 @@ import pandas as pd  # noqa: E402
 
 import rvpp  # noqa: E402
 from benchmarks.common import header, write_result  # noqa: E402
-from rvpp.cli import Number  # noqa: E402
+from rvpp.cli.options import Number  # noqa: E402
 from rvpp.solving.parallel import default_workers, open_executor  # noqa: E402
 from rvpp.studies import markets, out_of_sample, sensitivity, stochastic  # noqa: E402
 from rvpp.studies.settings import SCENARIO_COUNTS, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings  # noqa: E402

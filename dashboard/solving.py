@@ -54,7 +54,7 @@ import streamlit as st
 import rvpp
 from rvpp import Case, CaseError, Problem, Result, RvppError
 from rvpp.solving.outcome import Outcome
-from rvpp.solving.problem import tied_budgets
+from rvpp.uncertainty.problem import tied_budgets
 
 from . import widgets, worker
 from .state import REQUESTED, ROOT, case_key
@@ -290,7 +290,7 @@ def _case_shape(case: Case) -> tuple:
 
 def tied(case: Case) -> list[str]:
     """The deviations tied at the Γ boundary that a solve of ``case`` leaves to the solver
-    (:func:`rvpp.solving.problem.tied_budgets`) on the day :func:`prepare_cached` keeps, empty
+    (:func:`rvpp.uncertainty.problem.tied_budgets`) on the day :func:`prepare_cached` keeps, empty
     when the case cannot be prepared (its solve says why)."""
     try:
         return tied_budgets(prepare_cached(case))

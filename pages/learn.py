@@ -7,7 +7,7 @@ from dashboard import solving, state, sweeps, widgets
 from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure,
                         thin_clock_ticks)
-from rvpp.solving.problem import top_gamma_deviation
+from rvpp.uncertainty.problem import top_gamma_deviation
 
 state.through_app("pages/learn.py")
 

@@ -15,7 +15,7 @@ from rvpp.data.case import PRICE_MODELS
 from rvpp.data.edits import PERIOD_NAMES
 from rvpp.data.files import excerpt
 from rvpp.outputs.plots import band_overlays, bands_figure, deviating_periods, thin_clock_ticks
-from rvpp.solving.problem import STRATEGY_BUDGETS_H, strategy_budgets
+from rvpp.uncertainty.problem import STRATEGY_BUDGETS_H, strategy_budgets
 from rvpp.uncertainty.forecast import band_specs, has_forecast
 
 state.through_app("pages/uncertainty.py")

@@ -15,9 +15,9 @@ its validation load without the optimisation stack (Pyomo, HiGHS).
 from importlib import import_module
 
 _EXPORTS = {
-    "Case": "data.case", "load_case": "data.case", "save_case": "data.case", "with_options": "data.case",
+    "Case": "data.case", "load_case": "data.case_yaml", "save_case": "data.case_yaml", "with_options": "data.variants",
     "CaseError": "errors", "ModelError": "errors", "RvppError": "errors",
-    "Problem": "solving.problem", "prepare": "solving.problem",
+    "Problem": "uncertainty.problem", "prepare": "uncertainty.problem",
     "Result": "solving.results", "Search": "solving.outcome",
     "audit_export": "settle.audit", "audit_result": "settle.audit",
     "write_plan": "outputs.export",

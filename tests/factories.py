@@ -13,7 +13,7 @@ import pandas as pd
 from rvpp.data.case import parse_case
 from rvpp.data.history import History
 from rvpp.data.periods import delivery_periods
-from rvpp.solving.problem import problem_from_bands
+from rvpp.uncertainty.problem import problem_from_bands
 
 ROOT = Path(__file__).resolve().parent.parent
 # The real Spanish data (never committed): RVPP_SPAIN_DATA, or shared/data/spain beside the project.

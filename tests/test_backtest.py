@@ -193,7 +193,7 @@ def test_the_plan_of_a_day_reads_nothing_of_the_day_itself_or_after(paper_case):
 def test_a_day_without_a_plan_bids_nothing_and_is_still_settled(paper_case, monkeypatch):
     from rvpp.backtest import engine
     from rvpp.solving.outcome import Outcome
-    from rvpp.solving.problem import prepare
+    from rvpp.uncertainty.problem import prepare
     from rvpp.solving.results import Result
 
     def no_plan(case):

@@ -8,7 +8,7 @@ import datetime as dt
 import pytest
 
 from rvpp.backtest import BacktestSettings, variants_of
-from rvpp.backtest.cli import settings_from
+from rvpp.cli.backtest import settings_from
 from rvpp.backtest.launch import command_line, start, status, stop
 from rvpp.backtest.settings import parse_day
 from rvpp.cli import _parser

@@ -22,7 +22,8 @@ import yaml
 
 from rvpp import load_case
 from rvpp.cli import main
-from rvpp.data.case import parse_case, read_case_yaml
+from rvpp.data.case import parse_case
+from rvpp.data.case_yaml import read_case_yaml
 from rvpp.data.history import History
 from rvpp.errors import CaseError, CaseFileError, CasePathError
 from rvpp.outputs import workbook

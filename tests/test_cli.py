@@ -464,7 +464,7 @@ def test_a_second_ctrl_c_gives_up_and_the_command_says_so(monkeypatch, capsys):
 
 
 def test_a_long_search_reports_itself_every_few_seconds():
-    from rvpp.cli import SEARCH_REPORT_S, SearchStop
+    from rvpp.cli.solve import SEARCH_REPORT_S, SearchStop
     from rvpp.solving.outcome import Search
 
     said = []

@@ -67,7 +67,7 @@ def _twins(case, n: int = 2):
 
 def test_identical_csps_are_paired_and_budgets_that_differ_part_them(paper_case):
     from rvpp.model.csp import identical_csp_pairs
-    from rvpp.solving.problem import prepare
+    from rvpp.uncertainty.problem import prepare
 
     case = _twins(with_options(paper_case, strategy="balanced"), 3)
     names = [c.name for c in case.csp]

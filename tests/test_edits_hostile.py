@@ -14,7 +14,7 @@ import rvpp
 from rvpp.data import edits
 from rvpp.data.history import PRICE_COLUMNS, History
 from rvpp.outputs import workbook
-from rvpp.solving.problem import prepare
+from rvpp.uncertainty.problem import prepare
 from tests.factories import open_app
 
 

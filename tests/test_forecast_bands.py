@@ -16,7 +16,7 @@ from rvpp.data.case import parse_case
 from rvpp.data.history import History
 from rvpp.data.periods import delivery_periods
 from rvpp.errors import CaseError
-from rvpp.solving.problem import prepare
+from rvpp.uncertainty.problem import prepare
 from rvpp.uncertainty.forecast import BandSpec, forecast_and_errors, forecast_error_bands, level_quantiles
 from rvpp.uncertainty.quality import score
 from tests.factories import SPAIN, demand, wind
@@ -233,7 +233,7 @@ def test_case_refuses_forecast_bands_it_cannot_draw():
 
 
 def test_case_round_trips_its_new_fields(tmp_path):
-    from rvpp.data.case import load_case, save_case
+    from rvpp.data.case_yaml import load_case, save_case
 
     case = _case(bands={"wind": "forecast"}, forecast_series="W_fc", price_forecast="blend")
     case = case.replace(provenance={"W": {"origin": "real", "source": "a file, sha256 0123"}})

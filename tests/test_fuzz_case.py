@@ -21,7 +21,8 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rvpp.data.case import parse_case, with_options
+from rvpp.data.case import parse_case
+from rvpp.data.variants import with_options
 from rvpp.data.history import History
 from rvpp.errors import CaseError, RvppError
 from rvpp.outputs.bundle import read_case_files

@@ -18,7 +18,7 @@ from rvpp.settle.recourse import Penalties, build_recourse_model, first_stage, r
 from rvpp.solving.highs import compile_model, run_highs
 from rvpp.solving.linear import TrivialInfeasibility, Unsupported, standard_form
 from rvpp.solving.outcome import Outcome
-from rvpp.solving.robust import set_budgets
+from rvpp.model.robust import set_budgets
 from rvpp.solving.sweep import with_budgets
 from tests.factories import cyclic_storage
 

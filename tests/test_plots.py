@@ -9,7 +9,7 @@ import pytest
 import rvpp
 from rvpp.outputs import plots
 from rvpp.settle.audit import price_exposures
-from rvpp.solving.problem import top_gamma_deviation
+from rvpp.uncertainty.problem import top_gamma_deviation
 
 
 @pytest.fixture(scope="module")

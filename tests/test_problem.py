@@ -11,7 +11,7 @@ from rvpp.model import build_model
 from rvpp.solving.highs import run_highs
 from rvpp.solving.outcome import Outcome
 from rvpp.solving.plan import solve_problem
-from rvpp.solving.problem import budget_split, infeasibility_reasons
+from rvpp.uncertainty.problem import budget_split, infeasibility_reasons
 
 from tests.factories import demand, heat, tiny_case, tiny_problem, wind
 

@@ -12,7 +12,8 @@ import pytest
 import rvpp
 from rvpp.errors import RvppError
 from rvpp.settle.recourse import (FirstStage, Penalties, Realization, evaluate, first_stage, nominal_realization,
-                                  realization, realized_problem, set_fingerprint, solve_stochastic, values_fingerprint)
+                                  realization, realized_problem, set_fingerprint, values_fingerprint)
+from rvpp.settle.stochastic import solve_stochastic
 from rvpp.solving.plan import solve_problem
 
 from tests.factories import heat, tiny_case, wind
@@ -281,7 +282,8 @@ def test_a_shortfall_of_energy_and_reserve_and_heat_adds_up():
 def test_the_stochastic_start_is_a_complete_feasible_point_worth_its_settlements(paper):
     import pyomo.environ as pyo
 
-    from rvpp.settle.recourse import build_recourse_model, recourse_start
+    from rvpp.settle.recourse import build_recourse_model
+    from rvpp.settle.stochastic import recourse_start
 
     days = [paper.delivery_date - dt.timedelta(days=k) for k in (2, 9)]
     reals = [realization(paper, d) for d in days]

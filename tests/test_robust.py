@@ -12,8 +12,8 @@ from rvpp import solve_problem
 from rvpp.settle.audit import audit_day, audit_result, audit_tables, protection_exact
 from rvpp.data.case import SolverSettings
 from rvpp.model import build_model
-from rvpp.solving.problem import tied_budgets
-from rvpp.solving.robust import add_price_protection, budget_choices
+from rvpp.uncertainty.problem import tied_budgets
+from rvpp.model.robust import add_price_protection, budget_choices
 from rvpp.solving.highs import run_highs
 from rvpp.solving.sweep import sweep_parts
 from rvpp.solving.outcome import Outcome

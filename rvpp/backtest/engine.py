@@ -5,7 +5,7 @@ day ``D`` of the period, one pure step (:func:`run_day`):
 
 1. **plan**: the case of day ``D`` starting from the state the settlement of ``D − 1``
    left (storage energy, turbine status and time in it), bands from the history before
-   ``D`` (:func:`rvpp.solving.problem.prepare` reads nothing of ``D`` itself), solved by
+   ``D`` (:func:`rvpp.uncertainty.problem.prepare` reads nothing of ``D`` itself), solved by
    :func:`plan`, on hourly days with ``D − 1``'s plan as MIP start (its integer variables
    at one, ``plan_integer_ones`` in the record);
 2. **settle**: the plan's first-stage bids re-dispatched against ``D``'s own observations
@@ -91,7 +91,7 @@ def day_history(case: Case, day: dt.date, margin_days: int = HISTORY_MARGIN_DAYS
     """``case`` with only the history a day needs: its band window (plus ``margin_days``) and the day.
 
     Keeps tasks small when they travel to workers; the plan and settlement are the same
-    as on the whole history (a test checks it), since :func:`rvpp.solving.problem.prepare`
+    as on the whole history (a test checks it), since :func:`rvpp.uncertainty.problem.prepare`
     reads the window before the day and the settlement the day itself.
     """
     first = pd.Timestamp(day - dt.timedelta(days=case.uncertainty.window_days + margin_days)).tz_localize(case.timezone)

@@ -36,12 +36,13 @@ from typing import Any
 
 import pandas as pd
 
-from ..data.case import save_case
+from ..data.case_yaml import save_case
 from ..data.files import excerpt_names
 from ..store import BacktestStore
 from . import metrics
 from .engine import BIDS
 from .settings import BacktestError
+from .. import __version__
 
 ROOT = Path(__file__).resolve().parents[2]
 NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp", "plan_integer_ones")
@@ -113,7 +114,6 @@ def export(store: BacktestStore, ident: str, folder: str | Path, extra: dict[str
     checked before anything is written and again just before the swap). ``extra`` tables are
     written beside the others (CSV and Parquet); ``notes`` go into the manifest.
     """
-    from .. import __version__
 
     folder = Path(folder)
     check_replaceable_export(folder)

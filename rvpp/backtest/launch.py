@@ -22,7 +22,8 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..data.case import Case, load_case, save_case
+from ..data.case import Case
+from ..data.case_yaml import load_case, save_case
 from ..data.files import BIDI_CONTROLS, CONTROL_CHARACTERS, excerpt, refused_character
 from ..store import BacktestStore
 from ..store.backtests import BacktestProgress, backtest_id

@@ -26,6 +26,7 @@ from ..store import BacktestStore
 from . import metrics
 from .engine import Progress, run_backtest
 from .settings import FRACTION, PERFECT, PRESET, BacktestError, BacktestSettings, BacktestVariant, variants_of
+from .export import export
 
 CRITERIA = {"mean": "mean_net_cost_eur", "cvar95": "cvar95_net_cost_eur"}
 CRITERION_NAMES = {"mean": "mean daily net cost", "cvar95": "CVaR 95 % of the daily net cost"}
@@ -173,7 +174,6 @@ def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test) ->
 
 def write_recommendation(result: Recommendation, store: BacktestStore, folder: str | Path) -> Path:
     """The backtest's export (:func:`.export.export`) plus ``curve``, ``comparison`` and the verdict."""
-    from .export import export
 
     notes = {"recommendation": {"fraction": result.fraction, "criterion": result.criterion,
                                 "train": [d.isoformat() for d in result.train],

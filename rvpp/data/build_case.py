@@ -44,7 +44,8 @@ import pandas as pd
 
 from ..errors import CaseError, DataImportError, RvppError
 from . import synth
-from .case import CASE_FILE, Case, load_case, parse_case, save_case
+from .case import Case, CASE_FILE, parse_case
+from .case_yaml import load_case, save_case
 from .history import History
 from .importers import ImportReport, fill_gaps, hourly_table, import_files
 

@@ -1,9 +1,10 @@
 """The case: typed, validated, immutable inputs of one RVPP.
 
 A case is a folder holding ``case.yaml`` (units and settings) and the hourly history
-CSV it names. Every object here is frozen and hashable, so a case can key a cache.
-Validation happens on creation and every error names the unit, the field, the value
-and the rule, e.g. ``csp "CSP1": storage.e_min_mwh_th=1200 must be <
+CSV it names (read and written by :mod:`rvpp.data.case_yaml`). Every object here is
+frozen and hashable, so a case can key a cache. Validation happens on creation and
+every error names the unit, the field, the value and the rule (rendered by
+:mod:`rvpp.data.case_messages`), e.g. ``csp "CSP1": storage.e_min_mwh_th=1200 must be <
 storage.e_max_mwh_th=1100``. Parameters follow MODEL_SPEC §12 (paper Tables 3-7);
 efficiencies and shares are fractions in [0, 1].
 """
@@ -12,21 +13,18 @@ from __future__ import annotations
 
 import datetime as dt
 import math
-import os
 import re
 from collections.abc import Iterator, Mapping
-from pathlib import Path, PurePosixPath
 from typing import Annotated, Any, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-import yaml
-from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, ValidationError,
-                      field_serializer, field_validator, model_validator)
+from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_serializer, field_validator,
+                      model_validator)
 from pydantic_core import PydanticCustomError
 
-from ..errors import CaseError, CaseFileError, CasePathError, require
-from .files import (CONTROL_CHARACTERS, MIB, decode_text, excerpt, excerpt_names, inside_folder, read_file,
-                    refused_character, relative_path)
+from ..errors import CaseError
+from .case_messages import as_number, kind_of, show_value, validate_into
+from .files import CONTROL_CHARACTERS, excerpt, excerpt_names, refused_character
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .periods import ALLOWED_DT_H
 
@@ -83,22 +81,6 @@ Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
 MARKET_NAMES = ("DAM", "SRM", "HPA")
 RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}
 CASE_FILE = "case.yaml"
-MAX_CASE_YAML_BYTES = MIB  # a case.yaml of 100 units is about 80 KiB
-MAX_YAML_DEPTH = 32        # nesting levels (a case uses five)
-MAX_YAML_VALUES = 100_000  # values once aliases are expanded (a case of 100 units holds about 10,000)
-YAML_TAG = "tag:yaml.org,2002:"
-# Explicit tags a case may carry: those of plain data (``name: !!str 2025``). The other standard
-# tags build values a case has no use for (!!binary, !!set, !!omap, !!pairs; a date is written
-# plainly, without !!timestamp) and any other tag names a constructor rvpp does not have: both are
-# refused from the parser's events, before anything is built.
-PLAIN_TAGS = frozenset(YAML_TAG + kind for kind in ("str", "int", "float", "bool", "null", "seq", "map"))
-NON_SPECIFIC_TAG = "!"  # "! x": no tag named (PyYAML reads the value as if untagged)
-# What a value of a standard tag must be, for a message when it cannot be built (``!!float abc``).
-TAG_MEANS = {"int": "a whole number", "float": "a number", "bool": "true or false", "null": "an empty value",
-             "timestamp": "a valid date or time (a date is written 2025-03-18)", "str": "text", "seq": "a list",
-             "map": "a mapping"}
-# What PyYAML's constructors raise, besides its own errors, for a value they cannot build.
-CONSTRUCTION_ERRORS = (ValueError, TypeError, AttributeError, IndexError, KeyError, OverflowError, RecursionError)
 HOURS_PER_DAY = 24
 FIRST_DATE, LAST_DATE = dt.date(1900, 1, 1), dt.date(2199, 12, 31)  # delivery dates rvpp plans
 ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
@@ -370,11 +352,11 @@ class Markets(_Frozen):
         field = "hpa_tariff_eur_per_mwh"
         if not isinstance(value, (list, tuple)):
             raise ValueError(f"{field} must be a list of 24 tariffs [EUR/MWh_th], one per clock hour 00:00 to "
-                             f"23:00; got {_kind_of(value)}")
+                             f"23:00; got {kind_of(value)}")
         if len(value) != HOURS_PER_DAY:
             raise ValueError(f"{field} has {len(value)} values; give 24, one per clock hour 00:00 to 23:00")
-        numbers = [_as_number(tariff) for tariff in value]
-        problems = [f"{field} hour {hour:02d}:00 = {_show(tariff)} "
+        numbers = [as_number(tariff) for tariff in value]
+        problems = [f"{field} hour {hour:02d}:00 = {show_value(tariff)} "
                     + (number if isinstance(number, str) else
                        "must be >= 0" if number < 0 else f"must be <= {MAX_QUANTITY:g}")
                     for hour, (tariff, number) in enumerate(zip(value, numbers))
@@ -480,24 +462,24 @@ class Budgets(_Frozen):
             pairs = [tuple(p) for p in value]
         else:
             raise ValueError(f"overrides must be a mapping of source: Γ [periods], e.g. {{price_da: 6, WF1: 3}}; "
-                             f"got {_kind_of(value)}")
+                             f"got {kind_of(value)}")
         problems = []
         names = [source for source, _ in pairs]
         for source, gamma in pairs:
             if not isinstance(source, str):
-                problems.append(f"overrides: source {_show(source)} must be a name such as price_da or WF1")
+                problems.append(f"overrides: source {show_value(source)} must be a name such as price_da or WF1")
                 continue
             if names.count(source) > 1:
                 problems.append(f"overrides name {source!r} more than once")
                 continue
-            number = _as_number(gamma, whole=True)
+            number = as_number(gamma, whole=True)
             if isinstance(number, str):
-                problems.append(f"overrides.{excerpt(source)}={_show(gamma)} {number} [periods]")
+                problems.append(f"overrides.{excerpt(source)}={show_value(gamma)} {number} [periods]")
             elif number < 0:
-                problems.append(f"overrides.{excerpt(source)}={_show(gamma)} must be >= 0 [periods]")
+                problems.append(f"overrides.{excerpt(source)}={show_value(gamma)} must be >= 0 [periods]")
         if problems:
             raise ValueError("\n".join(dict.fromkeys(problems)))
-        return tuple(sorted((source, _as_number(gamma, whole=True)) for source, gamma in pairs))
+        return tuple(sorted((source, as_number(gamma, whole=True)) for source, gamma in pairs))
 
     @property
     def override_map(self) -> dict[str, int]:
@@ -624,9 +606,10 @@ class Case(_Frozen):
         """A date is written as one (``2025-03-18``): never as a number of seconds since 1970,
         nor with a time of day, even midnight (a plan covers a whole delivery day)."""
         if isinstance(value, dt.datetime) or (isinstance(value, str) and _ISO_TIME.match(value)):
-            raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18, without a time of day")
+            raise ValueError(f"delivery_date={show_value(value)} must be a date such as 2025-03-18, "
+                             "without a time of day")
         if isinstance(value, (int, float)) or (isinstance(value, str) and not ISO_DATE.fullmatch(value)):
-            raise ValueError(f"delivery_date={_show(value)} must be a date such as 2025-03-18")
+            raise ValueError(f"delivery_date={show_value(value)} must be a date such as 2025-03-18")
         return value
 
     @field_validator("delivery_date")
@@ -779,9 +762,6 @@ def _require_within(name: str, value: float | None, low: str, lval: float, high:
         raise ValueError(f"{name}={value:g} must lie in [{low}={lval:g}, {high}={hval:g}]")
 
 
-# ----------------------------------------------------------------------------- parsing
-
-
 def parse_case(data: Mapping[str, Any], history: History) -> Case:
     """Build a :class:`Case` from plain data (the ``case.yaml`` layout).
 
@@ -789,7 +769,7 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
     value and rule in the words of ``case.yaml``.
     """
     if not isinstance(data, Mapping):
-        raise CaseError(f"{CASE_FILE}: the top level must be a mapping of settings, got {_kind_of(data)}")
+        raise CaseError(f"{CASE_FILE}: the top level must be a mapping of settings, got {kind_of(data)}")
     problems: list[str] = []
     for key in data:
         if key not in _TOP_FIELDS:
@@ -801,13 +781,13 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
             problems.append(f"{key}: section is {'empty' if key in data else 'required'}; it needs at least "
                             "hpa_tariff_eur_per_mwh")
             continue
-        sections[key] = _validate(model, {} if raw is None else raw, key, problems)  # blank: the defaults
+        sections[key] = validate_into(model, {} if raw is None else raw, key, problems)  # blank: the defaults
     units = _parse_units(data.get("units"), problems)
     if problems:
         raise CaseError(problems)
     top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "provenance")
            if k in data and not (k == "provenance" and data[k] is None)}
-    case = _validate(Case, {**top, **sections, **units, "history": history}, "", problems)
+    case = validate_into(Case, {**top, **sections, **units, "history": history}, "", problems)
     if problems:
         raise CaseError(problems)
     return case
@@ -820,7 +800,7 @@ def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:
         problems.append(f"units: section is required; list the units of the case under {kinds}")
         return {}
     if not isinstance(raw_units, Mapping):
-        problems.append(f"units: must be a mapping of unit lists ({kinds}); got {_kind_of(raw_units)}")
+        problems.append(f"units: must be a mapping of unit lists ({kinds}); got {kind_of(raw_units)}")
         return {}
     for kind in raw_units:
         if kind not in UNIT_KINDS:
@@ -829,20 +809,20 @@ def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:
     for kind in UNIT_KINDS:
         entries = raw_units.get(kind) or []
         if not isinstance(entries, (list, tuple)):
-            problems.append(f"units.{kind}: must be a list of units; got {_kind_of(entries)}")
+            problems.append(f"units.{kind}: must be a list of units; got {kind_of(entries)}")
             continue
         built = []
         for i, entry in enumerate(entries, start=1):
             if not isinstance(entry, Mapping):
                 problems.append(f"units.{kind} item {i}: must be a mapping of fields (name: ..., ...); got "
-                                f"{_kind_of(entry)}")
+                                f"{kind_of(entry)}")
                 continue
             name = entry.get("name")
             label = f'{kind} "{excerpt(name)}"' if isinstance(name, str) and name else f"units.{kind} item {i}"
             payload = dict(entry)
             if kind in ("wind", "pv"):
                 payload.setdefault("kind", kind)
-            unit = _validate(_UNIT_MODELS[kind], payload, label, problems)
+            unit = validate_into(_UNIT_MODELS[kind], payload, label, problems)
             if unit is not None:
                 built.append(unit)
         units[kind] = tuple(built)
@@ -850,419 +830,3 @@ def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:
             and not any(kind not in UNIT_KINDS for kind in raw_units):
         problems.append(f"units: no unit is listed; a case needs at least one unit under {kinds}")
     return units
-
-
-def _validate(model: type[BaseModel], raw: Any, label: str, problems: list[str]) -> Any:
-    try:
-        return model.model_validate(raw)
-    except ValidationError as err:
-        problems.extend(_describe(err, label))
-        return None
-
-
-def _describe(err: ValidationError, label: str) -> list[str]:
-    """One line per error of ``err``, located as in ``case.yaml``: ``label: field.sub=value rule``.
-
-    ``label`` names the section or unit (``markets``, ``csp "CSP1"``); empty for the top
-    level. Lists are located by what their items mean (``breakpoints point 2 input``),
-    never by an internal index.
-    """
-    prefix = f"{label}: " if label else ""
-    lines = []
-    for e in err.errors():
-        where = _where(e["loc"])
-        kind, ctx = e["type"], e.get("ctx") or {}
-        if kind == "value_error":
-            for line in str(ctx.get("error", e["msg"])).splitlines():
-                shown = line if not where or line.startswith(where.split(" ")[0]) else f"{where}: {line}"
-                lines.append(line if not label and not where else prefix + shown)
-        elif kind == "missing":
-            lines.append(f"{prefix}{where} is required")
-        elif kind == "extra_forbidden":
-            lines.append(f'{prefix}unknown field "{excerpt(where)}"')
-        elif not where:
-            lines.append(f"{prefix}{_rule(kind, ctx, e['msg'])}; got {_kind_of(e.get('input'))}")
-        else:
-            lines.append(f"{prefix}{where}={_show(e.get('input'))} {_rule(kind, ctx, e['msg'])}")
-    return list(dict.fromkeys(lines))
-
-
-def _where(loc: tuple) -> str:
-    """A pydantic location as written in ``case.yaml``: ``storage.e_min_mwh_th``,
-    ``power_block.breakpoints point 2 efficiency``, ``hpa_tariff_eur_per_mwh hour 07:00``."""
-    text = ""
-    for i, part in enumerate(loc):
-        if isinstance(part, int):
-            parent = loc[i - 1] if i else None
-            if parent == "breakpoints":
-                text += f" point {part + 1}"
-            elif parent == "hpa_tariff_eur_per_mwh":
-                text += f" hour {part:02d}:00"
-            elif isinstance(parent, int) and loc[i - 2:i - 1] == ("breakpoints",):
-                text += " input" if part == 0 else " efficiency"
-            else:
-                text += f" item {part + 1}"
-        else:
-            text += ("." if text else "") + excerpt(part)
-    return text
-
-
-def _show(value: Any) -> str:
-    """A value as the user wrote it, cut short."""
-    if isinstance(value, float):
-        return f"{value:g}"
-    if isinstance(value, (list, tuple)) and len(value) > 6:
-        return f"[{len(value)} values]"
-    if isinstance(value, Mapping):
-        return "{...}" if value else "{}"
-    return repr(excerpt(value)) if isinstance(value, str) else excerpt(value)
-
-
-def _rule(kind: str, ctx: dict, msg: str) -> str:
-    """The rule a pydantic error type stands for, in the words of the case format."""
-    rules = {
-        "greater_than_equal": lambda: f"must be >= {ctx.get('ge'):g}",
-        "greater_than": lambda: f"must be > {ctx.get('gt'):g}",
-        "less_than_equal": lambda: f"must be <= {ctx.get('le'):g}",
-        "less_than": lambda: f"must be < {ctx.get('lt'):g}",
-        "float_parsing": lambda: "must be a number",
-        "float_type": lambda: "must be a number",
-        "finite_number": lambda: "must be a finite number",
-        "int_parsing": lambda: "must be a whole number",
-        "int_from_float": lambda: "must be a whole number",
-        "int_type": lambda: "must be a whole number",
-        "int_parsing_size": lambda: "must be a whole number of a sensible size",
-        "bool_parsing": lambda: "must be true or false",
-        "bool_type": lambda: "must be true or false",
-        "literal_error": lambda: f"must be {ctx.get('expected')}",
-        "string_type": lambda: "must be text (put it in quotes if it looks like a number or a date)",
-        "string_pattern_mismatch": lambda: "must start with a letter or digit and use at most 40 letters, "
-                                            "digits, '_', '.' or '-'",
-        "string_too_short": lambda: "must not be empty",
-        "string_too_long": lambda: f"must have at most {ctx.get('max_length')} characters",
-        "too_short": lambda: f"must have at least {ctx.get('min_length')} values (has {ctx.get('actual_length')})",
-        "too_long": lambda: f"must have at most {ctx.get('max_length')} values (has {ctx.get('actual_length')})",
-        "date_from_datetime_parsing": lambda: "must be a date such as 2025-03-18",
-        "date_from_datetime_inexact": lambda: "must be a date such as 2025-03-18, without a time of day",
-        "date_parsing": lambda: "must be a date such as 2025-03-18",
-        "date_type": lambda: "must be a date such as 2025-03-18",
-        "tuple_type": lambda: "must be a list",
-        "list_type": lambda: "must be a list",
-        "iterable_type": lambda: "must be a list",
-        "model_type": lambda: "must be a mapping of fields",
-        "model_attributes_type": lambda: "must be a mapping of fields",
-        "dict_type": lambda: "must be a mapping",
-        "mapping_type": lambda: "must be a mapping",
-        "is_instance_of": lambda: f"must be {ctx.get('class', 'of another type')}",
-        "recursion_loop": lambda: "is nested too deep",
-    }
-    return rules.get(kind, lambda: msg[:1].lower() + msg[1:])()
-
-
-# ----------------------------------------------------------------------------- files
-
-
-def load_case(path: str | Path) -> Case:
-    """Read a case folder (or its ``case.yaml``) and validate it.
-
-    ``case.yaml`` and the history CSV named by ``history:`` must lie inside the case
-    folder: an absolute path, a ``..`` step or a link out of the folder raises
-    :class:`~rvpp.errors.CasePathError` before the file is opened, so a case is a
-    portable folder and never reads files beside it.
-    """
-    require(path, (str, os.PathLike), "rvpp.load_case: path", "a case folder or its case.yaml")
-    path = Path(path)
-    try:
-        file = path / CASE_FILE if path.is_dir() else path
-        found = file.is_file()
-        target = file.resolve()
-        inside = target.is_relative_to(file.parent.resolve())
-    except (OSError, ValueError, RuntimeError):  # no permission, a NUL in the name, a loop of links
-        found = False
-    if not found:
-        raise CaseError(f"no {CASE_FILE} found at {excerpt(path, 200)}")
-    if not inside:  # the target is never opened nor named: it may be any file of the server
-        raise CasePathError(f"{excerpt(file.name)}: is a link to a file outside the case folder; copy the file "
-                            "into the folder")
-    data = read_case_yaml(read_file(target, file.name, max_bytes=MAX_CASE_YAML_BYTES), file.name)
-    relative = history_path(data, file.name)
-    history = History.read_csv(inside_folder(file.parent, relative, "history", file.name), source=str(relative))
-    return parse_case(data, history)
-
-
-def history_path(data: Mapping[str, Any], file: str) -> PurePosixPath:
-    """The ``history:`` of a case, checked to stay inside the case folder (nothing is opened)."""
-    return relative_path(data.get("history"), "history", file)
-
-
-def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:
-    """The settings in the bytes of a ``case.yaml`` named ``file`` (not yet validated).
-
-    The file must be UTF-8 text of at most ``MAX_CASE_YAML_BYTES``, nested at most
-    ``MAX_YAML_DEPTH`` levels and at most ``MAX_YAML_VALUES`` values once its aliases
-    are expanded, with no tag but those of ``PLAIN_TAGS``; its top level must be a
-    mapping. A value that cannot be built (``!!float abc``, ``2025-02-30``) is named by
-    its line. Raises :class:`CaseFileError`.
-    """
-    if len(data) > MAX_CASE_YAML_BYTES:
-        raise CaseFileError(f"{file}: is larger than {MAX_CASE_YAML_BYTES // 1024} KiB; a case.yaml is usually "
-                            "a few KiB")
-    text = decode_text(data, file)
-    try:
-        _check_yaml_shape(text, file)
-        loader = _CaseLoader(text)
-        loader.file = file
-        try:
-            loaded = loader.get_single_data()
-        finally:
-            loader.dispose()
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or exc
-        raise CaseFileError(f"{file}: not valid YAML{where} ({excerpt(problem, 120)})") from None
-    except CONSTRUCTION_ERRORS:  # not placed at a value by _CaseLoader.construct_object
-        raise CaseFileError(f"{file}: not valid YAML (a value cannot be read as plain data)") from None
-    if not isinstance(loaded, Mapping):
-        got = "the file is empty" if loaded is None else f"it holds {_kind_of(loaded)}"
-        raise CaseFileError(f"{file}: the top level must be a mapping of settings (name:, markets:, units:, ...); "
-                            f"{got}")
-    return dict(loaded)
-
-
-_YamlBase = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when available: fast and iterative
-
-
-class _CaseLoader(_YamlBase):
-    """PyYAML's safe loader (plain data only: no Python objects) that refuses a key written
-    twice in one mapping, at every depth, instead of keeping the last value, and reports a
-    value it cannot build (``!!float abc``, ``2025-02-30``) at its line, never as a traceback."""
-
-    file = CASE_FILE
-
-    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
-        try:
-            return super().construct_object(node, deep=deep)
-        except CONSTRUCTION_ERRORS:
-            raise yaml.constructor.ConstructorError(None, None, _cannot_build(node), node.start_mark) from None
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
-        if not isinstance(node, yaml.MappingNode):  # "!!map 5", "!!map [1, 2]"
-            raise yaml.constructor.ConstructorError(None, None, f"{_tag_name(node.tag)} must be a mapping (key: value "
-                                                    f"lines), not {_node_kind(node)}", node.start_mark)
-        lines: dict[Any, int] = {}
-        for key_node, _ in node.value:
-            if key_node.tag == "tag:yaml.org,2002:merge":  # "<<: *defaults" may be overridden on purpose
-                continue
-            key = self.construct_object(key_node, deep=True)
-            line = key_node.start_mark.line + 1
-            if not _hashable(key):
-                continue  # the base class names it
-            if key in lines:
-                raise CaseFileError(f'{self.file}: key "{excerpt(key)}" is written twice in one mapping (lines '
-                                    f"{lines[key]} and {line}); keep one")
-            lines[key] = line
-        return super().construct_mapping(node, deep=deep)
-
-
-def _tag_name(tag: str) -> str:
-    """A tag as written: ``!!float`` for the standard ones."""
-    return excerpt("!!" + tag.removeprefix(YAML_TAG) if tag.startswith(YAML_TAG) else tag, 60)
-
-
-def _node_kind(node: yaml.Node) -> str:
-    return "a list" if isinstance(node, yaml.SequenceNode) else "a mapping" if isinstance(
-        node, yaml.MappingNode) else "a single value"
-
-
-def _cannot_build(node: yaml.Node) -> str:
-    """Why the value at ``node`` cannot be built, e.g. ``'abc' is not a number`` (for ``!!float abc``)."""
-    means = TAG_MEANS.get(node.tag.removeprefix(YAML_TAG), "plain data")
-    if not isinstance(node, yaml.ScalarNode):
-        return f"{_node_kind(node)} here cannot be read as {means}"
-    return f"{excerpt(node.value)!r} is not {means}"
-
-
-def _hashable(value: Any) -> bool:
-    try:
-        hash(value)
-    except TypeError:
-        return False
-    return True
-
-
-def _check_yaml_shape(text: str, file: str) -> None:
-    """Refuse YAML nested too deep, too large once aliases are expanded (a "billion laughs") or
-    carrying a tag other than those of plain data, from the parser's events, before any value is built."""
-    total = 0
-    sizes: dict[str, int] = {}
-    stack: list[list] = [[None, 0]]  # [anchor, expanded values so far] of each open collection
-    for event in yaml.parse(text, Loader=_YamlBase):
-        tag = getattr(event, "tag", None)
-        if tag not in (None, NON_SPECIFIC_TAG) and tag not in PLAIN_TAGS:
-            raise CaseFileError(f"{file}: the YAML tag {_tag_name(tag)} at line {event.start_mark.line + 1}, column "
-                                f"{event.start_mark.column + 1} is not allowed in a case; remove it (a case holds "
-                                "text, numbers, true/false, dates, lists and mappings; put text in quotes)")
-        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
-            if len(stack) > MAX_YAML_DEPTH:
-                raise CaseFileError(f"{file}: nested more than {MAX_YAML_DEPTH} levels deep (line "
-                                    f"{event.start_mark.line + 1}); a case needs a few levels")
-            stack.append([event.anchor, 1])
-            added = 1
-        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
-            anchor, size = stack.pop()
-            if anchor is not None:
-                sizes[anchor] = size
-            stack[-1][1] += size
-            continue
-        elif isinstance(event, yaml.ScalarEvent):
-            if event.anchor is not None:
-                sizes[event.anchor] = 1
-            stack[-1][1] += 1
-            added = 1
-        elif isinstance(event, yaml.AliasEvent):
-            if event.anchor not in sizes:
-                raise CaseFileError(f"{file}: alias *{excerpt(event.anchor)} at line {event.start_mark.line + 1} "
-                                    "refers to a value not defined before it (or to itself)")
-            added = sizes[event.anchor]
-            stack[-1][1] += added
-        else:
-            continue
-        total += added
-        if total > MAX_YAML_VALUES:
-            raise CaseFileError(f"{file}: holds more than {MAX_YAML_VALUES:,} values once its aliases (*name) are "
-                                "expanded; a case holds a few thousand")
-
-
-def _as_number(value: Any, whole: bool = False) -> float | int | str:
-    """``value`` as a finite number (an ``int`` with ``whole``), or the rule it breaks.
-
-    Numbers written as text (``"70"``) count, as they do for every other field.
-    """
-    wanted = "must be a whole number" if whole else "must be a number"
-    if isinstance(value, bool):
-        return wanted
-    if isinstance(value, str):
-        try:
-            value = float(value)
-        except ValueError:
-            return wanted
-    if isinstance(value, int):
-        if whole:
-            return value
-        try:
-            return float(value)
-        except OverflowError:
-            return "must be a finite number"
-    if not isinstance(value, float):
-        return wanted
-    if not math.isfinite(value):
-        return "must be a finite number"
-    if whole:
-        return int(value) if value.is_integer() else wanted
-    return value
-
-
-def _kind_of(value: Any) -> str:
-    """What a YAML value is, in the words of the format: a list, a mapping, text, a number."""
-    if value is None:
-        return "nothing (an empty value)"
-    if isinstance(value, bool):
-        return "true/false"
-    if isinstance(value, (int, float)):
-        return "a number"
-    if isinstance(value, str):
-        return "text"
-    if isinstance(value, (list, tuple)):
-        return "a list"
-    if isinstance(value, Mapping):
-        return "a mapping"
-    return "a " + type(value).__name__
-
-
-def save_case(case: Case, folder: str | Path, history_file: str = "history.csv") -> Path:
-    """Write ``case.yaml`` and the history CSV into ``folder``; return the folder."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    data = case.to_data()
-    data["history"] = history_file
-    data["delivery_date"] = case.delivery_date.isoformat()
-    ordered = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "history")}
-    ordered.update({k: data[k] for k in ("markets", "uncertainty", "budgets", "solver", "units")})
-    if not ordered["solver"]["mip_start"]:
-        del ordered["solver"]["mip_start"]  # written only when a case carries one
-    else:
-        ordered["solver"]["mip_start"] = list(ordered["solver"]["mip_start"])
-    ordered["markets"]["hpa_tariff_eur_per_mwh"] = list(ordered["markets"]["hpa_tariff_eur_per_mwh"])
-    if data["provenance"]:
-        ordered["provenance"] = data["provenance"]
-    text = yaml.safe_dump(ordered, sort_keys=False, allow_unicode=True, width=100)
-    (folder / CASE_FILE).write_text(text, encoding="utf-8")
-    case.history.to_csv(folder / history_file, case.timezone)
-    return folder
-
-
-# ----------------------------------------------------------------------------- options
-
-
-def parse_markets(text: str) -> dict[str, bool]:
-    """``"DAM,SRM"`` -> ``{"srm": True, "hpa": False}``; the DAM is always required."""
-    if not isinstance(text, str):
-        raise CaseError(f"markets={excerpt(text)!r} must be text such as DAM,SRM,HPA")
-    names = [part.strip().upper() for part in text.replace("+", ",").split(",") if part.strip()]
-    if not names:
-        raise CaseError(f"markets={excerpt(text)!r} names no market; give a comma-separated subset of "
-                        f"{','.join(MARKET_NAMES)}, e.g. DAM,SRM")
-    unknown = [n for n in names if n not in MARKET_NAMES]
-    if unknown:
-        raise CaseError(f"markets: unknown market {excerpt(unknown[0])!r}; choose from {', '.join(MARKET_NAMES)}")
-    if "DAM" not in names:
-        raise CaseError(f"markets={excerpt(text)!r} must include DAM (the day-ahead market is always on)")
-    return {"srm": "SRM" in names, "hpa": "HPA" in names}
-
-
-def with_options(
-    case: Case,
-    *,
-    date: dt.date | str | None = None,
-    strategy: str | None = None,
-    gamma_fraction: float | None = None,
-    gammas: Mapping[str, int] | None = None,
-    markets: str | None = None,
-    csp: bool = True,
-    hpa_flat: float | None = None,
-    dt_h: float | None = None,
-    budget_mode: str | None = None,
-    ties: str | None = None,
-    time_limit_s: float | None = None,
-    rel_gap: float | None = None,
-    threads: int | None = None,
-    budget_encoding: str | None = None,
-    pwl_encoding: str | None = None,
-) -> Case:
-    """A copy of ``case`` with run options applied (what the command line offers).
-
-    Strategy, Γ fraction, Γ edits, markets, CSPs, HPA tariff and period length make a
-    :class:`~rvpp.data.variants.Variant` (a strategy sets the case's own Γ edits aside);
-    the date, budget mode and solver settings are changed in the same step.
-    """
-    from .variants import Variant
-
-    require(case, Case, "rvpp.with_options: case", "from rvpp.load_case")
-    require(csp, bool, "rvpp.with_options: csp", "True keeps the CSPs, False removes them")
-    require(gammas if gammas is not None else {}, Mapping, "rvpp.with_options: gammas", "{source: Γ}")
-    variant = Variant(strategy=strategy, gamma_fraction=gamma_fraction, gammas=dict(gammas or {}), markets=markets,
-                      dt_h=dt_h, csp=csp, hpa_flat=hpa_flat)
-    changes: dict[str, Any] = variant.changes(case)
-    if date is not None:
-        changes["delivery_date"] = date
-    if budget_mode is not None:
-        changes["budgets"] = {**changes.get("budgets", {}), "mode": budget_mode}
-    if ties is not None:
-        changes["budgets"] = {**changes.get("budgets", {}), "ties": ties}
-    solver = {k: v for k, v in {"time_limit_s": time_limit_s, "rel_gap": rel_gap, "threads": threads,
-                                "budget_encoding": budget_encoding, "pwl_encoding": pwl_encoding}.items()
-              if v is not None}
-    if solver:
-        changes["solver"] = solver
-    return case.replace(**changes) if changes else case

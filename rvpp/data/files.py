@@ -15,11 +15,13 @@ and columns of history and the time spent reading it (:class:`UploadBudget`).
 
 from __future__ import annotations
 
+import errno
 import io
 import os
 import re
 import stat
 import time
+import uuid
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -361,3 +363,45 @@ def unpacking(name: str, member: zipfile.ZipInfo, error: type[Exception] = Uploa
 
 def _mib(n: int) -> str:
     return f"{n / MIB:g} MiB"
+
+
+@contextmanager
+def replacing(path: str | Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` (same suffix) to write to; it replaces ``path`` only
+    when the block ends without error, so ``path`` is never seen half-written."""
+    path = Path(path)
+    temporary = sibling(path, "tmp")
+    try:
+        yield temporary
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def check_replaceable(path: str | Path, headers: tuple[bytes, ...], kind: str) -> None:
+    """Refuse to write ``path`` over anything but an earlier file of the same ``kind``.
+
+    A missing ``path`` is fine, and so is a file starting with one of ``headers``, as the
+    files of that kind that rvpp writes do; a folder, a device, a dangling link or any
+    other file raises :class:`OSError` naming ``path`` and the headers expected, so a
+    mistyped output path cannot destroy an unrelated file. Only the first bytes are read,
+    and they are never shown.
+    """
+    path = Path(path)
+    if not os.path.lexists(path):
+        return
+    if path.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "it is a folder, not a file", str(path))
+    if not path.is_file():
+        raise FileExistsError(errno.EEXIST, "it exists and is not a regular file", str(path))
+    with path.open("rb") as handle:
+        start = handle.read(max(len(header) for header in headers))
+    if not start.startswith(headers):
+        expected = " or ".join(repr(header.decode()) for header in headers)
+        raise FileExistsError(errno.EEXIST, f"it exists and is not {kind}, whose first line starts with {expected}; "
+                              "remove it first or choose another path", str(path))
+
+
+def sibling(path: Path, tag: str) -> Path:
+    """A hidden, unique name beside ``path`` with the same suffix, e.g. ``.plan.tmp-1a2b3c4d.xlsx``."""
+    return path.with_name(f".{path.stem}.{tag}-{uuid.uuid4().hex[:8]}{path.suffix}")

@@ -21,6 +21,7 @@ import pandas as pd
 import pvlib
 from scipy import signal, stats
 from scipy.special import expit, ndtr, ndtri
+from .files import replacing
 
 DEFAULT_SEED = 20250318
 
@@ -790,7 +791,6 @@ def write_history(path, seed: int = DEFAULT_SEED) -> pd.DataFrame:
     Timestamps are ISO 8601 local times with their UTC offset. The file is written beside
     ``path`` and renamed into place, so ``path`` is never seen half-written.
     """
-    from ..outputs.export import replacing  # outputs build on data, not the other way round
 
     frame = build_history(seed)
     frame[list(COLUMNS)] = frame[list(COLUMNS)].round(3)

@@ -15,11 +15,15 @@ preset. Without a strategy, the case keeps its strategy and Γ edits and the var
 
 from __future__ import annotations
 
+import datetime as dt
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .case import Case, parse_markets
+from ..errors import CaseError, require
+from .case import MARKET_NAMES, Case
+from .edits import convert_overrides
+from .files import excerpt
 from .periods import ALLOWED_DT_H, delivery_periods
 
 SEPARATOR = " · "
@@ -57,8 +61,6 @@ class Variant:
         if self.dt_h is not None:
             changes["dt_h"] = self.dt_h
             if own and self.dt_h in ALLOWED_DT_H and self.dt_h != case.dt_h:  # they keep their hours
-                from .edits import convert_overrides
-
                 periods = len(delivery_periods(case.delivery_date, case.timezone, self.dt_h))
                 own = convert_overrides(own, case.dt_h, self.dt_h, periods)
         budgets: dict[str, Any] = {}
@@ -121,3 +123,64 @@ def describe(case: Case) -> str:
     if case.budgets.ties == "earliest":
         parts.append("earliest tied periods")
     return SEPARATOR.join(parts)
+
+
+def parse_markets(text: str) -> dict[str, bool]:
+    """``"DAM,SRM"`` -> ``{"srm": True, "hpa": False}``; the DAM is always required."""
+    if not isinstance(text, str):
+        raise CaseError(f"markets={excerpt(text)!r} must be text such as DAM,SRM,HPA")
+    names = [part.strip().upper() for part in text.replace("+", ",").split(",") if part.strip()]
+    if not names:
+        raise CaseError(f"markets={excerpt(text)!r} names no market; give a comma-separated subset of "
+                        f"{','.join(MARKET_NAMES)}, e.g. DAM,SRM")
+    unknown = [n for n in names if n not in MARKET_NAMES]
+    if unknown:
+        raise CaseError(f"markets: unknown market {excerpt(unknown[0])!r}; choose from {', '.join(MARKET_NAMES)}")
+    if "DAM" not in names:
+        raise CaseError(f"markets={excerpt(text)!r} must include DAM (the day-ahead market is always on)")
+    return {"srm": "SRM" in names, "hpa": "HPA" in names}
+
+
+def with_options(
+    case: Case,
+    *,
+    date: dt.date | str | None = None,
+    strategy: str | None = None,
+    gamma_fraction: float | None = None,
+    gammas: Mapping[str, int] | None = None,
+    markets: str | None = None,
+    csp: bool = True,
+    hpa_flat: float | None = None,
+    dt_h: float | None = None,
+    budget_mode: str | None = None,
+    ties: str | None = None,
+    time_limit_s: float | None = None,
+    rel_gap: float | None = None,
+    threads: int | None = None,
+    budget_encoding: str | None = None,
+    pwl_encoding: str | None = None,
+) -> Case:
+    """A copy of ``case`` with run options applied (what the command line offers).
+
+    Strategy, Γ fraction, Γ edits, markets, CSPs, HPA tariff and period length make a
+    :class:`~rvpp.data.variants.Variant` (a strategy sets the case's own Γ edits aside);
+    the date, budget mode and solver settings are changed in the same step.
+    """
+    require(case, Case, "rvpp.with_options: case", "from rvpp.load_case")
+    require(csp, bool, "rvpp.with_options: csp", "True keeps the CSPs, False removes them")
+    require(gammas if gammas is not None else {}, Mapping, "rvpp.with_options: gammas", "{source: Γ}")
+    variant = Variant(strategy=strategy, gamma_fraction=gamma_fraction, gammas=dict(gammas or {}), markets=markets,
+                      dt_h=dt_h, csp=csp, hpa_flat=hpa_flat)
+    changes: dict[str, Any] = variant.changes(case)
+    if date is not None:
+        changes["delivery_date"] = date
+    if budget_mode is not None:
+        changes["budgets"] = {**changes.get("budgets", {}), "mode": budget_mode}
+    if ties is not None:
+        changes["budgets"] = {**changes.get("budgets", {}), "ties": ties}
+    solver = {k: v for k, v in {"time_limit_s": time_limit_s, "rel_gap": rel_gap, "threads": threads,
+                                "budget_encoding": budget_encoding, "pwl_encoding": pwl_encoding}.items()
+              if v is not None}
+    if solver:
+        changes["solver"] = solver
+    return case.replace(**changes) if changes else case

@@ -2,15 +2,15 @@
 
 :func:`build_model` reads like the paper: one call per constraint family, one block
 per asset on the shared periods, system balances and market coupling at the top, then
-the robust layer (:mod:`rvpp.solving.robust`) and the objective.
+the robust layer (:mod:`rvpp.model.robust`) and the objective.
 """
 
 from __future__ import annotations
 
 import pyomo.environ as pyo
 
-from ..solving.problem import Problem
-from ..solving.robust import add_robustness
+from ..uncertainty.problem import Problem
+from .robust import add_robustness
 from .csp import (add_csp_commitment, add_csp_power_block, add_csp_reserves, add_csp_solar_field,
                   add_csp_storage, add_csp_symmetry)
 from .market import (SCENARIOS, activation, add_electric_balance, add_heat_balance, add_market_bids,

@@ -12,8 +12,8 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ..data.case import CSP
-from ..solving.problem import Problem
-from ..solving.robust import surely_deviating
+from ..uncertainty.problem import Problem
+from .robust import surely_deviating
 from .market import activation
 from .curve import on_curve
 from .piecewise import add_convex_combination, add_incremental

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pyomo.environ as pyo
 
 from ..data.history import PRICE_COLUMNS
-from ..solving.problem import Problem
+from ..uncertainty.problem import Problem
 
 SCENARIOS = ("none", "up", "dn")
 
@@ -41,7 +41,7 @@ def add_market_bids(m: pyo.ConcreteModel, problem: Problem) -> None:
     ``p_da`` [MW] day-ahead energy (+ sell, − buy); ``r_sr_up``, ``r_sr_dn`` [MW] secondary
     reserve bands, each ``≤ κ·max(0, ΣPmax_r + ΣPmax_θ − ΣPmax_d)``; ``h_hpa`` [MW_th] heat
     bought through the HPA. A market switched off fixes its decisions to zero.
-    ``protection[price]`` [EUR] holds the price protection that :mod:`rvpp.solving.robust` adds.
+    ``protection[price]`` [EUR] holds the price protection that :mod:`rvpp.model.robust` adds.
     """
     markets = problem.case.markets
     reserve_cap = capacities(problem)[2] if markets.srm else 0.0

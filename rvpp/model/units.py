@@ -2,7 +2,7 @@
 
 Each unit is a Pyomo block on the shared periods ``m.T`` with an Expression ``bound[t]``:
 the available power of an ND-RES or the required consumption of a demand. It starts
-at the nominal forecast; :mod:`rvpp.solving.robust` moves it by the budgeted deviation.
+at the nominal forecast; :mod:`rvpp.model.robust` moves it by the budgeted deviation.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import pyomo.environ as pyo
 
 from ..data.case import ElectricalDemand, NdresUnit, ThermalDemand
-from ..solving.problem import Problem
+from ..uncertainty.problem import Problem
 
 
 def reserve_cap(problem: Problem, ramp_mw_per_min: float, share_cap_mw: float = float("inf")) -> float:

@@ -21,7 +21,8 @@ import zipfile
 from collections.abc import Callable, Mapping
 from pathlib import Path, PurePosixPath
 
-from ..data.case import CASE_FILE, Case, history_path, parse_case, read_case_yaml, save_case
+from ..data.case import Case, CASE_FILE, parse_case
+from ..data.case_yaml import history_path, read_case_yaml, save_case
 from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, unzip, upload_path
 from ..data.history import History
 from ..errors import CaseError, UploadError, UploadLimitError

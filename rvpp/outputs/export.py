@@ -12,13 +12,11 @@ import json
 import math
 import os
 import shutil
-import uuid
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import pandas as pd
 
+from ..data.files import sibling
 from ..errors import require
 from ..solving.results import Result
 
@@ -39,7 +37,7 @@ def write_plan(result: Result, folder: str | Path) -> list[Path]:
     require(result, Result, "rvpp.write_plan: result", "from rvpp.solve")
     folder = check_plan_folder(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
-    staging = _sibling(folder, "tmp")
+    staging = sibling(folder, "tmp")
     staging.mkdir()
     try:
         names = _write_exports(result, staging)
@@ -80,48 +78,6 @@ def _write_exports(result: Result, folder: Path) -> list[str]:
         names.append("plan.xlsx")
     (folder / SUMMARY).write_text(json.dumps(_clean(result.summary()), indent=2) + "\n", encoding="utf-8")
     return [*names, SUMMARY]
-
-
-@contextmanager
-def replacing(path: str | Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` (same suffix) to write to; it replaces ``path`` only
-    when the block ends without error, so ``path`` is never seen half-written."""
-    path = Path(path)
-    temporary = _sibling(path, "tmp")
-    try:
-        yield temporary
-        os.replace(temporary, path)
-    finally:
-        temporary.unlink(missing_ok=True)
-
-
-def check_replaceable(path: str | Path, headers: tuple[bytes, ...], kind: str) -> None:
-    """Refuse to write ``path`` over anything but an earlier file of the same ``kind``.
-
-    A missing ``path`` is fine, and so is a file starting with one of ``headers``, as the
-    files of that kind that rvpp writes do; a folder, a device, a dangling link or any
-    other file raises :class:`OSError` naming ``path`` and the headers expected, so a
-    mistyped output path cannot destroy an unrelated file. Only the first bytes are read,
-    and they are never shown.
-    """
-    path = Path(path)
-    if not os.path.lexists(path):
-        return
-    if path.is_dir():
-        raise IsADirectoryError(errno.EISDIR, "it is a folder, not a file", str(path))
-    if not path.is_file():
-        raise FileExistsError(errno.EEXIST, "it exists and is not a regular file", str(path))
-    with path.open("rb") as handle:
-        start = handle.read(max(len(header) for header in headers))
-    if not start.startswith(headers):
-        expected = " or ".join(repr(header.decode()) for header in headers)
-        raise FileExistsError(errno.EEXIST, f"it exists and is not {kind}, whose first line starts with {expected}; "
-                              "remove it first or choose another path", str(path))
-
-
-def _sibling(path: Path, tag: str) -> Path:
-    """A hidden, unique name beside ``path`` with the same suffix, e.g. ``.plan.tmp-1a2b3c4d.xlsx``."""
-    return path.with_name(f".{path.stem}.{tag}-{uuid.uuid4().hex[:8]}{path.suffix}")
 
 
 def write_workbook(result: Result, target: str | Path | io.BytesIO) -> str | Path | io.BytesIO:

@@ -1,7 +1,7 @@
 """Plotly figures of plans and forecast bands.
 
 Every builder is a pure function of a :class:`~rvpp.solving.results.Result` or a
-:class:`~rvpp.solving.problem.Problem` and returns a :class:`plotly.graph_objects.Figure`:
+:class:`~rvpp.uncertainty.problem.Problem` and returns a :class:`plotly.graph_objects.Figure`:
 the x axis shows the clock time of each period's start on the delivery day (local
 time), every axis title carries its unit, every trace has a legend entry and a hover
 value. Backgrounds are transparent and the colours come from :mod:`rvpp.outputs.style`
@@ -23,10 +23,13 @@ import pandas as pd
 import plotly.graph_objects as go
 
 from ..settle.audit import price_exposures, protection_exact
-from ..solving.problem import Problem
+from ..uncertainty.problem import Problem
 from ..solving.results import FLEX_KINDS, Result
 from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, FIGURE_MARGIN, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS,
                     MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
+from ..errors import CaseError
+from ..uncertainty.bands import realized_values
+from ..uncertainty.forecast import band_specs, case_bands, has_forecast
 
 CLOCK_TITLE = "Delivery day, period start (local time)"
 HOURS_PER_TICK = 1  # one x tick per clock hour
@@ -239,9 +242,6 @@ def band_overlays(problem: Problem, source: str) -> dict:
     """What :func:`bands_figure` can draw beside a source's band: the other method's band
     (``compare``, where that method applies) and the delivery day's observed values
     (``realized``, where the history covers the day)."""
-    from ..errors import CaseError
-    from ..uncertainty.bands import realized_values
-    from ..uncertainty.forecast import band_specs, case_bands, has_forecast
 
     case = problem.case
     spec = band_specs(case)[source]

@@ -2,7 +2,7 @@
 
 The audit reads only the exported tables (``market``, ``units``, ``csp``), the summary
 and the case; it never touches the optimisation model nor the preparation of the day
-(:mod:`rvpp.solving.problem`, :mod:`rvpp.uncertainty`). What the plan had to respect
+(:mod:`rvpp.uncertainty.problem`, :mod:`rvpp.uncertainty`). What the plan had to respect
 is derived here from the case and its history with the audit's own arithmetic
 (:func:`audit_day`): the bands of MODEL_SPEC §6 (:func:`band` for the paper's climatology,
 :func:`forecast_band` for a point forecast and its past errors), the nominal
@@ -575,7 +575,7 @@ def price_exposures(day, market: pd.DataFrame) -> dict[str, np.ndarray]:
 
     DAM ``λ_neg·p_da·dt`` where the plan sells, ``λ_pos·(−p_da)·dt`` where it buys; SR
     ``λ_neg·r_sr·dt``. ``day``: an :class:`AuditDay` or any object with the same
-    ``dt_h`` and ``sources`` (e.g. a :class:`~rvpp.solving.problem.Problem`, to draw a
+    ``dt_h`` and ``sources`` (e.g. a :class:`~rvpp.uncertainty.problem.Problem`, to draw a
     plan's exposures); ``market``: the columns ``p_da_mw``, ``r_sr_up_mw``, ``r_sr_dn_mw``.
     """
     dt = day.dt_h

@@ -11,7 +11,7 @@ from __future__ import annotations
 import pyomo.environ as pyo
 
 from ..model import build_model
-from .problem import Problem
+from ..uncertainty.problem import Problem
 from .highs import run_highs
 
 REPORT_THRESHOLD = 1e-4  # [MW] or [MWh] of slack worth reporting

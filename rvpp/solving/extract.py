@@ -7,7 +7,7 @@ import pandas as pd
 import pyomo.environ as pyo
 
 from ..data.history import PRICE_COLUMNS
-from .problem import Problem
+from ..uncertainty.problem import Problem
 from .results import flexibility_table
 
 SOLVER_ZERO = 1e-9  # solver round-off below this is reported as exactly 0

@@ -56,7 +56,7 @@ OBJECTIVE_SCALE = -12
 def objective_scale(dt_h: float, budget_choices: bool = False) -> int:
     """The power of two by which a bidding day's objective is scaled inside HiGHS, for ``dt_h``-hour
     periods; ``budget_choices``: the solver places some budgeted deviations
-    (:func:`rvpp.solving.robust.budget_choices`)."""
+    (:func:`rvpp.model.robust.budget_choices`)."""
     return OBJECTIVE_SCALE if dt_h < 1.0 or not budget_choices else 0
 
 

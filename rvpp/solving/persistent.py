@@ -1,10 +1,10 @@
 """A day model kept between solves, for sweeps and backtests.
 
-:class:`DayModel` solves a sequence of :class:`~rvpp.solving.problem.Problem` objects:
+:class:`DayModel` solves a sequence of :class:`~rvpp.uncertainty.problem.Problem` objects:
 
 * when only the budgets Γ change (same case, day and bands), the built Pyomo model is
   kept: the mutable budgets and the fixed χ are updated in place
-  (:func:`rvpp.solving.robust.set_budgets`) and the matrix is recompiled, with no
+  (:func:`rvpp.model.robust.set_budgets`) and the matrix is recompiled, with no
   rebuild;
 * when anything else changes (another day, other bands or bounds, the storage's initial
   energy ``e_init_mwh_th``, the turbine's ``initially_on``), the model is rebuilt for
@@ -28,9 +28,9 @@ from ..model import build_model
 from ..model.csp import identical_csp_pairs
 from .highs import HighsModel
 from .plan import day_scale, not_solved, plan_result
-from .problem import Problem, infeasibility_reasons
+from ..uncertainty.problem import Problem, infeasibility_reasons
 from .results import Result
-from .robust import set_budgets
+from ..model.robust import set_budgets
 
 # Model building and extraction are Python work and Pyomo keeps some shared state; only
 # HiGHS runs of day models in different threads go side by side.

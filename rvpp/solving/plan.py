@@ -16,10 +16,11 @@ from .diagnose import explain_infeasibility
 from .highs import HighsModel, model_lifetime, objective_scale
 from .outcome import Outcome, SolveOutcome, Watch
 from ..model import build_model
-from .problem import Problem, infeasibility_reasons, prepare
-from .robust import budget_choices
+from ..uncertainty.problem import Problem, infeasibility_reasons, prepare
+from ..model.robust import budget_choices
 from .extract import extract
 from .results import Result
+from ..data.files import replacing
 
 Progress = Callable[[str], None]
 
@@ -112,7 +113,6 @@ def write_mps(case: Case, path) -> None:
     The file is written beside ``path`` and renamed into place, so ``path`` is never seen
     half-written.
     """
-    from ..outputs.export import replacing  # outputs build on solving, not the other way round
 
     problem = prepare(case)
     Path(path).parent.mkdir(parents=True, exist_ok=True)

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from .outcome import Outcome
-from .problem import Problem
+from ..uncertainty.problem import Problem
 
 FLEX_KINDS = ("wind", "pv", "csp", "ed")
 PROTECTION_KEYS = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}

@@ -25,11 +25,12 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..data.case import Case, with_options
+from ..data.case import Case
+from ..data.variants import with_options
 from ..data.periods import delivery_periods
 from ..errors import RvppError
 from .persistent import DayModel
-from .problem import Problem, prepare, strategy_budgets, tied_budgets
+from ..uncertainty.problem import Problem, prepare, strategy_budgets, tied_budgets
 from .results import Result
 
 Progress = Callable[[int, int], None]
@@ -100,7 +101,7 @@ def sweep_gamma(case: Case, gammas: Iterable[int], sources: Sequence[str] | None
 def sweep_parts(problems: dict[int, Problem], workers: int) -> list[list[int]]:
     """The sorted Γ of ``problems`` cut into the parts that ``workers`` threads walk, in the order
     they are taken: each Γ at which the solver must choose among tied deviations
-    (:func:`~rvpp.solving.problem.tied_budgets`) alone, then the other Γ in ``workers``
+    (:func:`~rvpp.uncertainty.problem.tied_budgets`) alone, then the other Γ in ``workers``
     contiguous parts; one part when there is one worker."""
     order = sorted(problems)
     if workers <= 1:

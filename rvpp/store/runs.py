@@ -29,13 +29,17 @@ from typing import Any
 import pandas as pd
 import sqlalchemy as sa
 
-from ..data.case import Case, parse_case, save_case, with_options
+from ..data.case import Case, parse_case
+from ..data.case_yaml import save_case
+from ..data.variants import with_options
 from ..data.files import BIDI_CONTROLS, CONTROL_CHARACTERS, excerpt, refused_character
 from ..solving.outcome import Outcome
 from ..solving.results import Result
 from .codec import case_data, history_bytes, history_from, jsonable
 from .engine import (LABEL_LENGTH, StoreError, connect, decoding, drop_unused_blobs, get_blob, now, put_blob,
                      runs)
+from ..outputs.export import write_plan
+from ..uncertainty.problem import prepare
 
 TABLES = ("market", "units", "csp", "flexibility")
 SAVE_ATTEMPTS = 5  # a save retries when a concurrent save took the same label
@@ -167,7 +171,6 @@ class RunLibrary:
 
     def export_zip(self, run_id: str) -> bytes:
         """The run as a zip: its case folder (``case/``) and its plan exports (``plan/``)."""
-        from ..outputs.export import write_plan
 
         saved = self.load(run_id)
         buffer = io.BytesIO()
@@ -239,7 +242,6 @@ def _result_data(result: Result | None) -> dict[str, Any]:
 
 
 def _result_from(case: Case, data: Mapping[str, Any], tables: bytes | None) -> Result:
-    from ..solving.problem import prepare
 
     frames = {}
     if tables:

@@ -29,7 +29,8 @@ from ..backtest import metrics
 from ..backtest.figures import cumulative_figure, robustness_figure
 from ..backtest.recommend import CRITERION_NAMES, recommend
 from ..backtest.settings import BacktestSettings, variants_of
-from ..data.case import STRATEGIES, Case, load_case
+from ..data.case import Case, STRATEGIES
+from ..data.case_yaml import load_case
 from ..store import BacktestStore
 from .runner import Progress, StudyOutput
 from .settings import StudySettings

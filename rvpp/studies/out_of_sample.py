@@ -11,7 +11,8 @@ from concurrent.futures import Executor
 
 import pandas as pd
 
-from ..data.case import Case, with_options
+from ..data.case import Case
+from ..data.variants import with_options
 from ..data.variants import describe
 from ..settle.recourse import first_stage, set_fingerprint
 from . import figures

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..data.case import Case
-from ..outputs.export import replacing
+from ..data.files import replacing
 from ..solving.extract import SOLVER_ZERO
 from .findings import findings
 from .runner import StudyOutput

@@ -7,7 +7,8 @@ import math
 import numbers
 from dataclasses import dataclass, field, replace
 
-from ..data.case import STRATEGIES, parse_markets
+from ..data.case import STRATEGIES
+from ..data.variants import parse_markets
 from ..data.history import MAX_QUANTITY
 from ..errors import CaseError, RvppError
 from ..settle.recourse import Penalties

@@ -13,8 +13,10 @@ from concurrent.futures import Executor
 import pandas as pd
 
 from ..solving.batch import run_many
-from ..data.case import Case, with_options
-from ..settle.recourse import StochasticPlan, set_fingerprint, solve_stochastic
+from ..data.case import Case
+from ..data.variants import with_options
+from ..settle.stochastic import StochasticPlan, solve_stochastic
+from ..settle.recourse import set_fingerprint
 from . import figures
 from .evaluation import (EUR_PER_KEUR, evaluate_methods, realizations, sample_days, settlement_warning, summarize,
                          training_days)

@@ -31,10 +31,11 @@ import numpy as np
 import pandas as pd
 
 from ..solving.batch import run_many
-from ..data.case import Case, with_options
+from ..data.case import Case
+from ..data.variants import with_options
 from ..data.variants import describe
 from ..solving.outcome import Outcome
-from ..solving.problem import Problem, top_gamma_deviation
+from ..uncertainty.problem import Problem, top_gamma_deviation
 from ..settle.audit import price_exposures
 from ..settle.recourse import FirstStage, Realization, first_stage, nominal_realization
 from .evaluation import EUR_PER_KEUR, evaluate_task

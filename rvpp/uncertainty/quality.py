@@ -26,6 +26,7 @@ from ..data.periods import delivery_periods
 from ..errors import RvppError
 from .bands import forecast_bands
 from .forecast import BandSpec, forecast_error_bands
+from ..data.importers import fill_gaps, hourly_table, import_files
 
 SERIES = {  # --series: (actual column, forecast column or None for prices, normalised by capacity)
     "wind_onshore": ("actual_wind_onshore", "forecast_wind_onshore", True),
@@ -80,7 +81,6 @@ def band_quality_from_files(paths: list[str | Path], *, series: str = "wind_onsh
     Gaps of at most three hours are interpolated for scoring and counted in ``filled_hours``;
     longer gaps are refused.
     """
-    from ..data.importers import fill_gaps, hourly_table, import_files
 
     if series not in SERIES:
         raise RvppError(f"--series {series!r} must be one of {', '.join(SERIES)}")

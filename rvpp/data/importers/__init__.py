@@ -23,6 +23,7 @@ import pandas as pd
 from ...errors import DataImportError
 from . import entsoe, omie, tables
 from .report import Imported, ImportReport, decode, hourly, read_bytes
+from ..files import replacing
 
 __all__ = ["Imported", "ImportReport", "HourlyTable", "detect", "fill_gaps", "import_files", "hourly_table",
            "write_table"]
@@ -154,7 +155,6 @@ TABLE_HEADER = b"time_utc,time_local"  # how the normalised CSV of write_table b
 def write_table(table: pd.DataFrame, path: str | Path, timezone: str = "Europe/Madrid") -> Path:
     """Write an hourly table as rvpp's normalised CSV (``time_utc, time_local, series...``),
     atomically (a temporary file renamed into place)."""
-    from ...outputs.export import replacing
 
     path = Path(path)
     out = table.copy()

@@ -12,14 +12,13 @@ import signal
 import sys
 from pathlib import Path
 
-from ..cli import Number, listed, path_option
-from ..data.case import MAX_THREADS, STRATEGIES, load_case
+from ..backtest.settings import CARRY, BacktestError, BacktestSettings, parse_day, parse_period, variants_of
+from ..data.case import MAX_THREADS, STRATEGIES
+from ..data.case_yaml import load_case
 from ..data.files import excerpt
 from ..settle.recourse import Penalties
-from ..studies.cli import add_settlement_options, scheduler_option
-from .settings import CARRY, BacktestError, BacktestSettings, parse_day, parse_period, variants_of
+from .options import DEFAULT_CASE, Number, add_settlement_options, listed, path_option, scheduler_option
 
-DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
 CRITERIA = ("mean", "cvar95")
 
 
@@ -104,7 +103,7 @@ def _strategy(name: str) -> str:
 
 
 def _label(text: str) -> str:
-    from .launch import check_label  # the launch's rule; it imports the store, so only when a label is given
+    from ..backtest.launch import check_label  # heavy: the launch imports the store; only when a label is given
 
     try:
         return check_label(text)
@@ -133,7 +132,8 @@ def settings_from(args: argparse.Namespace, first, last, strategies, fractions) 
 def check_out(out: Path | None) -> None:
     """Refuse an ``--out`` the export may not replace (:func:`.export.check_replaceable_export`),
     before any backtest runs; the message names the option and the folder as given."""
-    from .export import check_replaceable_export
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..backtest.export import check_replaceable_export
 
     if out is None:
         return
@@ -173,9 +173,10 @@ class ProgressBar:
 
 
 def run_backtest_command(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..backtest.engine import run_backtest
     from ..solving.parallel import open_executor
     from ..store import BacktestStore
-    from .engine import run_backtest
 
     if not args.first or not args.last:
         raise BacktestError("backtest needs --from D1 and --to D2 (delivery days, YYYY-MM-DD)")
@@ -204,8 +205,9 @@ def run_backtest_command(args: argparse.Namespace) -> int:
 
 
 def _report(store, ident: str, out: Path | None, say) -> int:
-    from . import metrics
-    from .export import export
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..backtest import metrics
+    from ..backtest.export import export
 
     records = store.records(ident)
     problems = metrics.reconcile(records)
@@ -224,9 +226,10 @@ def _report(store, ident: str, out: Path | None, say) -> int:
 
 
 def run_recommend_command(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..backtest.recommend import check_periods, recommend, write_recommendation
     from ..solving.parallel import open_executor
     from ..store import BacktestStore
-    from .recommend import check_periods, recommend, write_recommendation
 
     train = parse_period(args.train, "--train")
     test = parse_period(args.test, "--test")
@@ -256,8 +259,9 @@ def run_recommend_command(args: argparse.Namespace) -> int:
 
 
 def run_export_command(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..backtest.export import export
     from ..store import BacktestStore
-    from .export import export
 
     check_out(args.out)
     export(BacktestStore(args.store, existing=args.store is not None), args.ident, args.out)
@@ -266,6 +270,7 @@ def run_export_command(args: argparse.Namespace) -> int:
 
 
 def run_list_command(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
     from ..store import BacktestStore
     from ..store.engine import LABEL_LENGTH
 

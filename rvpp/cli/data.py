@@ -5,17 +5,24 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
-from ..cli import Number, path_option
+from ..data.case import PRICE_MODELS
+from ..data.files import check_replaceable
 from ..uncertainty.quality import SERIES
-from .case import PRICE_MODELS
+from .options import DEFAULT_CASE, Number, path_option
 
-DEFAULT_TEMPLATE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
+DEFAULT_TEMPLATE = DEFAULT_CASE
 
 
 def add_data_commands(commands) -> None:
-    """Add ``import``, ``build-case`` and ``band-quality`` to the ``data`` subparsers."""
+    """Add ``data`` with ``build``, ``import``, ``build-case`` and ``band-quality``."""
+    data = commands.add_parser("data", help="build the default dataset, import real data, build a case from it")
+    commands = data.add_subparsers(title="data commands")
+    build = commands.add_parser("build", help="regenerate the synthetic history of the paper case")
+    build.add_argument("--seed", type=Number(0, whole=True), help="random seed >= 0 (default: the published one)")
+    build.add_argument("--out", type=path_option, default=DEFAULT_CASE / "history.csv", help="CSV to write")
+    build.set_defaults(run=_run_data_build)
+
     read = commands.add_parser(
         "import", help="read downloaded OMIE / ENTSO-E files and report what they hold",
         description="Read OMIE marginalpdbc files (or their zip archives), ENTSO-E Transparency Platform CSV "
@@ -82,8 +89,8 @@ def add_data_commands(commands) -> None:
 
 
 def _run_import(args: argparse.Namespace) -> int:
-    from ..outputs.export import check_replaceable
-    from .importers import TABLE_HEADER, hourly_table, import_files, write_table
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..data.importers import TABLE_HEADER, hourly_table, import_files, write_table
 
     if args.out:
         check_replaceable(args.out, (TABLE_HEADER,), "a table rvpp wrote")
@@ -100,7 +107,8 @@ def _run_import(args: argparse.Namespace) -> int:
 
 
 def _run_build_case(args: argparse.Namespace) -> int:
-    from .build_case import BuildOptions, build_case
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..data.build_case import BuildOptions, build_case
 
     options = BuildOptions(errors_scale=args.errors_scale, start=args.start, end=args.end, date=args.date,
                            zone=args.zone, wind_capacity_mw=args.wind_capacity,
@@ -113,6 +121,7 @@ def _run_build_case(args: argparse.Namespace) -> int:
 
 
 def _run_band_quality(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
     from ..uncertainty.quality import band_quality_from_files
 
     table = band_quality_from_files(args.files, series=args.series, year=args.year, window_days=args.window,
@@ -136,3 +145,13 @@ def _quality_lines(table: dict) -> list[str]:
                      f"mean shortfall below the lower bound {row['shortfall']:.2f} {unit}")
     return lines
 
+
+def _run_data_build(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..data import synth
+
+    seed = synth.DEFAULT_SEED if args.seed is None else args.seed
+    check_replaceable(args.out, (synth.HISTORY_HEADER,), "a history CSV")
+    frame = synth.write_history(args.out, seed=seed)
+    print(f"wrote {len(frame)} hours to {args.out} (seed {seed})", file=sys.stderr)
+    return 0

@@ -29,7 +29,7 @@ from ..data.case import STRATEGY_BUDGETS_H, Case, power_unit
 from ..errors import CaseError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods, period_labels
-from ..uncertainty.forecast import band_specs, case_bands
+from .forecast import band_specs, case_bands
 
 MARGIN = 1e-6  # [MW], [MWh]: a limit counts as broken before solving only beyond the solver's tolerance
 

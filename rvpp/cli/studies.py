@@ -3,26 +3,24 @@
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
-from ..cli import Number, choice_of, date_option, listed, path_option
-from ..data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES, load_case, parse_markets, with_options
-from ..data.files import excerpt
+from ..data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES
+from ..data.case_yaml import load_case
 from ..data.periods import ALLOWED_DT_H
-from ..errors import RvppError
+from ..data.variants import with_options
 from ..settle.recourse import Penalties
-from ..solving.parallel import SCHEDULERS
-from .settings import (BACKTEST_CRITERIA, BACKTEST_FRACTIONS, HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS, SEED,
-                       SP_TIME_LIMIT_S, TEST_DAYS, StudySettings)
-
-DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"
+from ..studies.settings import (BACKTEST_CRITERIA, BACKTEST_FRACTIONS, HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS,
+                                SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings)
+from .options import (DEFAULT_CASE, Number, add_settlement_options, choice, choice_of, date_option, listed, market_set,
+                      path_option, period_option, scheduler_option)
 
 
 def add_study_commands(commands) -> None:
     """Add the ``study`` subcommand to the command line's subparsers."""
-    from . import REPRODUCE, STUDIES
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..studies import REPRODUCE, STUDIES
 
     study = commands.add_parser(
         "study", help="run a case study of the paper (or reproduce all of them)",
@@ -41,7 +39,7 @@ def add_study_commands(commands) -> None:
     study.add_argument("--workers", type=Number(1, MAX_THREADS, whole=True),
                        help="worker processes of a local pool or cluster (default: cores; a local pool uses "
                             "at most one per core)")
-    study.add_argument("--strategies", type=listed(_choice(STRATEGIES), "a comma-separated subset of "
+    study.add_argument("--strategies", type=listed(choice(STRATEGIES), "a comma-separated subset of "
                                                    + ",".join(STRATEGIES)),
                        help="comma-separated subset of " + ",".join(STRATEGIES))
     study.add_argument("--gammas", type=listed(Number(0, whole=True), "whole numbers >= 0 such as 0,6,12"),
@@ -49,7 +47,7 @@ def add_study_commands(commands) -> None:
     study.add_argument("--sources", type=listed(str, "source names or kinds such as PV1,wind,price"), default=(),
                        help="sensitivity: sweep these sources or kinds one at a time, e.g. PV1,wind,price "
                             "(default: all sources at once)")
-    study.add_argument("--market-sets", type=listed(_market_set, "market sets such as DAM,DAM+SRM+HPA"),
+    study.add_argument("--market-sets", type=listed(market_set, "market sets such as DAM,DAM+SRM+HPA"),
                        help=f"market sets of Table 10, e.g. DAM,DAM+SRM+HPA (default {','.join(MARKET_SETS)})")
     tariff = Number(0, MAX_QUANTITY, unit="EUR/MWh_th")
     study.add_argument("--hpa-prices", type=listed(tariff, "tariffs >= 0 such as 70,60,50"),
@@ -67,9 +65,9 @@ def add_study_commands(commands) -> None:
     study.add_argument("--time-limit", type=seconds, metavar="S",
                        help="time limit of every other solve [s]")
     add_settlement_options(study)
-    study.add_argument("--backtest-train", type=_period, metavar="D1:D2",
+    study.add_argument("--backtest-train", type=period_option, metavar="D1:D2",
                        help="backtest: training period of the recommended Γ (default: April 2025 on the paper case)")
-    study.add_argument("--backtest-test", type=_period, metavar="D3:D4",
+    study.add_argument("--backtest-test", type=period_option, metavar="D3:D4",
                        help="backtest: test period, after the training period (default: May 2025)")
     study.add_argument("--backtest-fractions", type=listed(Number(0, 1), "fractions of the day such as 0,0.125,0.25"),
                        help="backtest: the Γ grid as fractions of the day (default "
@@ -80,53 +78,6 @@ def add_study_commands(commands) -> None:
     study.add_argument("--quiet", action="store_true", help="no progress bars")
     study.set_defaults(run=run_study_command)
 
-
-
-def add_settlement_options(parser: argparse.ArgumentParser) -> None:
-    """The options of the settlement of realized days: penalty multipliers, the price of
-    unserved heat and the turbine schedule (shared by the studies and the backtest)."""
-    penalties = Penalties()
-    multiplier = Number(0, MAX_QUANTITY)
-    parser.add_argument("--m-def", type=multiplier, default=penalties.m_def,
-                        help=f"deficit price multiplier, 0 to {MAX_QUANTITY:g} (default {penalties.m_def:g})")
-    parser.add_argument("--m-sur", type=multiplier, default=penalties.m_sur,
-                        help=f"surplus price multiplier, 0 to {MAX_QUANTITY:g} (default {penalties.m_sur:g})")
-    parser.add_argument("--m-sr", type=multiplier, default=penalties.m_sr,
-                        help=f"reserve shortfall price multiplier, 0 to {MAX_QUANTITY:g} (default {penalties.m_sr:g})")
-    parser.add_argument("--c-heat", type=Number(0, MAX_QUANTITY, unit="EUR/MWh_th"), metavar="EUR_PER_MWH",
-                        help="price of unserved heat (default: twice the highest HPA tariff)")
-    parser.add_argument("--fix-commitment", action="store_true",
-                        help="settle with the plan's CSP turbine schedule: no start where the plan is off")
-
-def _choice(allowed: tuple[str, ...]):
-    def convert(name: str) -> str:
-        if name not in allowed:
-            raise argparse.ArgumentTypeError(f"unknown {excerpt(name)!r}; choose from {', '.join(allowed)}")
-        return name
-    return convert
-
-
-def _market_set(text: str) -> str:
-    parse_markets(text)  # raises a CaseError naming the market
-    return text
-
-
-def scheduler_option(text: str) -> str:
-    """``--scheduler``: a name of :data:`SCHEDULERS` or a Dask scheduler address ``[proto://]host:port``."""
-    if text in SCHEDULERS or re.fullmatch(r"(?:[a-z]+://)?[^\s:/]+:\d{1,5}", text):
-        return text
-    raise argparse.ArgumentTypeError(f"{excerpt(text)!r} is neither {', '.join(SCHEDULERS)} nor a scheduler "
-                                     "address such as tcp://10.0.0.5:8786")
-
-
-def _period(text: str):
-    """``--backtest-train`` / ``--backtest-test``: ``FIRST:LAST`` as two dates."""
-    from ..backtest.settings import parse_period
-
-    try:
-        return parse_period(text, "period")
-    except RvppError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def settings_from(args: argparse.Namespace) -> StudySettings:
@@ -152,6 +103,7 @@ class ProgressBars:
     def __call__(self, stage: str, done: int, total: int) -> None:
         if not self.enabled:
             return
+        # heavy (the solver stack, the store or pvlib): loaded only when this command runs
         from tqdm import tqdm
 
         bar = self.bars.get(stage)
@@ -164,8 +116,9 @@ class ProgressBars:
 
 
 def run_study_command(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
     from ..solving.parallel import open_executor
-    from . import run_studies
+    from ..studies import run_studies
 
     settings = settings_from(args)  # checks every setting before the case is read
     case = with_options(load_case(args.case), date=args.date, dt_h=args.dt, time_limit_s=args.time_limit)

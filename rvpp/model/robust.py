@@ -4,7 +4,7 @@ Bertsimas, D. and Sim, M. (2004), "The Price of Robustness", Operations Research
 52(1):35-53, Proposition 1: for fixed decisions, the worst case of ``Σt λneg_t·x_t``
 over at most Γ deviating periods equals ``min Γ·φ + Σt ζ_t`` subject to
 ``φ + ζ_t ≥ λneg_t·|x_t|``, ``φ, ζ ≥ 0``. This module takes the nominal model built
-by :mod:`rvpp.model`, the deviations and budgets of each :class:`~rvpp.solving.problem.Source`
+by :mod:`rvpp.model`, the deviations and budgets of each :class:`~rvpp.uncertainty.problem.Source`
 and adds
 
 * the price protection of the objective for the DAM, SR-up and SR-down prices
@@ -34,7 +34,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ..errors import RvppError
-from .problem import Problem, Source, budget_split
+from ..uncertainty.problem import Problem, Source, budget_split
 
 PRICE_EXPOSURES = ("price_da", "price_sr_up", "price_sr_dn")
 
@@ -175,7 +175,7 @@ def top_gamma_choice(dev: np.ndarray, gamma: int, ties: str = "choose") -> np.nd
     tied deviations straddle the Γ boundary (the solver chooses among them) unless ``ties`` is
     ``"earliest"`` (``budgets.ties``: the earliest of them deviate).
 
-    The periods come from :func:`~rvpp.solving.problem.budget_split`; where fewer than Γ
+    The periods come from :func:`~rvpp.uncertainty.problem.budget_split`; where fewer than Γ
     periods have a positive deviation, χ is completed with the earliest remaining
     periods (their deviation is 0, so they change no bound) to keep ``Σχ = Γ``.
     """
