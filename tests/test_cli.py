@@ -445,7 +445,7 @@ def test_ctrl_c_during_a_solve_writes_the_best_plan_found_so_far(tmp_path):
 
 
 def test_a_second_ctrl_c_gives_up_and_the_command_says_so(monkeypatch, capsys):
-    import rvpp.cli as cli
+    import rvpp.cli.solve as cli
 
     stop = cli.SearchStop(lambda _m: None)
     before = signal.getsignal(signal.SIGINT)
