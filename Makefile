@@ -38,6 +38,7 @@ run: install
 		--server.address $(ADDRESS) --server.headless true
 
 test: install axe
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -n 2
 
 # Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes under ten minutes.

@@ -161,7 +161,7 @@ class ProgressBar:
         if not self.enabled:
             return
         if self.bar is None:
-            from tqdm import tqdm
+            from tqdm import tqdm  # heavy: only when a progress bar is drawn
 
             self.bar = tqdm(total=total, initial=done, desc=self.title, unit="day", file=sys.stderr,
                             dynamic_ncols=True)

@@ -14,6 +14,7 @@ from ..data.files import check_replaceable, excerpt
 from ..data.periods import ALLOWED_DT_H
 from ..data.variants import describe, with_options
 from ..errors import RvppError
+from ..uncertainty.problem import tied_budgets
 from .options import DEFAULT_CASE, FAILURE, Number, choice_of, date_option, market_list, path_option
 
 SEARCH_REPORT_S = 5.0  # a solve's search reports itself this often [s]
@@ -83,7 +84,6 @@ def _run_solve(args: argparse.Namespace) -> int:
     # heavy: the optimisation stack (Pyomo, HiGHS) loads only when a solve runs
     from ..outputs.export import check_plan_folder, write_plan
     from ..solving.plan import MPS_HEADERS, solve, write_mps
-    from ..uncertainty.problem import tied_budgets
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(f"  {m}", file=sys.stderr))
     case = load_case(args.case)

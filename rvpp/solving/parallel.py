@@ -74,7 +74,7 @@ def end_with_parent(parent: int) -> None:
 
 @contextmanager
 def _dask_local(workers: int) -> Iterator[Executor]:
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client, LocalCluster  # heavy: Dask loads only when a cluster is asked for
 
     with LocalCluster(n_workers=workers, processes=True, threads_per_worker=1,
                       dashboard_address=None) as cluster, Client(cluster) as client:
@@ -83,7 +83,7 @@ def _dask_local(workers: int) -> Iterator[Executor]:
 
 @contextmanager
 def _dask_remote(address: str) -> Iterator[Executor]:
-    from dask.distributed import Client
+    from dask.distributed import Client  # heavy: Dask loads only when a cluster is asked for
 
     try:
         client = Client(address, timeout="20s")

@@ -127,7 +127,7 @@ def write_figures(outputs: Sequence[StudyOutput], folder: Path, png: bool) -> li
 
 
 def _write_png(figures: dict, target: Path) -> list[Path]:
-    import kaleido
+    import kaleido  # heavy: the PNG renderer (a browser) loads only when pictures are written
 
     kaleido.start_sync_server()
     try:
