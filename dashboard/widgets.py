@@ -18,12 +18,12 @@ from rvpp.outputs.economics import economics, explanation
 from rvpp.outputs.export import plan_workbook_bytes
 from rvpp.solving.outcome import Outcome
 from rvpp.outputs.workbook import case_workbook_bytes
+from rvpp.data.kinds import KINDS, UnitKind
 from rvpp.store.engine import LABEL_LENGTH
 
 from . import library, state
 
-KIND_TITLES = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP plants", "ed": "Electrical demands",
-               "td": "Thermal demands"}
+KIND_TITLES = {kind: info.group for kind, info in KINDS.items()}
 KPI_COLUMNS = 4
 NET = "Net result [kEUR]"
 PERCENT = 100.0
@@ -199,14 +199,14 @@ def case_summary(case: Case) -> None:
         units = getattr(case, kind)
         if not units:
             continue
-        if kind == "td":
+        if kind == UnitKind.TD:
             capacity = f"{sum(u.h_max_mw_th for u in units):,.0f} MW_th"
-        elif kind == "csp":
+        elif kind == UnitKind.CSP:
             storage = sum(u.storage.e_max_mwh_th for u in units)
             capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW, TS {storage:,.0f} MWh_th"
         else:
             capacity = f"{sum(u.p_max_mw for u in units):,.0f} MW"
-        off = kind == "csp" and not state.csp_on()
+        off = kind == UnitKind.CSP and not state.csp_on()
         rows.append({"Kind": title + (" (switched off)" if off else ""), "Units": len(units),
                      "Names": ", ".join(u.name for u in units), "Installed": capacity})
     st.table(pd.DataFrame(rows).set_index("Kind"))

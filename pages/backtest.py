@@ -14,7 +14,7 @@ from rvpp.backtest import launch, metrics
 from rvpp.backtest.engine import reopen_case
 from rvpp.backtest.export import export_zip
 from rvpp.backtest.figures import cumulative_figure, distribution_figure, robustness_figure
-from rvpp.backtest.recommend import CRITERION_NAMES, recommendation_from
+from rvpp.backtest.recommend import CRITERION_NAMES, Verdict, recommendation_from
 from rvpp.backtest.settings import (
     CARRY,
     PERFECT,
@@ -367,7 +367,7 @@ except RvppError as err:
 left, right = st.columns(2)
 left.plotly_chart(robustness_figure(rec.curve, rec.fraction, "train"), key="backtest_robustness_train")
 right.plotly_chart(robustness_figure(rec.curve, rec.fraction, "test"), key="backtest_robustness_test")
-if "LOSES" in rec.verdict:
+if rec.outcome is Verdict.LOSES:
     st.warning(rec.verdict, icon=":material/trending_down:")
 else:
     st.success(rec.verdict, icon=":material/verified:")

@@ -7,7 +7,8 @@ from dashboard import solving, state, sweeps, widgets
 from rvpp.settle.audit import price_exposures, protection_exact
 from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure,
                         thin_clock_ticks)
-from rvpp.uncertainty.problem import top_gamma_deviation
+from rvpp.data.kinds import power_unit
+from rvpp.uncertainty.problem import SourceKind, top_gamma_deviation
 
 state.through_app("pages/learn.py")
 
@@ -44,10 +45,10 @@ def budget_demo() -> None:
     gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
                         key="learn_gamma")
     y = top_gamma_deviation(src.deviation, gamma)
-    energy = "MWh_th" if src.unit_kind in ("csp", "td") else "MWh"
+    energy = power_unit(src.unit_kind).replace("MW", "MWh")
     left.metric("Energy at risk in the bound", f"{float(y.sum() * problem.dt_h):,.1f} {energy}",
                 help="Σ deviation × period length over the Γ chosen periods: how much the plan must cover.")
-    nominal, adverse = ("upper", "lower") if src.kind == "production" else ("lower", "upper")
+    nominal, adverse = ("upper", "lower") if src.kind is SourceKind.PRODUCTION else ("lower", "upper")
     left.caption(f"Γ = 0 plans on the {nominal} bound everywhere; Γ = {nt} on the {adverse} bound everywhere.")
     right.plotly_chart(bands_figure(problem, source, (y > 0).astype(float)), key="learn_band")
 

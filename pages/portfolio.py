@@ -5,12 +5,12 @@ import streamlit as st
 from dashboard import fields, solving, state, widgets
 from rvpp import CaseError
 from rvpp.data.edits import follow_capacity, table_message
+from rvpp.data.kinds import UNIT_KINDS, UnitKind
 from rvpp.outputs import workbook
 from rvpp.outputs.plots import bands_figure, curve_figure, thin_clock_ticks
 
 state.through_app("pages/portfolio.py")
 
-KINDS = ("wind", "pv", "csp", "ed", "td")
 BAND_COLUMNS = 2
 SCALE = "scale_with_capacity"   # table column: the unit's forecast band follows its capacity
 FIXED = "portfolio_fixed_scale"  # session key: names of units whose band does not follow
@@ -67,9 +67,9 @@ if case.csp:
               help="Off: the plan is made without any CSP, as in the paper's Table 11. The CSP's parameters "
                    "are kept and come back when you switch it on again.")
 
-for kind in KINDS:
+for kind in UNIT_KINDS:
     st.subheader(widgets.KIND_TITLES[kind])
-    if kind == "csp" and not state.csp_on():
+    if kind == UnitKind.CSP and not state.csp_on():
         st.info("Switched off: the plan is made without the CSP plants. Their parameters are kept below.",
                 icon=":material/power_off:")
     widgets.table_editor(
@@ -117,7 +117,7 @@ if run.provenance_summary():
     st.caption(run.provenance_summary())
 problem = solving.prepare(run)
 if problem is not None:
-    kinds = [k for k in KINDS if getattr(run, k)]
+    kinds = [k for k in UNIT_KINDS if getattr(run, k)]
     for tab, kind in zip(st.tabs([widgets.KIND_TITLES[k] for k in kinds]), kinds):
         with tab:
             columns = st.columns(BAND_COLUMNS)

@@ -17,6 +17,7 @@ import datetime as dt
 from collections.abc import Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass
+from enum import StrEnum
 from pathlib import Path
 
 import pandas as pd
@@ -50,6 +51,7 @@ class Recommendation:
     curve: pd.DataFrame
     comparison: pd.DataFrame
     verdict: str
+    outcome: Verdict
 
     @property
     def variant(self) -> BacktestVariant:
@@ -104,8 +106,8 @@ def recommendation_from(records: pd.DataFrame, train: tuple[dt.date, dt.date], t
     best = trained.sort_values([column, "fraction"]).iloc[0]
     fraction = float(best["fraction"])
     comparison = _comparison(table, fraction, periods, column)
-    verdict = _verdict(comparison, fraction, criterion, test)
-    return Recommendation(backtest_id, criterion, train, test, fraction, curve, comparison, verdict)
+    outcome, verdict = _verdict(comparison, fraction, criterion, test)
+    return Recommendation(backtest_id, criterion, train, test, fraction, curve, comparison, verdict, outcome)
 
 
 def check_periods(train, test) -> None:
@@ -153,7 +155,15 @@ def _comparison(table: pd.DataFrame, fraction: float, periods: dict, column: str
     return out
 
 
-def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test) -> str:
+class Verdict(StrEnum):
+    """How the recommended Γ fared on the test days against the presets: no preset did better
+    (``holds``), or at least one did (``loses``: the choice did not carry over)."""
+
+    HOLDS = "holds"
+    LOSES = "loses"
+
+
+def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test) -> tuple[Verdict, str]:
     column = f"test_{CRITERIA[criterion]}"
     name = CRITERION_NAMES[criterion]
     contenders = comparison[comparison["variant"] != "perfect information"]
@@ -166,10 +176,10 @@ def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test) ->
         runner = presets.nsmallest(1, column)
         gap = f"; the best preset, {runner.iloc[0]['variant']}, has {runner.iloc[0][column]:,.0f} EUR" \
             if len(runner) else ""
-        return head + f": no preset does better{gap}."
+        return Verdict.HOLDS, head + f": no preset does better{gap}."
     listing = ", ".join(f"{r['variant']} ({r[column]:,.0f} EUR)" for _, r in better.sort_values(column).iterrows())
-    return (head + f", and it LOSES to {listing} on the test days: the choice made on the training days did not "
-            "carry over to the test period.")
+    return Verdict.LOSES, (head + f", and it LOSES to {listing} on the test days: the choice made on the training "
+                           "days did not carry over to the test period.")
 
 
 def write_recommendation(result: Recommendation, store: BacktestStore, folder: str | Path) -> Path:

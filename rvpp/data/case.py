@@ -15,7 +15,7 @@ import datetime as dt
 import math
 import re
 from collections.abc import Iterator, Mapping
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_serializer, field_validator,
@@ -26,6 +26,7 @@ from ..errors import CaseError
 from .case_messages import as_number, kind_of, show_value, validate_into
 from .files import CONTROL_CHARACTERS, excerpt, excerpt_names, refused_character
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
+from .kinds import KINDS, NDRES_KINDS, UNIT_KINDS, UnitKind
 from .periods import ALLOWED_DT_H
 
 
@@ -78,6 +79,10 @@ STRATEGY_BUDGETS_H = {
     "pessimistic": {"price": 9, "wind": 9, "pv": 6, "csp": 6, "ed": 9, "td": 9},
 }
 Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
+BudgetMode = Literal["paper", "planner_chosen"]  # MODEL_SPEC §5: the published method, or the teaching variant
+Ties = Literal["choose", "earliest"]  # deviations tied at the Γ boundary: the model chooses, or the earliest
+BudgetEncoding = Literal["top_gamma", "binary"]
+PwlEncoding = Literal["incremental", "convex_combination"]
 MARKET_NAMES = ("DAM", "SRM", "HPA")
 RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}
 CASE_FILE = "case.yaml"
@@ -93,7 +98,32 @@ class _Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
-class _FollowsSeries(_Frozen):
+class _Unit(_Frozen):
+    """What every unit class offers, whatever its kind (its kind's facts are in ``KINDS``)."""
+
+    KIND: ClassVar[UnitKind]
+
+    @property
+    def unit_kind(self) -> UnitKind:
+        return self.KIND
+
+    @property
+    def series_capacity(self) -> float | None:
+        """The upper limit of its uncertain series (``None``: unbounded, as a demand's) [MW or MW_th]."""
+        return None
+
+    @property
+    def series_range(self) -> tuple[float, float]:
+        """The physical range of its realized series [MW or MW_th] (the settlement clips to it)."""
+        return 0.0, self.series_capacity
+
+    @classmethod
+    def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
+        """``data`` (a dump of a unit) in the layout of ``case.yaml``."""
+        return data
+
+
+class _FollowsSeries(_Unit):
     """A unit whose forecast band follows one history column: ``series`` if set, else its name.
 
     ``forecast_series`` names the history column of its day-ahead point forecast, used
@@ -107,6 +137,11 @@ class _FollowsSeries(_Frozen):
     @property
     def forecast_column(self) -> str | None:
         return self.forecast_series
+
+    @property
+    def scale(self) -> float:
+        """The factor from the history column to this unit's series."""
+        return self.series_scale
 
 
 class NdresUnit(_FollowsSeries):
@@ -123,6 +158,14 @@ class NdresUnit(_FollowsSeries):
     series: Text | None = None
     series_scale: Positive = 1.0
     forecast_series: Text | None = None
+
+    @property
+    def unit_kind(self) -> UnitKind:
+        return UnitKind(self.kind)
+
+    @property
+    def series_capacity(self) -> float:
+        return self.p_max_mw
 
     @model_validator(mode="after")
     def _limits(self) -> "NdresUnit":
@@ -209,8 +252,10 @@ class PowerBlock(_Frozen):
         return (left, 0) if self.initially_on else (0, left)
 
 
-class CSP(_Frozen):
+class CSP(_Unit):
     """Concentrated solar power plant: solar field, thermal storage, power block."""
+
+    KIND: ClassVar[UnitKind] = UnitKind.CSP
 
     name: UnitName
     om_eur_per_mwh: NonNegative = 0.0
@@ -228,6 +273,19 @@ class CSP(_Frozen):
     @property
     def forecast_column(self) -> str | None:
         return self.solar_field.forecast_series
+
+    @property
+    def scale(self) -> float:
+        return self.solar_field.series_scale
+
+    @property
+    def series_capacity(self) -> float:
+        return self.solar_field.p_max_mw_th
+
+    @classmethod
+    def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
+        data["power_block"]["breakpoints"] = [list(p) for p in data["power_block"]["breakpoints"]]
+        return data
 
     @property
     def p_max_mw(self) -> float:
@@ -284,6 +342,8 @@ def _check_breakpoints(pb: PowerBlock) -> None:
 class ElectricalDemand(_FollowsSeries):
     """Flexible electrical demand (MODEL_SPEC §9, paper Demand1-Demand8, Table 4)."""
 
+    KIND: ClassVar[UnitKind] = UnitKind.ED
+
     name: UnitName
     p_min_mw: NonNegative
     p_max_mw: Positive
@@ -297,6 +357,10 @@ class ElectricalDemand(_FollowsSeries):
     series_scale: Positive = 1.0
     forecast_series: Text | None = None
 
+    @property
+    def series_range(self) -> tuple[float, float]:
+        return self.p_min_mw, self.p_max_mw
+
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":
         _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
@@ -307,6 +371,8 @@ class ElectricalDemand(_FollowsSeries):
 class ThermalDemand(_FollowsSeries):
     """Thermal demand served by the CSPs and the HPA (MODEL_SPEC §9, paper Demand_Heat1-3)."""
 
+    KIND: ClassVar[UnitKind] = UnitKind.TD
+
     name: UnitName
     h_min_mw_th: NonNegative
     h_max_mw_th: Positive
@@ -315,6 +381,10 @@ class ThermalDemand(_FollowsSeries):
     series: Text | None = None
     series_scale: Positive = 1.0
     forecast_series: Text | None = None
+
+    @property
+    def series_range(self) -> tuple[float, float]:
+        return self.h_min_mw_th, self.h_max_mw_th
 
     @model_validator(mode="after")
     def _limits(self) -> "ThermalDemand":
@@ -441,9 +511,9 @@ class Budgets(_Frozen):
 
     strategy: Strategy = "balanced"
     overrides: tuple[tuple[str, Annotated[int, Field(ge=0)]], ...] = ()
-    mode: Literal["paper", "planner_chosen"] = "paper"
+    mode: BudgetMode = "paper"
     fraction: Fraction | None = None
-    ties: Literal["choose", "earliest"] = "choose"
+    ties: Ties = "choose"
 
     @property
     def label(self) -> str:
@@ -492,8 +562,8 @@ class SolverSettings(_Frozen):
     time_limit_s: Positive = 120.0
     rel_gap: Annotated[Number, Field(ge=0.0, lt=1.0)] = 1e-4
     threads: Annotated[WholeNumber, Field(ge=0, le=MAX_THREADS)] = 0
-    budget_encoding: Literal["top_gamma", "binary"] = "top_gamma"
-    pwl_encoding: Literal["incremental", "convex_combination"] = "incremental"
+    budget_encoding: BudgetEncoding = "top_gamma"
+    pwl_encoding: PwlEncoding = "incremental"
     # A MIP start: the integer variables at one in an earlier plan (a backtest passes the day before's),
     # the others at zero. HiGHS checks it and ignores it when it does not fit the day, so it can shorten
     # the search but never changes what counts as optimal; names the model does not have are ignored.
@@ -557,18 +627,22 @@ class Case(_Frozen):
     def ndres(self) -> tuple[NdresUnit, ...]:
         return self.wind + self.pv
 
-    def units(self) -> Iterator[tuple[str, Any]]:
-        """``(kind, unit)`` for every unit, kinds ``wind|pv|csp|ed|td``."""
-        for kind in ("wind", "pv", "csp", "ed", "td"):
+    def units(self) -> Iterator[tuple[UnitKind, Any]]:
+        """``(kind, unit)`` for every unit, in the order of :data:`~rvpp.data.kinds.UNIT_KINDS`."""
+        for kind in UNIT_KINDS:
             for unit in getattr(self, kind):
                 yield kind, unit
 
     def unit_names(self) -> list[str]:
         return [unit.name for _, unit in self.units()]
 
+    def uncertain_units(self) -> Iterator[tuple[UnitKind, Any]]:
+        """``(kind, unit)`` for every unit whose kind has an uncertain series."""
+        return ((kind, unit) for kind, unit in self.units() if KINDS[kind].role is not None)
+
     def sources(self) -> list[str]:
         """Names of every uncertain source that has a budget Γ."""
-        return list(PRICE_COLUMNS) + self.unit_names()
+        return list(PRICE_COLUMNS) + [unit.name for _, unit in self.uncertain_units()]
 
     def replace(self, **changes: Any) -> "Case":
         """A validated copy with fields changed.
@@ -593,7 +667,7 @@ class Case(_Frozen):
     def to_data(self) -> dict[str, Any]:
         """Plain data in the layout of ``case.yaml`` (without the history)."""
         dump = self.model_dump(mode="python", exclude={"history"})
-        units = {kind: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
+        units = {kind.value: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
         dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
         if dump["budgets"]["ties"] == "choose":
             del dump["budgets"]["ties"]  # written only when set: cases and their digests stay as they were
@@ -640,11 +714,10 @@ class Case(_Frozen):
     @model_validator(mode="after")
     def _cross_checks(self) -> "Case":
         problems = []
-        for kind in ("wind", "pv"):
+        for kind in NDRES_KINDS:
             for unit in getattr(self, kind):
                 if unit.kind != kind:
                     problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind!r} in the {kind} list')
-        names = self.unit_names()
         seen: set[str] = set()
         for kind, unit in self.units():
             if unit.name in seen:
@@ -652,13 +725,14 @@ class Case(_Frozen):
             if unit.name in RESERVED_NAMES:
                 problems.append(f'{kind} "{unit.name}": name is reserved for a price series; choose another')
             seen.add(unit.name)
-        known = set(PRICE_COLUMNS) | set(names)
+        known = set(self.sources())
+        uncertain = [unit.name for _, unit in self.uncertain_units()]
         for source, _ in self.budgets.overrides:
             if source not in known:
                 problems.append(f"budgets.overrides: unknown source {excerpt(source)!r}; sources are "
-                                f"{', '.join(PRICE_COLUMNS)} and the unit names ({', '.join(names)})")
+                                f"{', '.join(PRICE_COLUMNS)} and the unit names ({', '.join(uncertain)})")
         columns = set(self.history.columns)
-        for kind, unit in self.units():
+        for kind, unit in self.uncertain_units():
             if unit.column in PRICE_COLUMNS or unit.forecast_column in PRICE_COLUMNS:
                 problems.append(f'{kind} "{unit.name}": follows the price column '
                                 f"{unit.column if unit.column in PRICE_COLUMNS else unit.forecast_column!r}; a unit "
@@ -698,13 +772,13 @@ class Case(_Frozen):
             if key not in keys:
                 problems.append(f"uncertainty.bands: unknown key {excerpt(key)!r}; keys are {DEFAULT_BANDS}, a unit "
                                 f"kind ({', '.join(UNIT_KINDS)}) or a source ({excerpt_names(sorted(sources), 12)})")
-        for kind, unit in self.units():
+        for kind, unit in self.uncertain_units():
             column = unit.forecast_column
             if column is not None and column not in columns:
                 problems.append(f'{kind} "{unit.name}": forecast history column {excerpt(column)!r} is missing from '
                                 f"{self.history.source}")
             if self.uncertainty.band_method(unit.name, kind) == "forecast" and column is None:
-                field = "solar_field.forecast_series" if kind == "csp" else "forecast_series"
+                field = KINDS[kind].forecast_field
                 problems.append(f'{kind} "{unit.name}": uncertainty.bands asks for forecast bands but the unit '
                                 f"has no {field} (the history column of its day-ahead forecast)")
         imbalance = self.markets.imbalance_prices
@@ -720,16 +794,12 @@ class Case(_Frozen):
         return problems
 
 
-UNIT_KINDS = ("wind", "pv", "csp", "ed", "td")
-_UNIT_MODELS = {"wind": NdresUnit, "pv": NdresUnit, "csp": CSP, "ed": ElectricalDemand, "td": ThermalDemand}
+# The class of each unit kind (rvpp.data.kinds.KINDS holds the kind's other facts).
+UNIT_MODELS: dict[UnitKind, type[_Frozen]] = {UnitKind.WIND: NdresUnit, UnitKind.PV: NdresUnit, UnitKind.CSP: CSP,
+                                               UnitKind.ED: ElectricalDemand, UnitKind.TD: ThermalDemand}
 _SECTIONS = {"markets": Markets, "uncertainty": UncertaintySettings, "budgets": Budgets, "solver": SolverSettings}
 _TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "history", "units", "provenance",
                *_SECTIONS}
-
-
-def power_unit(kind: str) -> str:
-    """The unit of a unit kind's power: thermal for the CSP's field and the thermal demands."""
-    return "MW_th" if kind in ("csp", "td") else "MW"
 
 
 def _plain(kind: str, unit: Any) -> dict[str, Any]:
@@ -739,11 +809,9 @@ def _plain(kind: str, unit: Any) -> dict[str, Any]:
 
 
 def _unit_data(kind: str, unit: dict[str, Any]) -> dict[str, Any]:
-    if kind in ("wind", "pv"):
+    if kind in NDRES_KINDS:
         unit = {k: v for k, v in unit.items() if k != "kind"}
-    if kind == "csp":
-        unit["power_block"]["breakpoints"] = [list(p) for p in unit["power_block"]["breakpoints"]]
-    return unit
+    return UNIT_MODELS[kind].plain_data(unit)
 
 
 def _is_multiple(hours: float, dt_h: float) -> bool:
@@ -820,9 +888,9 @@ def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:
             name = entry.get("name")
             label = f'{kind} "{excerpt(name)}"' if isinstance(name, str) and name else f"units.{kind} item {i}"
             payload = dict(entry)
-            if kind in ("wind", "pv"):
-                payload.setdefault("kind", kind)
-            unit = validate_into(_UNIT_MODELS[kind], payload, label, problems)
+            if kind in NDRES_KINDS:
+                payload.setdefault("kind", kind.value)
+            unit = validate_into(UNIT_MODELS[kind], payload, label, problems)
             if unit is not None:
                 built.append(unit)
         units[kind] = tuple(built)

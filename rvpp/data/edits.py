@@ -25,7 +25,8 @@ import re
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from .case import UNIT_KINDS, Case, power_unit
+from .case import Case
+from .kinds import KINDS, UNIT_KINDS, power_unit
 from .periods import delivery_periods
 
 # field -> (name, unit, help); the form shows "name [unit]".
@@ -116,17 +117,14 @@ STUDY_FIELDS: dict[str, str] = {
     "sp_time_limit_s": "Time limit per stochastic program [s]",
     "threads": "Threads",
 }
-CAPACITY_FIELDS = {"wind": "p_max_mw", "pv": "p_max_mw", "csp": "solar_field.p_max_mw_th", "ed": "p_max_mw",
-                   "td": "h_max_mw_th"}
-UNIT_WORDS = {"wind": "wind farm", "pv": "PV plant", "csp": "CSP plant", "ed": "electrical demand",
-              "td": "thermal demand"}
 LABEL_LIMIT = 120  # characters of a default run label
 # Period lengths [h] as the pages name them: plural, singular.
 PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
 PERIOD_NAME = {1.0: "hour", 0.5: "half-hour", 0.25: "quarter-hour"}
 # A required unit field the case model found missing, i.e. an empty cell of a unit table:
 # ``wind "WF1": p_max_mw is required`` or, for a row without a name, ``units.wind item 2: name is required``.
-REQUIRED_CELL = re.compile(r'^(?:(?:wind|pv|csp|ed|td) "(?P<unit>[^"]+)"|units\.(?P<kind>wind|pv|csp|ed|td) '
+_KIND_WORDS = "|".join(UNIT_KINDS)
+REQUIRED_CELL = re.compile(rf'^(?:(?:{_KIND_WORDS}) "(?P<unit>[^"]+)"|units\.(?P<kind>{_KIND_WORDS}) '
                            r"item (?P<row>\d+)): (?P<field>[a-z_]+(?:\.[a-z_]+)*) is required$")
 CELL_ENTRIES = {"name": "a name", "series": "a history column"}  # what an empty cell asks for; others a number
 
@@ -145,7 +143,7 @@ def label(field: str) -> str:
 
 def capacity(kind: str, unit: Any) -> float:
     """The capacity a unit's forecast band scales with [MW or MW_th]."""
-    return float(_get(unit, CAPACITY_FIELDS[kind]))
+    return float(_get(unit, KINDS[kind].capacity_field))
 
 
 def follow_capacity(before: Case, after: Case, fixed: Collection[str] = ()) -> Case:
@@ -161,7 +159,7 @@ def follow_capacity(before: Case, after: Case, fixed: Collection[str] = ()) -> C
         units, changed = [], False
         for unit in getattr(after, kind):
             prior = old.get((kind, unit.name))
-            scale_field = "solar_field.series_scale" if kind == "csp" else "series_scale"
+            scale_field = KINDS[kind].scale_field
             if (prior is not None and unit.name not in fixed and capacity(kind, prior) > 0
                     and not math.isclose(capacity(kind, unit), capacity(kind, prior))
                     and _get(unit, scale_field) == _get(prior, scale_field)):
@@ -296,7 +294,7 @@ def table_message(message: str) -> str:
     cell = REQUIRED_CELL.match(message)
     if cell is None:
         return plain_message(message)
-    where = cell["unit"] if cell["unit"] is not None else f"{UNIT_WORDS[cell['kind']]} in row {cell['row']}"
+    where = cell["unit"] if cell["unit"] is not None else f"{KINDS[cell['kind']].words} in row {cell['row']}"
     entry = CELL_ENTRIES.get(cell["field"].split(".")[-1], "a number")
     return f"{where}: {label(cell['field'])} is empty; enter {entry}"
 
@@ -350,7 +348,7 @@ def _unit_edits(origin: Case, edited: Case) -> list[str]:
 
 def _field_edits(kind: str, old: Any, new: Any) -> list[str]:
     flat_old, flat_new = flatten(old.model_dump(mode="python")), flatten(new.model_dump(mode="python"))
-    cap_field = CAPACITY_FIELDS[kind]
+    cap_field = KINDS[kind].capacity_field
     ratio = capacity(kind, new) / capacity(kind, old) if capacity(kind, old) else 1.0
     words = []
     if flat_new[cap_field] != flat_old[cap_field]:

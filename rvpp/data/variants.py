@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import CaseError, require
-from .case import MARKET_NAMES, Case
+from .case import MARKET_NAMES, BudgetEncoding, BudgetMode, Case, PwlEncoding, Strategy, Ties
 from .edits import convert_overrides
 from .files import excerpt
 from .periods import ALLOWED_DT_H, delivery_periods
@@ -42,7 +42,7 @@ class Variant:
     HPA tariff for every hour [EUR/MWh_th].
     """
 
-    strategy: str | None = None
+    strategy: Strategy | None = None
     gamma_fraction: float | None = None
     gammas: tuple[tuple[str, int], ...] = ()
     markets: str | None = None
@@ -145,20 +145,20 @@ def with_options(
     case: Case,
     *,
     date: dt.date | str | None = None,
-    strategy: str | None = None,
+    strategy: Strategy | None = None,
     gamma_fraction: float | None = None,
     gammas: Mapping[str, int] | None = None,
     markets: str | None = None,
     csp: bool = True,
     hpa_flat: float | None = None,
     dt_h: float | None = None,
-    budget_mode: str | None = None,
-    ties: str | None = None,
+    budget_mode: BudgetMode | None = None,
+    ties: Ties | None = None,
     time_limit_s: float | None = None,
     rel_gap: float | None = None,
     threads: int | None = None,
-    budget_encoding: str | None = None,
-    pwl_encoding: str | None = None,
+    budget_encoding: BudgetEncoding | None = None,
+    pwl_encoding: PwlEncoding | None = None,
 ) -> Case:
     """A copy of ``case`` with run options applied (what the command line offers).
 

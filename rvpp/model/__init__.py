@@ -7,17 +7,23 @@ the robust layer (:mod:`rvpp.model.robust`) and the objective.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import pyomo.environ as pyo
 
 from ..uncertainty.problem import Problem
 from .robust import add_robustness
 from .csp import (add_csp_commitment, add_csp_power_block, add_csp_reserves, add_csp_solar_field,
                   add_csp_storage, add_csp_symmetry)
-from .market import (SCENARIOS, activation, add_electric_balance, add_heat_balance, add_market_bids,
+from .market import (SCENARIOS, Scenario, activation, add_electric_balance, add_heat_balance, add_market_bids,
                      add_market_limits, add_objective, add_time)
 from .units import add_electrical_demand, add_ndres, add_thermal_demand
+from ..data.case import CSP
+from ..data.kinds import UnitKind
+from .blocks import UNIT_BLOCKS, unit_block
 
-__all__ = ["build_model", "add_units", "SCENARIOS", "activation"]
+__all__ = ["build_model", "add_units", "unit_block", "UNIT_BUILDERS", "SCENARIOS", "Scenario", "activation"]
 
 
 def build_model(problem: Problem) -> pyo.ConcreteModel:
@@ -36,28 +42,37 @@ def build_model(problem: Problem) -> pyo.ConcreteModel:
     return m
 
 
+def add_csp(m: pyo.Block, csp: CSP, problem: Problem) -> None:
+    """One CSP: solar field, thermal storage, turbine commitment, power block, reserves (MODEL_SPEC §8)."""
+    add_csp_solar_field(m, csp, problem)
+    add_csp_storage(m, csp, problem)
+    add_csp_commitment(m, csp, problem)
+    add_csp_power_block(m, csp, problem)
+    add_csp_reserves(m, csp, problem)
+
+
+# The model's part of a unit kind (rvpp.data.kinds.KINDS holds its other facts, rvpp.model.blocks
+# where its block sits): a new kind adds its builder, build(m, unit, problem), here.
+UNIT_BUILDERS: dict[UnitKind, Callable[[pyo.Block, Any, Problem], None]] = {
+    UnitKind.WIND: add_ndres,
+    UnitKind.PV: add_ndres,
+    UnitKind.CSP: add_csp,
+    UnitKind.ED: add_electrical_demand,
+    UnitKind.TD: add_thermal_demand,
+}
+
+
 def add_units(m: pyo.Block, problem: Problem) -> None:
     """One block per unit on the periods ``m.T`` and scenarios ``m.S`` of ``m`` (MODEL_SPEC §8-§9).
 
     ``m`` is the model itself or any block carrying its own ``T`` and ``S``, such as
-    one scenario of the stochastic benchmark (:mod:`rvpp.settle.recourse`).
+    one scenario of the stochastic benchmark (:mod:`rvpp.settle.stochastic`).
     """
     case = problem.case
-    m.ndres = pyo.Block([u.name for u in case.ndres])
-    for unit in case.ndres:
-        add_ndres(m, unit, problem)
-
-    m.csp = pyo.Block([c.name for c in case.csp])
-    for csp in case.csp:
-        add_csp_solar_field(m, csp, problem)
-        add_csp_storage(m, csp, problem)
-        add_csp_commitment(m, csp, problem)
-        add_csp_power_block(m, csp, problem)
-        add_csp_reserves(m, csp, problem)
-
-    m.ed = pyo.Block([d.name for d in case.ed])
-    for ed in case.ed:
-        add_electrical_demand(m, ed, problem)
-    m.td = pyo.Block([k.name for k in case.td])
-    for td in case.td:
-        add_thermal_demand(m, td, problem)
+    names: dict[str, list[str]] = {block: [] for block in UNIT_BLOCKS.values()}
+    for kind, unit in case.units():
+        names[UNIT_BLOCKS[kind]].append(unit.name)
+    for block, members in names.items():
+        m.add_component(block, pyo.Block(members))
+    for kind, unit in case.units():
+        UNIT_BUILDERS[kind](m, unit, problem)

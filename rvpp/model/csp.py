@@ -14,10 +14,12 @@ import pyomo.environ as pyo
 from ..data.case import CSP
 from ..uncertainty.problem import Problem
 from .robust import surely_deviating
-from .market import activation
+from .market import Scenario, activation
 from .curve import on_curve
 from .piecewise import add_convex_combination, add_incremental
 from .units import reserve_cap
+
+NONE, UP, DN = Scenario.NONE, Scenario.UP, Scenario.DN
 
 
 def add_csp_solar_field(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
@@ -220,11 +222,11 @@ def _order_fill(m: pyo.ConcreteModel, b, n_fill: int) -> None:
     fills = range(n_fill)
     fixed_up, fixed_dn = b.sigma_up.ub == 0.0, b.sigma_dn.ub == 0.0
     b.pb_fill_order_up = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
-        b.pb_fill["none", t, k] == b.pb_fill["up", t, k] if fixed_up
-        else b.pb_fill["none", t, k] <= b.pb_fill["up", t, k]))
+        b.pb_fill[NONE, t, k] == b.pb_fill[UP, t, k] if fixed_up
+        else b.pb_fill[NONE, t, k] <= b.pb_fill[UP, t, k]))
     b.pb_fill_order_dn = pyo.Constraint(m.T, fills, rule=lambda b, t, k: (
-        b.pb_fill["dn", t, k] == b.pb_fill["none", t, k] if fixed_dn
-        else b.pb_fill["dn", t, k] <= b.pb_fill["none", t, k]))
+        b.pb_fill[DN, t, k] == b.pb_fill[NONE, t, k] if fixed_dn
+        else b.pb_fill[DN, t, k] <= b.pb_fill[NONE, t, k]))
 
 
 def _reserve_slopes(m: pyo.ConcreteModel, b, curve) -> None:
@@ -233,10 +235,10 @@ def _reserve_slopes(m: pyo.ConcreteModel, b, curve) -> None:
     ``s̲·r_ts↑ ≤ e_up − e_none ≤ s̄·r_ts↑`` and ``s̲·r_ts↓ ≤ e_none − e_dn ≤ s̄·r_ts↓``
     (off, every term is zero). They tie the reserve scenarios to the nominal output."""
     low, high = float(curve.slopes.min()), float(curve.slopes.max())
-    b.pb_slope_up_low = pyo.Constraint(m.T, rule=lambda b, t: b.e["up", t] - b.e["none", t] >= low * b.r_ts_up[t])
-    b.pb_slope_up_high = pyo.Constraint(m.T, rule=lambda b, t: b.e["up", t] - b.e["none", t] <= high * b.r_ts_up[t])
-    b.pb_slope_dn_low = pyo.Constraint(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t] >= low * b.r_ts_dn[t])
-    b.pb_slope_dn_high = pyo.Constraint(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t] <= high * b.r_ts_dn[t])
+    b.pb_slope_up_low = pyo.Constraint(m.T, rule=lambda b, t: b.e[UP, t] - b.e[NONE, t] >= low * b.r_ts_up[t])
+    b.pb_slope_up_high = pyo.Constraint(m.T, rule=lambda b, t: b.e[UP, t] - b.e[NONE, t] <= high * b.r_ts_up[t])
+    b.pb_slope_dn_low = pyo.Constraint(m.T, rule=lambda b, t: b.e[NONE, t] - b.e[DN, t] >= low * b.r_ts_dn[t])
+    b.pb_slope_dn_high = pyo.Constraint(m.T, rule=lambda b, t: b.e[NONE, t] - b.e[DN, t] <= high * b.r_ts_dn[t])
 
 
 def add_csp_reserves(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
@@ -246,12 +248,12 @@ def add_csp_reserves(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     """
     b = m.csp[csp.name]
     cap = reserve_cap(problem, csp.ramp_mw_per_min, csp.reserve_share * csp.p_max_mw)
-    if "up" not in m.S:
+    if UP not in m.S:
         b.r_up = pyo.Expression(m.T, rule=lambda b, t: 0.0)
         b.r_dn = pyo.Expression(m.T, rule=lambda b, t: 0.0)
         return
-    b.r_up = pyo.Expression(m.T, rule=lambda b, t: b.e["up", t] - b.e["none", t])
-    b.r_dn = pyo.Expression(m.T, rule=lambda b, t: b.e["none", t] - b.e["dn", t])
+    b.r_up = pyo.Expression(m.T, rule=lambda b, t: b.e[UP, t] - b.e[NONE, t])
+    b.r_dn = pyo.Expression(m.T, rule=lambda b, t: b.e[NONE, t] - b.e[DN, t])
     b.reserve_up_cap = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= cap)
     b.reserve_dn_cap = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= cap)
 

@@ -2,19 +2,30 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
+
 import pyomo.environ as pyo
 
 from ..data.history import PRICE_COLUMNS
 from ..uncertainty.problem import Problem
 
-SCENARIOS = ("none", "up", "dn")
+class Scenario(StrEnum):
+    """Reserve activation scenario (MODEL_SPEC §1, the set ``S``): none, all up reserve called,
+    all down reserve called. Every balance that involves reserves holds in each."""
+
+    NONE = "none"
+    UP = "up"
+    DN = "dn"
+
+
+SCENARIOS: tuple[Scenario, ...] = tuple(Scenario)
 
 
 def activation(s: str, up, dn):
     """Reserve deployed in activation scenario ``s``: ``+up``, ``-dn`` or 0 (paper's vectors)."""
-    if s == "up":
+    if s == Scenario.UP:
         return up
-    if s == "dn":
+    if s == Scenario.DN:
         return -dn
     return 0.0
 
@@ -22,8 +33,8 @@ def activation(s: str, up, dn):
 def add_time(m: pyo.ConcreteModel, problem: Problem) -> None:
     """Periods ``T = 1..NT`` and activation scenarios ``S`` (only ``none`` without the SRM)."""
     m.T = pyo.RangeSet(1, problem.nt)
-    scenarios = SCENARIOS if problem.case.markets.srm else ("none",)
-    m.S = pyo.Set(initialize=scenarios, ordered=True)
+    scenarios = SCENARIOS if problem.case.markets.srm else (Scenario.NONE,)
+    m.S = pyo.Set(initialize=[s.value for s in scenarios], ordered=True)  # plain text inside Pyomo
 
 
 def capacities(problem: Problem) -> tuple[float, float, float]:
@@ -89,7 +100,7 @@ def net_injection(m: pyo.Block, case, s: str, t: int):
 def operating_cost(m: pyo.Block, case, dt: float):
     """``Σt Σr C_r·p_r·dt + Σt Σθ C_θ·(p_θ + h_θ)·dt`` over the unit blocks of ``m`` [EUR]."""
     return sum(u.om_eur_per_mwh * m.ndres[u.name].p[t] * dt for u in case.ndres for t in m.T) + sum(
-        c.om_eur_per_mwh * (m.csp[c.name].e["none", t] + m.csp[c.name].h[t]) * dt
+        c.om_eur_per_mwh * (m.csp[c.name].e[Scenario.NONE, t] + m.csp[c.name].h[t]) * dt
         for c in case.csp for t in m.T)
 
 

@@ -34,7 +34,8 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ..errors import RvppError
-from ..uncertainty.problem import Problem, Source, budget_split
+from ..uncertainty.problem import Problem, Source, SourceKind, budget_split
+from .blocks import unit_block
 
 PRICE_EXPOSURES = ("price_da", "price_sr_up", "price_sr_dn")
 
@@ -50,7 +51,7 @@ def add_robustness(m: pyo.ConcreteModel, problem: Problem) -> None:
             m.protection[name].set_value(protection)
         else:
             target = _bound_target(m, source)
-            sign = -1.0 if source.kind == "production" else 1.0
+            sign = -1.0 if source.kind is SourceKind.PRODUCTION else 1.0
             y = add_budgeted_deviation(block, source, problem)
             for t in m.T:
                 target[t].set_value(float(source.nominal[t - 1]) + sign * y[t])
@@ -58,8 +59,7 @@ def add_robustness(m: pyo.ConcreteModel, problem: Problem) -> None:
 
 def _bound_target(m: pyo.ConcreteModel, source: Source):
     """The robust bound Expression of the unit the source belongs to."""
-    container = {"wind": m.ndres, "pv": m.ndres, "csp": m.csp, "ed": m.ed, "td": m.td}[source.unit_kind]
-    return container[source.name].bound
+    return unit_block(m, source.unit_kind, source.name).bound
 
 
 def _price_exposure(m, block, source: Source, problem: Problem) -> dict:

@@ -14,10 +14,12 @@ from collections.abc import Mapping
 import pandas as pd
 
 from ..data.case import STRATEGIES
+from ..data.kinds import UnitKind
 from ..solving.results import Result
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # the columns of the paper's Table 10
-KIND_NAMES = {"wind": "WFs", "pv": "PVs", "csp": "CSP", "ed": "EDs"}  # the rows of the paper's Table 9
+# The rows of the paper's Table 9.
+KIND_NAMES = {UnitKind.WIND: "WFs", UnitKind.PV: "PVs", UnitKind.CSP: "CSP", UnitKind.ED: "EDs"}
 PERCENT = 100.0
 KILO = 1000.0
 PERCENT_BASE_SHARE = 0.05  # a percentage needs a base of at least 5 % of the gross money flows

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import plotly.graph_objects as go
 
+from ..data.kinds import UnitKind
 from ..solving.results import Result
 from .plots import cell_axes, subplots_layout
 from .style import FIGURE_HEIGHT, FIGURE_MARGIN, GAIN_COLOR, GRID_COLOR, LOSS_COLOR, NET_COLOR, TRANSPARENT
@@ -78,8 +79,8 @@ def economics(result: Result) -> DayEconomics:
         revenue_dam_eur=parts.get("revenue_dam_eur", 0.0), revenue_sr_eur=parts.get("revenue_sr_eur", 0.0),
         cost_hpa_eur=parts.get("cost_hpa_eur", 0.0), cost_opex_eur=parts.get("cost_opex_eur", 0.0),
         protection_eur=sum(result.protection_eur.values()),
-        demand_mwh=float(units.loc[units["kind"] == "ed", "p_mw"].sum() * dt_h),
-        heat_mwh_th=float(units.loc[units["kind"] == "td", "p_mw"].sum() * dt_h),
+        demand_mwh=float(units.loc[units["kind"] == UnitKind.ED, "p_mw"].sum() * dt_h),
+        heat_mwh_th=float(units.loc[units["kind"] == UnitKind.TD, "p_mw"].sum() * dt_h),
         sold_mwh=float(p_da.clip(min=0).sum() * dt_h), bought_mwh=float(-p_da.clip(max=0).sum() * dt_h),
         heat_bought_mwh_th=float(market["h_hpa_mw"].sum() * dt_h))
 

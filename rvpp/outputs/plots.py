@@ -23,8 +23,9 @@ import pandas as pd
 import plotly.graph_objects as go
 
 from ..settle.audit import price_exposures, protection_exact
-from ..uncertainty.problem import Problem
-from ..solving.results import FLEX_KINDS, Result
+from ..uncertainty.problem import Problem, SourceKind
+from ..data.kinds import ELECTRIC_KINDS, FLEX_KINDS, KINDS, UnitKind
+from ..solving.results import Result
 from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, FIGURE_MARGIN, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS,
                     MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
 from ..errors import CaseError
@@ -35,7 +36,7 @@ CLOCK_TITLE = "Delivery day, period start (local time)"
 HOURS_PER_TICK = 1  # one x tick per clock hour
 
 SOURCE_UNITS = {"price_da": "EUR/MWh", "price_sr_up": "EUR/MW per h", "price_sr_dn": "EUR/MW per h",
-                "wind": "MW", "pv": "MW", "csp": "MW_th", "ed": "MW", "td": "MW_th"}
+                **{kind: info.power_unit for kind, info in KINDS.items()}}
 COMPARE_ROWS = (("p_da_mw", "DAM [MW]", "MW"), ("r_sr_up_mw", "SR up [MW]", "MW"),
                 ("r_sr_dn_mw", "SR down [MW]", "MW"), ("h_hpa_mw", "HPA heat [MW_th]", "MW_th"))
 TRADE_NAMES = {"p_da_mw": "day-ahead energy", "r_sr_up_mw": "up reserve", "r_sr_dn_mw": "down reserve",
@@ -75,7 +76,7 @@ def heat_figure(result: Result) -> go.Figure:
                    "%{y:.2f} MW_th") for i, (name, part) in enumerate(plants)]
     traces.append(_bar(x, result.market["h_hpa_mw"].to_numpy(float), "HPA purchase", MARKET_COLORS["hpa"],
                        "%{y:.2f} MW_th"))
-    traces.append(dict(type="scatter", x=x, y=_kind_sum(result, "td", "p_mw"), name="Thermal demand",
+    traces.append(dict(type="scatter", x=x, y=_kind_sum(result, UnitKind.TD, "p_mw"), name="Thermal demand",
                        mode="lines+markers", line=dict(color=GREEN, width=3), hovertemplate="%{y:.2f} MW_th"))
     layout = _plan_layout(result, "Heat supply against thermal demand", "Heat [MW_th]")
     return go.Figure(data=traces, layout={**layout, "barmode": "stack"})
@@ -87,10 +88,11 @@ def dispatch_figure(result: Result) -> go.Figure:
     x = _labels(result)
     units = result.units
     traces = []
-    for kind in ("wind", "pv", "csp", "ed"):
+    for kind in ELECTRIC_KINDS:
         parts = _by_unit(units[units["kind"] == kind])
-        sign = -1.0 if kind == "ed" else 1.0
-        traces += [{**_bar(x, sign * part["p_mw"].to_numpy(float), name, _shade(KIND_COLORS[kind], i, len(parts)),
+        sign = float(KINDS[kind].electric_sign)
+        color = KIND_COLORS.get(kind, GREY)
+        traces += [{**_bar(x, sign * part["p_mw"].to_numpy(float), name, _shade(color, i, len(parts)),
                            "%{y:.2f} MW"), "legendgroup": kind} for i, (name, part) in enumerate(parts)]
     traces.append(dict(type="scatter", x=x, y=result.market["p_da_mw"].to_numpy(float), name="DAM position",
                        mode="lines+markers", line=dict(color=BLUE, width=3), hovertemplate="%{y:.2f} MW"))
@@ -221,7 +223,7 @@ def bands_figure(problem: Problem, source: str, chi: Sequence[float] | np.ndarra
         chi = np.asarray(chi, dtype=float)
         if len(chi) != problem.nt:
             raise ValueError(f"chi has {len(chi)} values for {problem.nt} periods")
-        adverse = np.where(chi < 0, hi, hi if src.kind == "consumption" else lo)
+        adverse = np.where(chi < 0, hi, hi if src.kind is SourceKind.CONSUMPTION else lo)
         marked = np.flatnonzero(chi != 0)
         shapes = [dict(type="rect", xref="x", yref="y domain", x0=t - 0.5, x1=t + 0.5, y0=0, y1=1,
                        fillcolor=CHI_SHADE, line=dict(width=0), layer="below") for t in marked]
@@ -284,7 +286,7 @@ def deviating_periods(result: Result, source: str) -> np.ndarray:
             buying = result.market["p_da_mw"].to_numpy(float) < 0
             chi[worst & buying] = -1.0
         return chi
-    table = result.csp if src.unit_kind == "csp" else result.units
+    table = result.csp if src.unit_kind == UnitKind.CSP else result.units
     rows = table[table["unit"] == source].sort_values("t")
     return rows["chi"].to_numpy(dtype=float, na_value=0.0)
 
@@ -434,9 +436,9 @@ def _model_band(problem: Problem, source: str) -> tuple[np.ndarray, np.ndarray, 
     """Lower bound, median and upper bound the model uses for ``source``."""
     src = problem.sources[source]
     mid = problem.bands[(source, "mid")].to_numpy(float)
-    if src.kind == "price_da":
+    if src.kind is SourceKind.PRICE_DA:
         return src.nominal - src.deviation, mid, src.nominal + src.deviation_up
-    if src.kind == "consumption":
+    if src.kind is SourceKind.CONSUMPTION:
         return src.nominal, mid, src.nominal + src.deviation
     return src.nominal - src.deviation, np.minimum(mid, src.nominal), src.nominal
 
@@ -449,9 +451,9 @@ def _source_unit(problem: Problem, source: str) -> str:
 def _source_axis(source: str, src, unit: str) -> str:
     if src.is_price:
         return f"Price [{unit}]"
-    if src.unit_kind == "csp":
+    if src.unit_kind == UnitKind.CSP:
         return f"Solar-field heat available [{unit}]"
-    if src.kind == "consumption":
+    if src.kind is SourceKind.CONSUMPTION:
         return f"Consumption [{unit}]"
     return f"Available power [{unit}]"
 

@@ -10,6 +10,8 @@ legend entry.
 
 from __future__ import annotations
 
+from ..data.kinds import KINDS
+
 BLUE, SKY, GREEN, YELLOW = "#2E86DE", "#56B4E9", "#009E73", "#F0E442"
 ORANGE, VERMILION, PURPLE, GREY = "#E69F00", "#D55E00", "#CC79A7", "#8C8C8C"
 SERIES_COLORS = (BLUE, VERMILION, GREEN, ORANGE, PURPLE, SKY, GREY, YELLOW)
@@ -26,10 +28,10 @@ FIGURE_HEIGHT = 420
 # narrow (automargin) by drawing the whole figure again, which doubles the browser's work.
 FIGURE_MARGIN = {"t": 100, "b": 84, "l": 80, "r": 30}
 
+# A kind without a colour here is drawn grey (KIND_COLORS.get).
 KIND_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "hpa": GREY}
-KIND_LABELS = {"wind": "Wind", "pv": "PV", "csp": "CSP", "ed": "Electrical demand", "td": "Thermal demand"}
-KIND_GROUP_LABELS = {"wind": "Wind farms", "pv": "PV plants", "csp": "CSP", "ed": "Electrical demands",
-                     "td": "Thermal demands"}
+KIND_LABELS = {kind: info.label for kind, info in KINDS.items()}
+KIND_GROUP_LABELS = {kind: info.group for kind, info in KINDS.items()}
 
 # Markets: day-ahead energy, up and down secondary reserve, heat purchase agreement.
 MARKET_COLORS = {"dam": BLUE, "sr_up": GREEN, "sr_dn": ORANGE, "hpa": GREY}

@@ -39,7 +39,8 @@ import pandas as pd
 
 import openpyxl
 
-from ..data.case import UNIT_KINDS, Case, parse_case
+from ..data.case import Case, parse_case
+from ..data.kinds import KINDS, UNIT_KINDS, UnitKind
 from ..data.edits import flatten
 from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, read_file, unzip
 from ..data.history import History
@@ -47,8 +48,8 @@ from ..errors import CaseError, CaseFileError, UploadLimitError
 
 BREAKPOINTS = "power_block.breakpoints"
 BREAKPOINT_COLUMNS = ("input_mw_th", "efficiency")
-SERIES_FIELDS = {"wind": "series", "pv": "series", "csp": "solar_field.series", "ed": "series", "td": "series"}
-NAME_PREFIXES = {"wind": "WF", "pv": "PV", "csp": "CSP", "ed": "ED", "td": "TD"}
+SERIES_FIELDS = {kind: info.series_field for kind, info in KINDS.items()}
+NAME_PREFIXES = {kind: info.prefix for kind, info in KINDS.items()}
 SETTING_SECTIONS = ("markets", "uncertainty", "budgets", "solver")
 TOP_SETTINGS = ("name", "description", "delivery_date", "timezone", "dt_h")
 # Sections of the ``case`` sheet, each given as dotted rows (one field of each as an example).
@@ -152,7 +153,7 @@ def with_unit_table(case: Case, kind: str, table: pd.DataFrame,
     """
     _check_kind(kind)
     units = _units_from_table(kind, table)
-    if kind == "csp":
+    if kind == UnitKind.CSP:
         known = {c.name: [list(p) for p in c.power_block.breakpoints] for c in case.csp}
         known.update({name: [list(p) for p in points] for name, points in (breakpoints or {}).items()})
         for unit in units:
@@ -198,7 +199,7 @@ def with_breakpoints(case: Case, csp: str, table: pd.DataFrame) -> Case:
         raise CaseError(f'csp "{csp}": power_block.breakpoints point {missing[0]} needs both an input and '
                         "an efficiency")
     data = case.to_data()
-    for unit in data["units"]["csp"]:
+    for unit in data["units"][UnitKind.CSP]:
         if unit["name"] == csp:
             unit["power_block"]["breakpoints"] = points
     return parse_case(data, case.history)
@@ -287,7 +288,7 @@ def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "wo
     data["units"] = {}
     for kind in UNIT_KINDS:
         for unit in _units_from_table(kind, sheets.get(kind, pd.DataFrame(columns=["name"]))):
-            if kind == "csp":
+            if kind == UnitKind.CSP:
                 unit.setdefault("power_block", {})["breakpoints"] = points.get(unit.get("name"), [])
             data["units"].setdefault(kind, []).append(unit)
     history = sheets["history"]

@@ -28,6 +28,8 @@ import numpy as np
 import pandas as pd
 
 from ..data.case import STRATEGY_BUDGETS_H, Case
+from ..data.kinds import KINDS, NDRES_KINDS, Role, UnitKind
+from ..model.market import Scenario
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods
 
@@ -183,7 +185,8 @@ def budgets(case: Case, nt: int) -> dict[str, int]:
         return {**{name: min(gamma, nt) for name in names}, **case.budgets.override_map}
     preset, per_hour = STRATEGY_BUDGETS_H[case.budgets.strategy], int(round(1.0 / case.dt_h))
     gammas = {name: min(preset["price"] * per_hour, nt) for name in PRICE_COLUMNS}
-    gammas.update({unit.name: min(preset[kind] * per_hour, nt) for kind, unit in case.units()})
+    gammas.update({unit.name: min(preset[KINDS[kind].budget] * per_hour, nt)
+                   for kind, unit in case.uncertain_units()})
     return {**gammas, **case.budgets.override_map}
 
 
@@ -215,16 +218,16 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
     for name in ("price_sr_up", "price_sr_dn"):
         lo, _, hi = lo_mid_hi(name, name, 1.0)
         sources[name] = Series("price_sr", None, hi, hi - lo, gammas[name])
-    for kind, unit in case.units():
-        if kind == "csp":
+    for kind, unit in case.uncertain_units():
+        if kind == UnitKind.CSP:
             field = unit.solar_field
             lo, _, hi = lo_mid_hi(unit.name, field.series or unit.name, field.series_scale, kind, field.forecast_series)
             top, bottom = np.clip(hi, 0.0, field.p_max_mw_th), np.clip(lo, 0.0, field.p_max_mw_th)
         else:
             lo, _, hi = lo_mid_hi(unit.name, unit.series or unit.name, unit.series_scale, kind, unit.forecast_series)
-        if kind in ("wind", "pv"):
+        if kind in NDRES_KINDS:
             top, bottom = np.clip(hi, 0.0, unit.p_max_mw), np.clip(lo, 0.0, unit.p_max_mw)
-        if kind in ("wind", "pv", "csp"):
+        if KINDS[kind].role is Role.PRODUCTION:
             sources[unit.name] = Series("production", kind, top, top - bottom, gammas[unit.name])
         else:
             if case.uncertainty.band_method(unit.name, kind) == "forecast" and bands is None:
@@ -273,7 +276,7 @@ class _Auditor:
 
 
 def _activation(s: str, up, dn):
-    return up if s == "up" else (-dn if s == "dn" else 0.0 * up)
+    return up if s == Scenario.UP else (-dn if s == Scenario.DN else 0.0 * up)
 
 
 def audit_result(result, tol: float = TOLERANCE, bands: pd.DataFrame | None = None) -> list[Violation]:
@@ -331,7 +334,7 @@ def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: 
     for kind, unit in case.units():
         if unit.name not in by_unit or len(by_unit[unit.name]) != nt:
             a.fail("units.rows", f"missing or incomplete rows for {kind} {unit.name}", unit.name)
-        if kind == "csp" and (unit.name not in by_csp or len(by_csp[unit.name]) != nt):
+        if kind == UnitKind.CSP and (unit.name not in by_csp or len(by_csp[unit.name]) != nt):
             a.fail("csp.rows", "missing or incomplete csp rows", unit.name)
     if a.violations:
         return a.violations
@@ -377,7 +380,7 @@ def _audit_market(a: _Auditor, day: AuditDay, market: pd.DataFrame) -> None:
 def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: dict, by_csp: dict) -> None:
     case = day.case
     p_da, sr_up, sr_dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
-    for s in ("none", "up", "dn"):
+    for s in Scenario:
         supply = np.zeros(day.nt)
         for unit in case.ndres:
             u = by_unit[unit.name]
@@ -458,7 +461,7 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
     a.leq("csp.input_ceiling", col["p_pb_mw"] + r_up, pb.p_in_max_mw_th * u, n)
     a.leq("csp.input_floor", pb.p_in_min_mw_th * u, col["p_pb_mw"] - r_dn, n)
     # Conversion curve in each activation scenario (STU5) and the turbine nameplate.
-    for s in ("none", "up", "dn"):
+    for s in Scenario:
         x = col["p_pb_mw"] + _activation(s, r_up, r_dn)
         e = col[f"e_{s}_mw"]
         expected = np.where(u > 0.5, curve_output_mw(pb, x), 0.0)
@@ -538,8 +541,8 @@ def _audit_budgets(a: _Auditor, day: AuditDay, by_unit: dict, by_csp: dict) -> N
     for name, src in day.sources.items():
         if src.is_price:
             continue
-        table = by_csp[name] if src.unit_kind == "csp" else by_unit[name]
-        prefix = "sf_" if src.unit_kind == "csp" else ""
+        table = by_csp[name] if src.unit_kind == UnitKind.CSP else by_unit[name]
+        prefix = "sf_" if src.unit_kind == UnitKind.CSP else ""
         nominal = table[f"{prefix}nominal_mw"].to_numpy(float)
         deviation = table[f"{prefix}deviation_mw"].to_numpy(float)
         bound = table[f"{prefix}bound_mw"].to_numpy(float)

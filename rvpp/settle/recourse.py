@@ -37,12 +37,13 @@ import pandas as pd
 import pyomo.environ as pyo
 
 from ..data.case import Case
+from ..data.kinds import KINDS, UnitKind
 from ..errors import RvppError, SettlementError
 from ..data.history import MAX_QUANTITY, PRICE_COLUMNS
 from ..model import add_units
 from ..model.market import activation, add_market_bids, add_market_limits, add_time, net_injection, operating_cost
 from ..data.periods import delivery_periods, period_labels
-from ..uncertainty.problem import Problem, Source, source_columns
+from ..uncertainty.problem import Problem, Source, SourceKind, source_columns
 from ..solving.highs import model_lifetime, run_highs
 from ..uncertainty.bands import realized_values
 
@@ -216,13 +217,12 @@ def realized_problem(case: Case, real: Realization) -> "RealizedProblem":
                         f"{case.delivery_date} has {len(periods)}; use days of the same length")
     sources = {}
     for name in PRICE_COLUMNS:
-        kind = "price_da" if name == "price_da" else "price_sr"
+        kind = SourceKind.PRICE_DA if name == "price_da" else SourceKind.PRICE_SR
         sources[name] = _exact(name, kind, None, real.values[name].to_numpy(float))
-    for kind, unit in case.units():
-        low, high = _unit_limits(kind, unit)
+    for kind, unit in case.uncertain_units():
+        low, high = unit.series_range
         values = np.clip(real.values[unit.name].to_numpy(float), low, high)
-        role = "production" if kind in ("wind", "pv", "csp") else "consumption"
-        sources[unit.name] = _exact(unit.name, role, kind, values)
+        sources[unit.name] = _exact(unit.name, SourceKind(KINDS[kind].role.value), kind, values)
     tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
     bands = pd.DataFrame({(name, stat): src.nominal for name, src in sources.items() for stat in ("lo", "mid", "hi")},
                          index=pd.RangeIndex(1, len(periods) + 1, name="t"))
@@ -242,20 +242,10 @@ class RealizedProblem(Problem):
     imbalance_long: np.ndarray | None = None
 
 
-def _exact(name: str, kind: str, unit_kind: str | None, values: np.ndarray) -> Source:
+def _exact(name: str, kind: SourceKind, unit_kind: UnitKind | None, values: np.ndarray) -> Source:
     zero = np.zeros_like(values)
-    return Source(name, kind, unit_kind, values, zero, 0, deviation_up=zero if kind == "price_da" else None)
-
-
-def _unit_limits(kind: str, unit) -> tuple[float, float]:
-    """Physical range of a unit's uncertain series [MW] or [MW_th]."""
-    if kind == "csp":
-        return 0.0, unit.solar_field.p_max_mw_th
-    if kind in ("wind", "pv"):
-        return 0.0, unit.p_max_mw
-    if kind == "ed":
-        return unit.p_min_mw, unit.p_max_mw
-    return unit.h_min_mw_th, unit.h_max_mw_th
+    return Source(name, kind, unit_kind, values, zero, 0,
+                  deviation_up=zero if kind is SourceKind.PRICE_DA else None)
 
 
 # ----------------------------------------------------------------------------- model

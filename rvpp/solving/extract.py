@@ -7,6 +7,9 @@ import pandas as pd
 import pyomo.environ as pyo
 
 from ..data.history import PRICE_COLUMNS
+from ..data.kinds import UnitKind
+from ..model.blocks import unit_block
+from ..model.market import Scenario
 from ..uncertainty.problem import Problem
 from .results import flexibility_table
 
@@ -91,27 +94,26 @@ def _units_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
                                    "bound_mw", "chi")}
 
     def add(kind, name, p, r_up, r_dn, nominal, deviation, bound, chi):
-        for key, value in zip(columns, (np.full(len(T), name, dtype=object), np.full(len(T), kind, dtype=object),
+        kind_name = str(kind)  # plain text in the tables, as in case.yaml
+        for key, value in zip(columns, (np.full(len(T), name, dtype=object), np.full(len(T), kind_name, dtype=object),
                                         p, r_up, r_dn, nominal, deviation, bound, chi)):
             columns[key].append(np.asarray(value))
 
     for kind, unit in problem.case.units():
         name = unit.name
         src = problem.sources[name]
-        if kind in ("wind", "pv", "ed"):
-            b = m.ndres[name] if kind != "ed" else m.ed[name]
-            add(kind, name, _series(b.p, T), _series(b.r_up, T), _series(b.r_dn, T),
-                src.nominal, src.deviation, _series(b.bound, T), _chi(m, name, T))
-        elif kind == "td":
-            b = m.td[name]
+        b = unit_block(m, kind, name)
+        if kind == UnitKind.CSP:
+            empty = np.full(len(T), np.nan)
+            add(kind, name, _series(b.e, [(Scenario.NONE, t) for t in T]), _series(b.r_up, T),
+                _series(b.r_dn, T), empty, empty, empty, np.full(len(T), pd.NA, dtype=object))
+        elif kind == UnitKind.TD:
             zeros = np.zeros(len(T))
             add(kind, name, _series(b.h, T), zeros, zeros, src.nominal, src.deviation,
                 _series(b.bound, T), _chi(m, name, T))
         else:
-            b = m.csp[name]
-            empty = np.full(len(T), np.nan)
-            add(kind, name, _series(b.e, [("none", t) for t in T]), _series(b.r_up, T),
-                _series(b.r_dn, T), empty, empty, empty, np.full(len(T), pd.NA, dtype=object))
+            add(kind, name, _series(b.p, T), _series(b.r_up, T), _series(b.r_dn, T),
+                src.nominal, src.deviation, _series(b.bound, T), _chi(m, name, T))
     if not columns["unit"]:
         return pd.DataFrame()
     count = len(columns["unit"])
@@ -127,7 +129,7 @@ def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     for csp in problem.case.csp:
         b, src, ts = m.csp[csp.name], problem.sources[csp.name], csp.storage
         span = ts.e_max_mwh_th - ts.e_min_mwh_th
-        e = {s: _series(b.e, [(s if s in m.S else "none", t) for t in T]) for s in ("none", "up", "dn")}
+        e = {s: _series(b.e, [(s if s in m.S else Scenario.NONE, t) for t in T]) for s in Scenario}
         sigma_up, sigma_dn = _v(b.sigma_up), _v(b.sigma_dn)
         frames.append(pd.DataFrame({
             **base, "unit": csp.name,
@@ -137,7 +139,7 @@ def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
             "sf_bound_mw": _series(b.bound, T),
             "chi": _chi(m, csp.name, T),
             "p_pb_mw": _series(b.p_pb, T),
-            "e_none_mw": e["none"], "e_up_mw": e["up"], "e_dn_mw": e["dn"],
+            "e_none_mw": e[Scenario.NONE], "e_up_mw": e[Scenario.UP], "e_dn_mw": e[Scenario.DN],
             "ts_charge_mw": _series(b.p_ch, T),
             "ts_discharge_mw": _series(b.p_dis, T),
             "ts_energy_mwh": _series(b.e_ts, T),

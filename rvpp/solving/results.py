@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..data.kinds import FLEX_KINDS
 from .outcome import Outcome
 from ..uncertainty.problem import Problem
 
-FLEX_KINDS = ("wind", "pv", "csp", "ed")
 PROTECTION_KEYS = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}
 
 

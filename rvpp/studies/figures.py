@@ -17,7 +17,7 @@ from plotly.subplots import make_subplots
 
 from ..outputs.style import (BLUE, DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, KIND_COLORS, KIND_GROUP_LABELS,
                              MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, run_style)
-from ..solving.results import FLEX_KINDS
+from ..data.kinds import FLEX_KINDS
 
 KIND_LABELS = {kind: KIND_GROUP_LABELS[kind] for kind in FLEX_KINDS}
 GAMMA_TITLE = "Uncertainty budget Γ [periods]"

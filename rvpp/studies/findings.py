@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..data.kinds import UnitKind
 from ..solving.outcome import Outcome
 from .runner import StudyOutput
 from .stress import GREEDY, PAPER
@@ -194,7 +195,7 @@ def flat_hpa_tariff_cuts_cost(outputs: Outputs) -> Finding | None:
 
 def _up_reserve(outputs: Outputs) -> pd.DataFrame | None:
     flexibility = _fact(outputs, "strategies", "flexibility")
-    if flexibility is None or "csp" not in set(flexibility["kind"]):
+    if flexibility is None or UnitKind.CSP not in set(flexibility["kind"]):
         return None
     return flexibility
 
@@ -204,7 +205,7 @@ def csp_supplies_most_up_reserve(outputs: Outputs) -> Finding | None:
     if flexibility is None:
         return None
     total = flexibility.groupby("strategy", sort=False)["r_up_mwh"].sum()
-    csp = flexibility[flexibility["kind"] == "csp"].set_index("strategy")["r_up_mwh"]
+    csp = flexibility[flexibility["kind"] == UnitKind.CSP].set_index("strategy")["r_up_mwh"]
     share = (csp / total.replace(0.0, np.nan)).fillna(0.0)
     holds = bool((share > MAJORITY).all())
     return Finding("The CSP supplies most of the up reserve", "Case 2, Figure 13; Conclusion", holds,
@@ -217,7 +218,7 @@ def csp_highest_up_ratio(outputs: Outputs) -> Finding | None:
     if flexibility is None:
         return None
     best = flexibility.loc[flexibility.groupby("strategy", sort=False)["r_up_h"].idxmax()]
-    holds = bool(((best["kind"] == "csp") & (best["r_up_h"] > 0)).all())
+    holds = bool(((best["kind"] == UnitKind.CSP) & (best["r_up_h"] > 0)).all())
     return Finding("The CSP has the highest up-reserve-to-capacity ratio", "Case 2, Table 9", holds,
                    "highest ratio [h]: " + ", ".join(
                        f"{r.strategy} {r.kind} {r.r_up_h:.2f}" for r in best.itertuples()))

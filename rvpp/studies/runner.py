@@ -20,7 +20,8 @@ from ..settle.audit import audit_result
 from ..solving.batch import solve_many
 from ..data.case import Case
 from ..data.variants import Variant, describe
-from ..solving.results import FLEX_KINDS, Result
+from ..data.kinds import FLEX_KINDS
+from ..solving.results import Result
 from .settings import StudySettings
 
 Progress = Callable[[str, int, int], None]  # (stage, done, total)

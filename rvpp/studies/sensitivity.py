@@ -11,6 +11,7 @@ import time
 from concurrent.futures import Executor
 
 from ..data.case import Case
+from ..data.kinds import UNIT_KINDS
 from ..errors import RvppError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods
@@ -34,7 +35,7 @@ def gamma_grid(case: Case, settings: StudySettings) -> list[int]:
 
 def kind_sources(case: Case) -> dict[str, list[str]]:
     """``{kind: sources}`` for every kind the case has (``price``: the three prices)."""
-    kinds = {kind: [u.name for k, u in case.units() if k == kind] for kind in ("wind", "pv", "csp", "ed", "td")}
+    kinds = {kind: [u.name for k, u in case.units() if k == kind] for kind in UNIT_KINDS}
     kinds["price"] = list(PRICE_COLUMNS)
     return {kind: sources for kind, sources in kinds.items() if sources}
 

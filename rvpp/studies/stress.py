@@ -35,7 +35,7 @@ from ..data.case import Case
 from ..data.variants import with_options
 from ..data.variants import describe
 from ..solving.outcome import Outcome
-from ..uncertainty.problem import Problem, top_gamma_deviation
+from ..uncertainty.problem import Problem, SourceKind, top_gamma_deviation
 from ..settle.audit import price_exposures
 from ..settle.recourse import FirstStage, Realization, first_stage, nominal_realization
 from .evaluation import EUR_PER_KEUR, evaluate_task
@@ -55,9 +55,9 @@ def adverse_values(problem: Problem, p_da: np.ndarray) -> dict[str, np.ndarray]:
     """
     values = {}
     for name, src in problem.sources.items():
-        if src.kind == "price_da":
+        if src.kind is SourceKind.PRICE_DA:
             values[name] = np.where(p_da >= 0, src.nominal - src.deviation, src.nominal + src.deviation_up)
-        elif src.kind == "consumption":
+        elif src.kind is SourceKind.CONSUMPTION:
             values[name] = src.nominal + src.deviation
         else:
             values[name] = src.nominal - src.deviation

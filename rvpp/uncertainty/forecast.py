@@ -87,15 +87,9 @@ def band_specs(case: Case) -> dict[str, BandSpec]:
     specs = {}
     for name in PRICE_COLUMNS:
         specs[name] = BandSpec(name, 1.0, settings.band_method(name), price_model=settings.price_forecast)
-    for kind, unit in case.units():
-        if kind == "csp":
-            scale, low, high = unit.solar_field.series_scale, 0.0, unit.solar_field.p_max_mw_th
-        elif kind in ("wind", "pv"):
-            scale, low, high = unit.series_scale, 0.0, unit.p_max_mw
-        else:
-            scale, low, high = unit.series_scale, 0.0, None
-        specs[unit.name] = BandSpec(unit.column, scale, settings.band_method(unit.name, kind),
-                                    forecast_column=unit.forecast_column, low=low, high=high)
+    for kind, unit in case.uncertain_units():
+        specs[unit.name] = BandSpec(unit.column, unit.scale, settings.band_method(unit.name, kind),
+                                    forecast_column=unit.forecast_column, low=0.0, high=unit.series_capacity)
     return specs
 
 

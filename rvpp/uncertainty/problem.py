@@ -21,11 +21,13 @@ from __future__ import annotations
 import datetime as dt
 import math
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import pandas as pd
 
-from ..data.case import STRATEGY_BUDGETS_H, Case, power_unit
+from ..data.case import STRATEGY_BUDGETS_H, Case
+from ..data.kinds import KINDS, Role, UnitKind, power_unit
 from ..errors import CaseError
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods, period_labels
@@ -34,19 +36,27 @@ from .forecast import band_specs, case_bands
 MARGIN = 1e-6  # [MW], [MWh]: a limit counts as broken before solving only beyond the solver's tolerance
 
 
+class SourceKind(StrEnum):
+    """What an uncertain series is: a price, or a unit's production (bad direction: down) or
+    consumption (bad direction: up), as its kind's :class:`~rvpp.data.kinds.Role` says."""
+
+    PRICE_DA = "price_da"
+    PRICE_SR = "price_sr"
+    PRODUCTION = Role.PRODUCTION.value
+    CONSUMPTION = Role.CONSUMPTION.value
+
+
 @dataclass(frozen=True, eq=False)
 class Source:
     """An uncertain series with its budget.
 
-    ``kind`` is ``price_da``, ``price_sr``, ``production`` (bad direction: down) or
-    ``consumption`` (bad direction: up). ``deviation`` is the adverse deviation per
-    period (for the DAM price, the downward one ``mid - lo``); ``deviation_up`` is the
-    DAM price's upward deviation ``hi - mid``.
+    ``deviation`` is the adverse deviation per period (for the DAM price, the downward one
+    ``mid - lo``); ``deviation_up`` is the DAM price's upward deviation ``hi - mid``.
     """
 
     name: str
-    kind: str
-    unit_kind: str | None
+    kind: SourceKind
+    unit_kind: UnitKind | None
     nominal: np.ndarray
     deviation: np.ndarray
     gamma: int
@@ -96,8 +106,8 @@ def strategy_budgets(case: Case, nt: int) -> dict[str, int]:
         preset = STRATEGY_BUDGETS_H[case.budgets.strategy]
         per_hour = int(round(1.0 / case.dt_h))
         budgets = {name: preset["price"] * per_hour for name in PRICE_COLUMNS}
-        for kind, unit in case.units():
-            budgets[unit.name] = preset[kind] * per_hour
+        for kind, unit in case.uncertain_units():
+            budgets[unit.name] = preset[KINDS[kind].budget] * per_hour
         budgets = {name: min(g, nt) for name, g in budgets.items()}
     for name, gamma in case.budgets.overrides:
         if gamma > nt:
@@ -132,19 +142,20 @@ def problem_from_bands(case: Case, periods: pd.DatetimeIndex, bands: pd.DataFram
     position = {key: j for j, key in enumerate(bands.columns)}
     lo, mid, hi = ({name: values[:, position[(name, stat)]] for name in bands.columns.levels[0]}
                    for stat in ("lo", "mid", "hi"))
-    sources["price_da"] = Source("price_da", "price_da", None, mid["price_da"],
+    sources["price_da"] = Source("price_da", SourceKind.PRICE_DA, None, mid["price_da"],
                                  mid["price_da"] - lo["price_da"], budgets["price_da"],
                                  deviation_up=hi["price_da"] - mid["price_da"])
     for name in ("price_sr_up", "price_sr_dn"):
-        sources[name] = Source(name, "price_sr", None, hi[name], hi[name] - lo[name], budgets[name])
-    for kind, unit in case.units():
+        sources[name] = Source(name, SourceKind.PRICE_SR, None, hi[name], hi[name] - lo[name], budgets[name])
+    for kind, unit in case.uncertain_units():
         n = unit.name
-        if kind in ("wind", "pv", "csp"):
-            cap = unit.solar_field.p_max_mw_th if kind == "csp" else unit.p_max_mw
+        role = KINDS[kind].role
+        if role is Role.PRODUCTION:
+            cap = unit.series_capacity
             top, bottom = np.clip(hi[n], 0.0, cap), np.clip(lo[n], 0.0, cap)
-            sources[n] = Source(n, "production", kind, top, top - bottom, budgets[n])
-        else:
-            sources[n] = Source(n, "consumption", kind, lo[n], hi[n] - lo[n], budgets[n])
+            sources[n] = Source(n, SourceKind.PRODUCTION, kind, top, top - bottom, budgets[n])
+        elif role is Role.CONSUMPTION:
+            sources[n] = Source(n, SourceKind.CONSUMPTION, kind, lo[n], hi[n] - lo[n], budgets[n])
     tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
     return Problem(case=case, day=case.delivery_date, periods=periods, bands=bands,
                    sources=sources, tariff_hpa=tariff, labels=period_labels(periods))
