@@ -117,6 +117,16 @@ class _Unit(_Frozen):
         """The physical range of its realized series [MW or MW_th] (the settlement clips to it)."""
         return 0.0, self.series_capacity
 
+    @property
+    def supply_mw(self) -> float:
+        """Electrical power it can supply [MW]: its part of ``ΣPmax_r + ΣPmax_θ`` (MODEL_SPEC §7)."""
+        return 0.0
+
+    @property
+    def demand_mw(self) -> float:
+        """Electrical power it can draw [MW]: its part of ``ΣPmax_d`` (MODEL_SPEC §7)."""
+        return 0.0
+
     @classmethod
     def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
         """``data`` (a dump of a unit) in the layout of ``case.yaml``."""
@@ -165,6 +175,10 @@ class NdresUnit(_FollowsSeries):
 
     @property
     def series_capacity(self) -> float:
+        return self.p_max_mw
+
+    @property
+    def supply_mw(self) -> float:
         return self.p_max_mw
 
     @model_validator(mode="after")
@@ -292,6 +306,10 @@ class CSP(_Unit):
         """Electrical nameplate [MW]."""
         return self.power_block.p_el_max_mw
 
+    @property
+    def supply_mw(self) -> float:
+        return self.p_max_mw
+
     @model_validator(mode="after")
     def _consistent(self) -> "CSP":
         ts, pb = self.storage, self.power_block
@@ -360,6 +378,10 @@ class ElectricalDemand(_FollowsSeries):
     @property
     def series_range(self) -> tuple[float, float]:
         return self.p_min_mw, self.p_max_mw
+
+    @property
+    def demand_mw(self) -> float:
+        return self.p_max_mw
 
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":

@@ -14,7 +14,7 @@ import pyomo.environ as pyo
 from ..data.case import CSP
 from ..uncertainty.problem import Problem
 from .robust import surely_deviating
-from .market import Scenario, activation
+from .scenarios import Scenario, activation
 from .curve import on_curve
 from .piecewise import add_convex_combination, add_incremental
 from .units import reserve_cap
@@ -198,6 +198,9 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
     b.input_floor = pyo.Constraint(m.T, rule=lambda b, t: (
         b.p_pb[t] - b.r_ts_dn[t] >= pb.p_in_min_mw_th * b.online[t]))
     b.x = pyo.Expression(m.S, m.T, rule=lambda b, s, t: b.p_pb[t] + activation(s, b.r_ts_up[t], b.r_ts_dn[t]))
+    b.injection = pyo.Expression(m.S, m.T, rule=lambda b, s, t: b.e[s, t])
+    b.heat_supply = pyo.Expression(m.T, rule=lambda b, t: b.h[t])
+    b.cost = pyo.Expression(expr=sum(csp.om_eur_per_mwh * (b.e[NONE, t] + b.h[t]) * problem.dt_h for t in m.T))
     b.turbine_cap = pyo.Constraint(m.S, m.T, rule=lambda b, s, t: b.e[s, t] <= pb.p_el_max_mw * b.online[t])
 
     index = [(s, t) for s in m.S for t in m.T]

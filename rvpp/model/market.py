@@ -2,33 +2,12 @@
 
 from __future__ import annotations
 
-from enum import StrEnum
-
 import pyomo.environ as pyo
 
 from ..data.history import PRICE_COLUMNS
 from ..uncertainty.problem import Problem
-
-class Scenario(StrEnum):
-    """Reserve activation scenario (MODEL_SPEC §1, the set ``S``): none, all up reserve called,
-    all down reserve called. Every balance that involves reserves holds in each."""
-
-    NONE = "none"
-    UP = "up"
-    DN = "dn"
-
-
-SCENARIOS: tuple[Scenario, ...] = tuple(Scenario)
-
-
-def activation(s: str, up, dn):
-    """Reserve deployed in activation scenario ``s``: ``+up``, ``-dn`` or 0 (paper's vectors)."""
-    if s == Scenario.UP:
-        return up
-    if s == Scenario.DN:
-        return -dn
-    return 0.0
-
+from .blocks import unit_block
+from .scenarios import SCENARIOS, Scenario, activation
 
 def add_time(m: pyo.ConcreteModel, problem: Problem) -> None:
     """Periods ``T = 1..NT`` and activation scenarios ``S`` (only ``none`` without the SRM)."""
@@ -41,8 +20,8 @@ def capacities(problem: Problem) -> tuple[float, float, float]:
     """Generation nameplate ``ΣPmax_r + ΣPmax_θ``, demand nameplate ``ΣPmax_d`` and the
     reserve cap ``κ·max(0, generation − demand)`` [MW] (Power-Traded1..4)."""
     case = problem.case
-    generation = sum(u.p_max_mw for u in case.ndres) + sum(c.p_max_mw for c in case.csp)
-    demand = sum(d.p_max_mw for d in case.ed)
+    generation = sum(unit.supply_mw for _, unit in case.units())
+    demand = sum(unit.demand_mw for _, unit in case.units())
     return generation, demand, case.markets.kappa * max(0.0, generation - demand)
 
 
@@ -89,26 +68,26 @@ def net_injection(m: pyo.Block, case, s: str, t: int):
     ``Σr (p_r + a_s(r↑_r, r↓_r)) + Σθ e_θ,s − Σd (p_d − a_s(r↑_d, r↓_d))``; ``m`` holds the
     unit blocks (the model, or one scenario block of :mod:`rvpp.settle.recourse`).
     """
-    supply = sum(m.ndres[u.name].p[t] + activation(s, m.ndres[u.name].r_up[t], m.ndres[u.name].r_dn[t])
-                 for u in case.ndres)
-    supply += sum(m.csp[c.name].e[s, t] for c in case.csp)
-    demand = sum(m.ed[d.name].p[t] - activation(s, m.ed[d.name].r_up[t], m.ed[d.name].r_dn[t])
-                 for d in case.ed)
-    return supply - demand
+    return sum(block.injection[s, t] for block in _unit_blocks(m, case, "injection"))
+
+
+def _unit_blocks(m: pyo.Block, case, term: str) -> list[pyo.Block]:
+    """The blocks of ``m``'s units that add ``term`` (``injection``, ``heat_supply``, ...) to the system."""
+    blocks = (unit_block(m, kind, unit.name) for kind, unit in case.units())
+    return [block for block in blocks if hasattr(block, term)]
 
 
 def operating_cost(m: pyo.Block, case, dt: float):
     """``Σt Σr C_r·p_r·dt + Σt Σθ C_θ·(p_θ + h_θ)·dt`` over the unit blocks of ``m`` [EUR]."""
-    return sum(u.om_eur_per_mwh * m.ndres[u.name].p[t] * dt for u in case.ndres for t in m.T) + sum(
-        c.om_eur_per_mwh * (m.csp[c.name].e[Scenario.NONE, t] + m.csp[c.name].h[t]) * dt
-        for c in case.csp for t in m.T)
+    return sum(block.cost for block in _unit_blocks(m, case, "cost"))
 
 
 def add_heat_balance(m: pyo.ConcreteModel, problem: Problem) -> None:
     """Heat balance ``Σθ h_θ + h_hpa = Σk h_k`` (Supply-Demand1_Heat) [MW_th]."""
     case = problem.case
+    supply, use = _unit_blocks(m, case, "heat_supply"), _unit_blocks(m, case, "heat_use")
     m.heat_balance = pyo.Constraint(m.T, rule=lambda m, t: (
-        sum(m.csp[c.name].h[t] for c in case.csp) + m.h_hpa[t] == sum(m.td[k.name].h[t] for k in case.td)))
+        sum(b.heat_supply[t] for b in supply) + m.h_hpa[t] == sum(b.heat_use[t] for b in use)))
 
 
 def add_objective(m: pyo.ConcreteModel, problem: Problem) -> None:

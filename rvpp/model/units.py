@@ -3,6 +3,11 @@
 Each unit is a Pyomo block on the shared periods ``m.T`` with an Expression ``bound[t]``:
 the available power of an ND-RES or the required consumption of a demand. It starts
 at the nominal forecast; :mod:`rvpp.model.robust` moves it by the budgeted deviation.
+
+Every unit block states what it adds to the system (docs/architecture.md): ``injection[s, t]``
+[MW] into the electrical balance in activation scenario ``s``, ``heat_supply[t]`` or
+``heat_use[t]`` [MW_th] in the heat balance, and ``cost`` [EUR] in the objective; a block
+without one of them adds nothing there.
 """
 
 from __future__ import annotations
@@ -11,6 +16,7 @@ import pyomo.environ as pyo
 
 from ..data.case import ElectricalDemand, NdresUnit, ThermalDemand
 from ..uncertainty.problem import Problem
+from .scenarios import activation
 
 
 def reserve_cap(problem: Problem, ramp_mw_per_min: float, share_cap_mw: float = float("inf")) -> float:
@@ -36,6 +42,8 @@ def add_ndres(m: pyo.ConcreteModel, unit: NdresUnit, problem: Problem) -> None:
     b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
     b.available = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] + b.r_up[t] <= b.bound[t])
     b.minimum = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] - b.r_dn[t] >= unit.p_min_mw)
+    b.injection = pyo.Expression(m.S, m.T, rule=lambda b, s, t: b.p[t] + activation(s, b.r_up[t], b.r_dn[t]))
+    b.cost = pyo.Expression(expr=sum(unit.om_eur_per_mwh * b.p[t] * problem.dt_h for t in m.T))
 
 
 def add_electrical_demand(m: pyo.ConcreteModel, ed: ElectricalDemand, problem: Problem) -> None:
@@ -58,6 +66,7 @@ def add_electrical_demand(m: pyo.ConcreteModel, ed: ElectricalDemand, problem: P
     b.flex_up = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= ed.flex_up * b.p[t])
     b.flex_dn = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= ed.flex_dn * b.p[t])
     b.energy = pyo.Constraint(expr=sum((b.p[t] - b.r_up[t]) * dt for t in m.T) >= ed.e_min_mwh)
+    b.injection = pyo.Expression(m.S, m.T, rule=lambda b, s, t: -(b.p[t] - activation(s, b.r_up[t], b.r_dn[t])))
 
 
 def add_thermal_demand(m: pyo.ConcreteModel, td: ThermalDemand, problem: Problem) -> None:
@@ -72,3 +81,4 @@ def add_thermal_demand(m: pyo.ConcreteModel, td: ThermalDemand, problem: Problem
     b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
     b.required = pyo.Constraint(m.T, rule=lambda b, t: b.h[t] >= b.bound[t])
     b.energy = pyo.Constraint(expr=sum(b.h[t] * dt for t in m.T) >= td.q_min_mwh_th)
+    b.heat_use = pyo.Expression(m.T, rule=lambda b, t: b.h[t])
