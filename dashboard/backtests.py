@@ -13,14 +13,11 @@ from __future__ import annotations
 import re
 
 import pandas as pd
-import sqlalchemy as sa
 import streamlit as st
 
 from rvpp import Case, RvppError
-from rvpp.backtest.settings import FRACTION, PRESET, BacktestVariant
-from rvpp.data.variants import Variant
-from rvpp.store import BacktestStore, StoredRecommendation, default_url
-from rvpp.store.backtests import BacktestProgress
+from rvpp.service import (BacktestProgress, BacktestStore, BacktestVariant, FRACTION, PRESET, STORE_ERRORS,
+                          StoredRecommendation, Variant, default_url)
 
 from .widgets import literal
 
@@ -91,7 +88,7 @@ def recommended() -> StoredRecommendation | None:
     the pages then simply do not offer it)."""
     try:
         return store().recommendation()
-    except (RvppError, sa.exc.SQLAlchemyError):
+    except (RvppError, *STORE_ERRORS):
         return None
 
 

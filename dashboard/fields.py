@@ -6,9 +6,7 @@ from __future__ import annotations
 import streamlit as st
 
 from rvpp import Case
-from rvpp.data.edits import FIELDS, label
-from rvpp.data.history import PRICE_COLUMNS
-from rvpp.outputs.workbook import SERIES_FIELDS, new_unit_row, unit_columns
+from rvpp.service import FIELDS, PRICE_COLUMNS, SERIES_FIELDS, label, new_unit_row, unit_columns
 
 TEXT_FIELDS = {"name"}
 BOOL_FIELDS = {"initially_on"}

@@ -17,9 +17,7 @@ import plotly.graph_objects as go
 import streamlit as st
 
 from rvpp import Problem, Result
-from rvpp.outputs import plots
-from rvpp.outputs.economics import waterfall_figure
-from rvpp.outputs.style import GREY
+from rvpp.service import GREY, plots, waterfall_figure
 
 from .state import case_key
 

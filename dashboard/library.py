@@ -12,8 +12,7 @@ from __future__ import annotations
 import streamlit as st
 
 from rvpp import Case, Result
-from rvpp.store import RunInfo, RunLibrary, SavedRun, default_url
-from rvpp.store.codec import case_data
+from rvpp.service import RunInfo, RunLibrary, SavedRun, case_data, default_url
 
 from . import state
 

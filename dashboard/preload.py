@@ -11,7 +11,6 @@ threads behind that forked processes must not inherit.
 from pyomo.common.dependencies import scipy_available
 
 import dashboard.worker  # noqa: F401  (the solver processes' entry points)
-import rvpp.solving.plan  # noqa: F401
-import rvpp.solving.sweep  # noqa: F401
+import rvpp.service  # noqa: F401  (loads the solver stack before the first solve)
 
 bool(scipy_available)  # Pyomo's deferred import of SciPy, done now

@@ -53,8 +53,7 @@ import streamlit as st
 
 import rvpp
 from rvpp import Case, CaseError, Problem, Result, RvppError
-from rvpp.solving.outcome import Outcome
-from rvpp.uncertainty.problem import tied_budgets
+from rvpp.service import Outcome, tied_budgets
 
 from . import widgets, worker
 from .state import REQUESTED, ROOT, case_key

@@ -18,11 +18,7 @@ import streamlit as st
 
 import rvpp
 from rvpp import Case, CaseError
-from rvpp.data.case import parse_case
-from rvpp.data.edits import run_label
-from rvpp.data.files import excerpt
-from rvpp.errors import CasePathError
-from rvpp.store import SavedRun
+from rvpp.service import CasePathError, SavedRun, excerpt, parse_case, run_label
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_CASE = ROOT / "data" / "cases" / "paper"

@@ -39,9 +39,7 @@ import pandas as pd
 import streamlit as st
 
 from rvpp import Case, RvppError
-from rvpp.studies import STUDIES, StudyOutput, StudySettings
-from rvpp.studies.report import table_csv, tables_workbook_bytes
-from rvpp.studies.settings import parse_numbers
+from rvpp.service import STUDIES, StudyOutput, StudySettings, parse_numbers, table_csv, tables_workbook_bytes
 
 from . import widgets
 from .state import case_key

@@ -11,15 +11,8 @@ import pandas as pd
 import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
-from rvpp.data.edits import plain_message
-from rvpp.data.files import EXCERPT_CHARS, excerpt
-from rvpp.outputs.bundle import case_zip_bytes
-from rvpp.outputs.economics import economics, explanation
-from rvpp.outputs.export import plan_workbook_bytes
-from rvpp.solving.outcome import Outcome
-from rvpp.outputs.workbook import case_workbook_bytes
-from rvpp.data.kinds import KINDS, UnitKind
-from rvpp.store.engine import LABEL_LENGTH
+from rvpp.service import (EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, case_workbook_bytes, case_zip_bytes,
+                          economics, excerpt, explanation, plain_message, plan_workbook_bytes)
 
 from . import library, state
 

@@ -32,7 +32,7 @@ def sweep_into(connection, case: Case, gammas: list[int]) -> None:
     """Solve ``case`` for every Γ of ``gammas`` (the same Γ for every source, one model
     re-solved in place) and send ``("progress", (done, total))`` messages, then one
     ``("result", [Result, ...])`` in the order of ``gammas``, or the refusal or failure."""
-    from rvpp.solving.sweep import sweep_gamma  # imports the optimisation stack: solver processes only
+    from rvpp.service import sweep_gamma  # heavy: the optimisation stack, in solver processes only
 
     _answer(connection, lambda: sweep_gamma(
         case, gammas, progress=lambda done, total: connection.send(("progress", (done, total)))))

@@ -4,28 +4,14 @@ their cost, spread, worst days and export; the price of robustness and the recom
 
 import datetime as dt
 
-import sqlalchemy as sa
 import streamlit as st
 
 from dashboard import backtests as bt
 from dashboard import state, widgets
 from rvpp import RvppError
-from rvpp.backtest import launch, metrics
-from rvpp.backtest.engine import reopen_case
-from rvpp.backtest.export import export_zip
-from rvpp.backtest.figures import cumulative_figure, distribution_figure, robustness_figure
-from rvpp.backtest.recommend import CRITERION_NAMES, Verdict, recommendation_from
-from rvpp.backtest.settings import (
-    CARRY,
-    PERFECT,
-    BacktestSettings,
-    BacktestVariant,
-    variants_of,
-)
-from rvpp.data.case import STRATEGIES
-from rvpp.store import RecordKey
-from rvpp.studies.settings import parse_numbers
-
+from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, PERFECT, RecordKey, STORE_ERRORS,
+                          STRATEGIES, Verdict, cumulative_figure, distribution_figure, export_zip, launch, metrics,
+                          parse_numbers, recommendation_from, reopen_case, robustness_figure, variants_of)
 state.through_app("pages/backtest.py")
 
 DEFAULT_DAYS = 14     # a first backtest small enough to watch: 14 days × 5 variants, a minute or two
@@ -247,7 +233,7 @@ if notice := st.session_state.pop("backtest_notice", None):
 st.subheader("Backtests in the store")
 try:
     listed = bt.store().list()
-except (RvppError, sa.exc.SQLAlchemyError) as err:
+except (RvppError, *STORE_ERRORS) as err:
     widgets.problems([f"the store cannot be read: {err}"], "Backtests unavailable", note="Nothing was changed.")
     st.stop()
 if not listed:

@@ -5,12 +5,8 @@ import streamlit as st
 
 from dashboard import backtests, library, solving, state, sweeps, widgets
 from rvpp import RvppError
-from rvpp.data.case import STRATEGIES
-from rvpp.data.variants import Variant
-from rvpp.outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
-from rvpp.outputs.economics import waterfall_figure
-from rvpp.outputs.plots import TRADE_NAMES, compare_trades_figure, idle_trades
-from rvpp.solving.outcome import Outcome
+from rvpp.service import (MARKET_SETS, Outcome, STRATEGIES, TRADE_NAMES, Variant, compare_trades_figure, cost_table,
+                          flexibility_table, idle_trades, kpi_table, waterfall_figure)
 
 state.through_app("pages/compare.py")
 

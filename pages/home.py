@@ -7,9 +7,7 @@ import streamlit as st
 import rvpp
 from dashboard import solving, state, widgets
 from dashboard.figures import band_figure
-from rvpp.data.variants import Variant
-from rvpp.outputs.bundle import read_case_files
-from rvpp.outputs.plots import trades_figure
+from rvpp.service import Variant, read_case_files, trades_figure
 
 state.through_app("pages/home.py")
 

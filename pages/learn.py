@@ -4,11 +4,8 @@ import numpy as np
 import streamlit as st
 
 from dashboard import solving, state, sweeps, widgets
-from rvpp.settle.audit import price_exposures, protection_exact
-from rvpp.outputs.plots import (SOURCE_TITLES, bands_figure, deviating_periods, exposure_figure,
-                        thin_clock_ticks)
-from rvpp.data.kinds import power_unit
-from rvpp.uncertainty.problem import SourceKind, top_gamma_deviation
+from rvpp.service import (SOURCE_TITLES, SourceKind, bands_figure, deviating_periods, exposure_figure, power_unit,
+                          price_exposures, protection_exact, thin_clock_ticks, top_gamma_deviation)
 
 state.through_app("pages/learn.py")
 

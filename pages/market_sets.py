@@ -5,9 +5,7 @@ import streamlit as st
 
 from dashboard import state, studies, widgets
 from rvpp import RvppError
-from rvpp.data.case import STRATEGIES
-from rvpp.studies import StudySettings, markets
-from rvpp.studies.settings import HPA_FLAT_PRICES, MARKET_SETS, MARKET_SETS_WITHOUT_CSP
+from rvpp.service import HPA_FLAT_PRICES, MARKET_SETS, MARKET_SETS_WITHOUT_CSP, STRATEGIES, StudySettings, markets
 
 state.through_app("pages/market_sets.py")
 

@@ -5,8 +5,7 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import CaseError
-from rvpp.data.edits import with_period_length
-from rvpp.outputs.plots import bands_figure, tariff_figure
+from rvpp.service import bands_figure, tariff_figure, with_period_length
 
 state.through_app("pages/markets.py")
 

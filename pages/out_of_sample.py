@@ -7,10 +7,8 @@ import streamlit as st
 
 from dashboard import state, studies, widgets
 from rvpp import RvppError
-from rvpp.data.case import STRATEGIES
-from rvpp.settle.recourse import Penalties
-from rvpp.studies import StudySettings, figures
-from rvpp.studies.evaluation import evaluation_days, realizations_used, training_days
+from rvpp.service import (Penalties, STRATEGIES, StudySettings, evaluation_days, figures, realizations_used,
+                          training_days)
 
 state.through_app("pages/out_of_sample.py")
 

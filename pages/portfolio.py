@@ -4,10 +4,8 @@ import streamlit as st
 
 from dashboard import fields, solving, state, widgets
 from rvpp import CaseError
-from rvpp.data.edits import follow_capacity, table_message
-from rvpp.data.kinds import UNIT_KINDS, UnitKind
-from rvpp.outputs import workbook
-from rvpp.outputs.plots import bands_figure, curve_figure, thin_clock_ticks
+from rvpp.service import (UNIT_KINDS, UnitKind, bands_figure, curve_figure, follow_capacity, table_message,
+                          thin_clock_ticks, workbook)
 
 state.through_app("pages/portfolio.py")
 

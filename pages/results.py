@@ -6,7 +6,7 @@ import streamlit as st
 from dashboard import backtests, library, solving, state, widgets
 from dashboard.figures import heat_bought, plan_figures
 from rvpp import RvppError
-from rvpp.outputs.style import KIND_LABELS
+from rvpp.service import KIND_LABELS
 
 state.through_app("pages/results.py")
 

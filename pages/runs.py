@@ -8,11 +8,11 @@ a new solve.
 import hashlib
 
 import pandas as pd
-import sqlalchemy as sa
 import streamlit as st
 
 from dashboard import library, state, widgets
 from rvpp import RvppError
+from rvpp.service import STORE_ERRORS
 
 state.through_app("pages/runs.py")
 
@@ -89,7 +89,7 @@ if st.session_state.pop("runs_open", False):
     st.switch_page("pages/results.py")
 try:
     runs = library.runs()
-except (RvppError, sa.exc.SQLAlchemyError) as err:
+except (RvppError, *STORE_ERRORS) as err:
     widgets.problems([f"the run library cannot be read: {err}"], "Saved runs unavailable", note="Nothing was changed.")
     st.stop()
 st.markdown(f"Every run saved on **Results** or **Compare strategies**, with its case as edited, its settings and "

@@ -5,8 +5,7 @@ import streamlit as st
 
 from dashboard import solving, state, studies, widgets
 from rvpp import RvppError
-from rvpp.solving.outcome import Outcome
-from rvpp.studies import StudySettings, figures, sensitivity
+from rvpp.service import Outcome, StudySettings, figures, sensitivity
 
 state.through_app("pages/sensitivity.py")
 

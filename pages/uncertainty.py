@@ -8,15 +8,9 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import Case, CaseError
-from rvpp.data.case import STRATEGIES
-from rvpp.data.history import PRICE_COLUMNS
-from rvpp.data.periods import delivery_periods
-from rvpp.data.case import PRICE_MODELS
-from rvpp.data.edits import PERIOD_NAMES
-from rvpp.data.files import excerpt
-from rvpp.outputs.plots import band_overlays, bands_figure, deviating_periods, thin_clock_ticks
-from rvpp.uncertainty.problem import STRATEGY_BUDGETS_H, strategy_budgets
-from rvpp.uncertainty.forecast import band_specs, has_forecast
+from rvpp.service import (PERIOD_NAMES, PRICE_COLUMNS, PRICE_MODELS, STRATEGIES, STRATEGY_BUDGETS_H, band_overlays,
+                          band_specs, bands_figure, delivery_periods, deviating_periods, excerpt, has_forecast,
+                          strategy_budgets, thin_clock_ticks)
 
 state.through_app("pages/uncertainty.py")
 

@@ -56,3 +56,39 @@ def test_the_checker_finds_a_function_local_import(tmp_path):
     sample = tmp_path / "sample.py"
     sample.write_text("import os\n\n\ndef f():\n    from json import dumps\n    return dumps\n", encoding="utf-8")
     assert _function_local_imports(sample) == [(5, "    from json import dumps")]
+
+
+def _dashboard_imports() -> dict[str, set[str]]:
+    """Every module the pages, ``dashboard/`` and ``app.py`` import, with the files importing it."""
+    found: dict[str, set[str]] = {}
+    files = [*sorted((ROOT / "pages").glob("*.py")), *sorted((ROOT / "dashboard").glob("*.py")), ROOT / "app.py"]
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                names = [node.module]
+            elif isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            else:
+                continue
+            for name in names:
+                found.setdefault(name, set()).add(path.name)
+    return found
+
+
+def test_the_dashboard_reaches_rvpp_through_its_face():
+    """Pages and dashboard/ import rvpp's public names and rvpp.service (docs/architecture.md), at most 12
+    distinct rvpp modules, and never the store's database library."""
+    imports = _dashboard_imports()
+    rvpp_modules = {name for name in imports if name == "rvpp" or name.startswith("rvpp.")}
+    assert len(rvpp_modules) <= 12, sorted(rvpp_modules)
+    assert rvpp_modules <= {"rvpp", "rvpp.service"}, sorted(rvpp_modules - {"rvpp", "rvpp.service"})
+    assert not {name for name in imports if name.split(".")[0] == "sqlalchemy"}
+
+
+def test_every_service_name_resolves():
+    """Each name rvpp.service offers loads (a mistyped location would fail only when a page first used it)."""
+    import rvpp.service as service
+
+    assert set(service.__all__) == set(service._WHERE)
+    for name in service.__all__:
+        assert getattr(service, name) is not None, name

@@ -16,7 +16,7 @@ from ..uncertainty.problem import Problem
 from .robust import add_robustness
 from .csp import (add_csp_commitment, add_csp_power_block, add_csp_reserves, add_csp_solar_field,
                   add_csp_storage, add_csp_symmetry)
-from .scenarios import SCENARIOS, Scenario, activation
+from ..data.scenarios import SCENARIOS, Scenario, activation
 from .market import (add_electric_balance, add_heat_balance, add_market_bids,
                      add_market_limits, add_objective, add_time)
 from .units import add_electrical_demand, add_ndres, add_thermal_demand

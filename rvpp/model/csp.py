@@ -14,7 +14,7 @@ import pyomo.environ as pyo
 from ..data.case import CSP
 from ..uncertainty.problem import Problem
 from .robust import surely_deviating
-from .scenarios import Scenario, activation
+from ..data.scenarios import Scenario, activation
 from .curve import on_curve
 from .piecewise import add_convex_combination, add_incremental
 from .units import reserve_cap

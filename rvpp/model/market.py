@@ -7,7 +7,7 @@ import pyomo.environ as pyo
 from ..data.history import PRICE_COLUMNS
 from ..uncertainty.problem import Problem
 from .blocks import unit_block
-from .scenarios import SCENARIOS, Scenario, activation
+from ..data.scenarios import SCENARIOS, Scenario, activation
 
 def add_time(m: pyo.ConcreteModel, problem: Problem) -> None:
     """Periods ``T = 1..NT`` and activation scenarios ``S`` (only ``none`` without the SRM)."""

@@ -16,7 +16,7 @@ import pyomo.environ as pyo
 
 from ..data.case import ElectricalDemand, NdresUnit, ThermalDemand
 from ..uncertainty.problem import Problem
-from .scenarios import activation
+from ..data.scenarios import activation
 
 
 def reserve_cap(problem: Problem, ramp_mw_per_min: float, share_cap_mw: float = float("inf")) -> float:

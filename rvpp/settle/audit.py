@@ -29,7 +29,7 @@ import pandas as pd
 
 from ..data.case import STRATEGY_BUDGETS_H, Case
 from ..data.kinds import KINDS, NDRES_KINDS, Role, UnitKind
-from ..model.scenarios import Scenario
+from ..data.scenarios import Scenario
 from ..data.history import PRICE_COLUMNS
 from ..data.periods import delivery_periods
 

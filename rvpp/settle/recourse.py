@@ -42,7 +42,7 @@ from ..errors import RvppError, SettlementError
 from ..data.history import MAX_QUANTITY, PRICE_COLUMNS
 from ..model import add_units
 from ..model.market import add_market_bids, add_market_limits, add_time, net_injection, operating_cost
-from ..model.scenarios import activation
+from ..data.scenarios import activation
 from ..data.periods import delivery_periods, period_labels
 from ..uncertainty.problem import Problem, Source, SourceKind, source_columns
 from ..solving.highs import model_lifetime, run_highs

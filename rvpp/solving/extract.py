@@ -9,7 +9,7 @@ import pyomo.environ as pyo
 from ..data.history import PRICE_COLUMNS
 from ..data.kinds import UnitKind
 from ..model.blocks import unit_block
-from ..model.scenarios import Scenario
+from ..data.scenarios import Scenario
 from ..uncertainty.problem import Problem
 from .results import flexibility_table
 

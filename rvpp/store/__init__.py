@@ -5,8 +5,8 @@ SQLAlchemy URL (e.g. PostgreSQL) through ``RVPP_STORE_URL``; see :mod:`.engine`.
 """
 
 from .backtests import BacktestInfo, BacktestStore, RecordKey, StoredRecommendation, backtest_id, pending
-from .engine import StoreError, connect, default_url
+from .engine import STORE_ERRORS, StoreError, connect, default_url
 from .runs import RunInfo, RunLibrary, SavedRun
 
-__all__ = ["BacktestInfo", "BacktestStore", "RecordKey", "RunInfo", "RunLibrary", "SavedRun", "StoreError",
+__all__ = ["STORE_ERRORS", "BacktestInfo", "BacktestStore", "RecordKey", "RunInfo", "RunLibrary", "SavedRun", "StoreError",
            "StoredRecommendation", "backtest_id", "connect", "default_url", "pending"]

@@ -129,6 +129,11 @@ class StoreError(RvppError):
     """The store cannot be opened or refuses an operation (unknown run, label taken, ...)."""
 
 
+# What reading a store may raise: a StoreError naming the store, or a database error the driver
+# leaves unnamed (a connection lost mid-read, which the pool retries next time).
+STORE_ERRORS = (StoreError, sa.exc.SQLAlchemyError)
+
+
 # What decoding a damaged stored value raises: bad JSON or Parquet (ValueError, pyarrow's errors
 # among them), a missing or mistyped field, a cut zip. (A case that breaks a rule raises CaseError.)
 DAMAGED = (ValueError, TypeError, KeyError, AttributeError, IndexError, EOFError, OSError, zipfile.BadZipFile)
