@@ -2,7 +2,8 @@
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-STAMP := $(VENV)/.installed-$(shell cksum requirements.txt | cut -d' ' -f1)
+# Everything is installed again when requirements.txt or pyproject.toml changes.
+STAMP := $(VENV)/.installed-$(shell cat requirements.txt pyproject.toml | cksum | cut -d' ' -f1)
 PORT ?= 8501
 # `make run` is the local, single-user dashboard: it listens on this machine only and may load
 # case folders from its disk. To serve others, set ADDRESS=0.0.0.0 FOLDERS=0 (docs/dashboard.md).
@@ -16,10 +17,12 @@ BACKTEST_DAYS_quick = 28
 
 .PHONY: install axe run test bench bench-studies data reproduce clean
 
-$(STAMP): requirements.txt
+# The project itself is installed editable, with the `rvpp` command: Dask workers started from
+# this venv import rvpp wherever they run (docs/backtest.md, Parallel runs).
+$(STAMP): requirements.txt pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -r requirements.txt
+	$(BIN)/python -m pip install --quiet -r requirements.txt -e .
 	rm -f $(VENV)/.installed-*
 	touch $(STAMP)
 
