@@ -15,6 +15,7 @@ is feasible and its value is not overstated.
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 
 import numpy as np
 import pytest
@@ -263,3 +264,51 @@ def test_minimum_discharge_power_keeps_the_optimum(paper_case):
     reference = reference_optimum(case)
     assert relative_difference(result.objective_eur, reference) <= REL_TOL, (result.objective_eur, reference)
 
+
+# ----------------------------------------------------------------------------- the studies' figures
+
+
+def deterministic(*more_edits):
+    """An edit of case.yaml: the deterministic strategy, then ``more_edits``."""
+    def edit(data: dict) -> None:
+        data["budgets"]["strategy"] = "deterministic"
+        for more in more_edits:
+            more(data)
+    return edit
+
+
+def test_a_market_set_cell_is_the_reference_optimum_without_the_reserve_market(paper_case):
+    from rvpp.studies import markets
+    from rvpp.studies.settings import StudySettings
+
+    settings = StudySettings(strategies=("deterministic",), market_sets=("DAM+HPA",), market_sets_without_csp=(),
+                             hpa_flat_prices=(), png=False)
+    out = markets.run(paper_case.replace(solver={"rel_gap": GAP}), settings)
+    cell = out.tables["table10_markets"].loc["deterministic", "DAM+HPA"]
+    no_reserve = read_case(PAPER, deterministic(lambda data: data["markets"].update(srm=False)))
+    # The table shows the cost in kEUR: minus the profit, over a thousand.
+    assert cell == pytest.approx(-reference_optimum(no_reserve) / 1000.0, rel=REL_TOL)
+
+
+def test_an_out_of_sample_row_averages_the_reference_settlements_of_its_plan(paper_case, monkeypatch):
+    from rvpp.studies import out_of_sample
+    from rvpp.studies.settings import StudySettings
+    from tests.reference_model import reference_settlement
+
+    plans = {}
+    bids_of = out_of_sample.first_stage
+
+    def kept(result, fix_commitment=False):
+        plans[result.case.budgets.strategy] = result.market
+        return bids_of(result, fix_commitment)
+
+    monkeypatch.setattr(out_of_sample, "first_stage", kept)
+    settings = StudySettings(strategies=("deterministic",), test_days=2, png=False)
+    out = out_of_sample.run(paper_case.replace(solver={"rel_gap": GAP}), settings)
+    row = out.tables["table13_out_of_sample"].set_index("method").loc["deterministic"]
+    assert row["settlements_optimal"] == "2 / 2"
+    # The test window starts on the delivery day; the reference reads those days from the history itself.
+    reference = read_case(PAPER, deterministic())
+    days = [reference.delivery_date + dt.timedelta(days=k) for k in range(2)]
+    costs = [reference_settlement(reference, day, plans["deterministic"])["net_cost_eur"] for day in days]
+    assert row["avg_net_cost_keur"] == pytest.approx(np.mean(costs) / 1000.0, rel=REL_TOL)
