@@ -1,10 +1,13 @@
 """Independent reference implementation of the RVPP robust bidding MILP (test oracle).
 
 Builds MODEL_SPEC §3-§9 for one delivery day directly with HiGHS through highspy's
-modelling API and returns its optimal objective [EUR]. It shares no code with the
-library beyond the case's own data: unit parameters and the hourly history come from
-the :class:`rvpp.data.case.Case`, and everything derived from them is computed here
-from the specification:
+modelling API and returns its optimal objective [EUR], and settles a fixed bid against
+a realized day (MODEL_SPEC §10). It shares no code with the library: :func:`read_case`
+reads a case folder itself (``case.yaml`` with ``yaml.safe_load``, the history CSV with
+plain pandas, the defaults of docs/case-format.md), and everything derived from the
+case is computed here from the specification. (The model also accepts an
+:class:`rvpp.data.case.Case`, which has the same attribute names, to compare cases
+changed in ways the case format cannot write.) Derived here:
 
 * the delivery day's periods in local time (MODEL_SPEC §1);
 * the forecast bands (§6): the window of the ``window_days`` days before the delivery
@@ -39,9 +42,14 @@ from __future__ import annotations
 import datetime as dt
 from dataclasses import dataclass
 
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any, Callable
+
 import highspy
 import numpy as np
 import pandas as pd
+import yaml
 
 SCENARIOS = ("none", "up", "dn")
 MIP_REL_GAP = 1e-7
@@ -80,6 +88,83 @@ class DayData:
     price: dict[str, np.ndarray]
     gamma: dict[str, int]
     uncertain: dict[str, Uncertain]
+
+
+# ----------------------------------------------------------------------------- reading a case folder
+
+# Defaults of docs/case-format.md, per section and unit kind.
+DEFAULTS = {
+    "markets": {"dam": True, "srm": True, "hpa": True, "kappa": 0.3, "reserve_duration_min": 15.0},
+    "uncertainty": {"window_days": 30, "q_lo": 0.2, "q_hi": 0.8, "bands": {}, "price_forecast": "same_hour_yesterday"},
+    "budgets": {"strategy": "balanced", "overrides": {}, "mode": "paper"},
+    "wind": {"p_min_mw": 0.0, "om_eur_per_mwh": 0.0, "reserve_share": 0.1, "series": None, "series_scale": 1.0,
+             "forecast_series": None},
+    "csp": {"om_eur_per_mwh": 0.0, "heat_efficiency": 1.0, "reserve_share": 0.5},
+    "solar_field": {"series": None, "series_scale": 1.0, "forecast_series": None},
+    "storage": {"p_ch_min_mw_th": 0.0, "p_dis_min_mw_th": 0.0, "e_init_mwh_th": None, "e_end_min_mwh_th": None},
+    "power_block": {"min_up_h": 0.0, "min_down_h": 0.0, "startup_fraction": 0.0, "startup_duration_h": None,
+                    "initially_on": False, "initial_status_h": None},
+    "ed": {"flex_up": 0.1, "flex_dn": 0.1, "series": None, "series_scale": 1.0, "forecast_series": None},
+    "td": {"series": None, "series_scale": 1.0, "forecast_series": None},
+}
+DEFAULTS["pv"] = DEFAULTS["wind"]
+KINDS = ("wind", "pv", "csp", "ed", "td")
+
+
+def _with_defaults(kind: str, data: dict | None) -> SimpleNamespace:
+    return SimpleNamespace(**{**DEFAULTS[kind], **(data or {})})
+
+
+def _csp(data: dict) -> SimpleNamespace:
+    unit = _with_defaults("csp", {k: v for k, v in data.items() if k not in ("solar_field", "storage", "power_block")})
+    unit.solar_field = _with_defaults("solar_field", data["solar_field"])
+    unit.storage = _with_defaults("storage", data["storage"])
+    unit.storage.cyclic = unit.storage.e_init_mwh_th is None
+    unit.power_block = _with_defaults("power_block", data["power_block"])
+    unit.power_block.breakpoints = [tuple(float(x) for x in point) for point in unit.power_block.breakpoints]
+    unit.p_max_mw = unit.power_block.p_el_max_mw  # the turbine's electrical nameplate [MW]
+    return unit
+
+
+class ReferenceCase(SimpleNamespace):
+    """A case as this module reads it: sections and units as attribute namespaces."""
+
+    def units(self):
+        for kind in KINDS:
+            for unit in getattr(self, kind):
+                yield kind, unit
+
+    @property
+    def ndres(self) -> list:
+        return self.wind + self.pv
+
+
+def read_case(folder: str | Path, edit: Callable[[dict], Any] | None = None) -> ReferenceCase:
+    """The case of ``folder`` read here: ``case.yaml`` by ``yaml.safe_load`` (``edit`` may change the
+    parsed data first, as a user editing the file would) and its history CSV by ``pandas.read_csv``,
+    indexed by the UTC instants of its ``timestamp`` column (written with their UTC offsets)."""
+    folder = Path(folder)
+    data = yaml.safe_load((folder / "case.yaml").read_text(encoding="utf-8"))
+    if edit is not None:
+        edit(data)
+    table = pd.read_csv(folder / data["history"])
+    frame = table.drop(columns="timestamp").set_index(pd.DatetimeIndex(pd.to_datetime(table["timestamp"], utc=True)))
+    day = data["delivery_date"]
+    units = data.get("units") or {}
+    case = ReferenceCase(
+        name=data["name"], timezone=data.get("timezone", "Europe/Madrid"), dt_h=float(data.get("dt_h", 1)),
+        delivery_date=day if isinstance(day, dt.date) else dt.date.fromisoformat(str(day)),
+        history=SimpleNamespace(frame=frame.astype(float)),
+        **{section: SimpleNamespace(**{**DEFAULTS[section], **(data.get(section) or {})})
+           for section in ("markets", "uncertainty", "budgets")},
+        wind=[_with_defaults("wind", u) for u in units.get("wind") or []],
+        pv=[_with_defaults("pv", u) for u in units.get("pv") or []],
+        csp=[_csp(u) for u in units.get("csp") or []],
+        ed=[_with_defaults("ed", u) for u in units.get("ed") or []],
+        td=[_with_defaults("td", u) for u in units.get("td") or []],
+    )
+    case.markets.hpa_tariff_eur_per_mwh = [float(x) for x in case.markets.hpa_tariff_eur_per_mwh]
+    return case
 
 
 class ReferenceNotOptimal(RuntimeError):
@@ -222,8 +307,11 @@ def _act(scenario: str, up, dn):
 class ReferenceModel:
     """The MILP of MODEL_SPEC §3-§9, one method per constraint family."""
 
-    def __init__(self, case, data: DayData):
-        self.case, self.d = case, data
+    def __init__(self, case, data: DayData, settlement: dict[str, np.ndarray] | None = None):
+        """``settlement``: build the recourse model of MODEL_SPEC §10 instead, with slacks priced per
+        period by ``short`` (π_def), ``long`` (π_sur), ``reserve_up``, ``reserve_dn`` (m_sr·λ) and
+        ``heat`` (c_heat) [EUR/MWh]; its optimum is minus the net cost."""
+        self.case, self.d, self.settlement = case, data, settlement
         self.h = highspy.Highs()
         self.h.silent()
         self.T = range(data.nt)
@@ -610,12 +698,31 @@ class ReferenceModel:
     # ----------------------------------------------------------------- balances and solve
 
     def _balances(self) -> None:
-        """Electrical balance in the scenarios none/up/dn and heat balance (§7, Supply-Demand1)."""
+        """Electrical balance in the scenarios none/up/dn and heat balance (§7, Supply-Demand1).
+
+        Settling (§10): ``injection_s = p_da − s_neg + s_pos + act_s(r_sr_up − q_up, r_sr_dn − q_dn)``
+        with ``q ≤ r_sr``, heat ``supply + h_hpa + g = demand``, and the penalty
+        ``Σt dt·[π_def·s_neg − π_sur·s_pos + m_sr·λup·q_up + m_sr·λdn·q_dn + c_heat·g]`` subtracted
+        from the profit.
+        """
+        zero = [0.0] * self.d.nt
+        s_neg = s_pos = q_up = q_dn = g = zero
+        if self.settlement is not None:
+            s_neg, s_pos, q_up, q_dn, g = (self._series(0.0, np.inf) for _ in range(5))
+            self.slacks = {"s_neg": s_neg, "s_pos": s_pos, "q_up": q_up, "q_dn": q_dn, "g": g}
+            prices = self.settlement
+            for t in self.T:
+                self.h.addConstr(q_up[t] - self.r_sr_up[t] <= 0)
+                self.h.addConstr(q_dn[t] - self.r_sr_dn[t] <= 0)
+                self.profit.append(-self.d.dt * (prices["short"][t] * s_neg[t] - prices["long"][t] * s_pos[t]
+                                                 + prices["reserve_up"][t] * q_up[t]
+                                                 + prices["reserve_dn"][t] * q_dn[t] + prices["heat"][t] * g[t]))
         for t in self.T:
             for s in SCENARIOS:
-                market = self.p_da[t] + _act(s, self.r_sr_up[t], self.r_sr_dn[t])
+                market = self.p_da[t] - s_neg[t] + s_pos[t] + _act(s, self.r_sr_up[t] - q_up[t],
+                                                                   self.r_sr_dn[t] - q_dn[t])
                 self.h.addConstr(self._sum(self.injection[s][t]) - market == 0)
-            supply = self._sum(self.heat_supply[t]) + self.h_hpa[t]
+            supply = self._sum(self.heat_supply[t]) + self.h_hpa[t] + g[t]
             self.h.addConstr(supply - self._sum(self.heat_demand[t]) == 0)
 
     def solve(self) -> float:
@@ -632,3 +739,56 @@ class ReferenceModel:
         if status != highspy.HighsModelStatus.kOptimal:
             raise ReferenceNotOptimal(self.h.modelStatusToString(status))
         return float(self.h.getInfo().objective_function_value)
+
+
+# ----------------------------------------------------------------------------- settling a fixed bid (§10)
+
+
+def realized_day(case, day: dt.date) -> tuple[pd.DatetimeIndex, dict[str, np.ndarray]]:
+    """The local periods of ``day`` and what the history observed in each, per price and unit
+    (a unit's series times its scale; availabilities clipped to ``[0, nameplate]``, consumptions
+    to the demand's limits)."""
+    periods = local_periods(ReferenceCase(**{**vars(case), "delivery_date": day}))
+    rows = case.history.frame.reindex(periods.tz_convert("UTC").floor("h"))
+    values = {name: rows[name].to_numpy(float) for name in PRICES}
+    for kind, unit in case.units():
+        if kind == "csp":
+            column, scale, low, high = (unit.solar_field.series or unit.name, unit.solar_field.series_scale, 0.0,
+                                        unit.solar_field.p_max_mw_th)
+        else:
+            column, scale = unit.series or unit.name, unit.series_scale
+            low, high = {"wind": (0.0, getattr(unit, "p_max_mw", None)), "pv": (0.0, getattr(unit, "p_max_mw", None)),
+                         "ed": (getattr(unit, "p_min_mw", None), getattr(unit, "p_max_mw", None)),
+                         "td": (getattr(unit, "h_min_mw_th", None), getattr(unit, "h_max_mw_th", None))}[kind]
+        values[unit.name] = np.clip(rows[column].to_numpy(float) * scale, low, high)
+    return periods, values
+
+
+def reference_settlement(case, day: dt.date, market: pd.DataFrame, m_def: float = 2.0, m_sur: float = 0.5,
+                         m_sr: float = 2.0, c_heat: float | None = None) -> dict[str, float]:
+    """Settle the bid ``market`` (columns ``p_da_mw``, ``r_sr_up_mw``, ``r_sr_dn_mw``, ``h_hpa_mw`` per
+    period) against what ``day`` observed (MODEL_SPEC §10): every unit re-dispatched at the realized
+    values, imbalances priced at ``π_def = λ + (m_def − 1)·|λ|``, ``π_sur = λ − (1 − m_sur)·|λ|``,
+    undelivered reserve at ``m_sr`` times its price, unserved heat at ``c_heat`` (default twice the
+    highest HPA tariff). Returns the net cost [EUR] and the deficit and surplus energies [MWh]."""
+    periods, values = realized_day(case, day)
+    nt, zero = len(periods), np.zeros(len(periods))
+    tariff = np.array([case.markets.hpa_tariff_eur_per_mwh[h] for h in periods.hour], dtype=float)
+    price = {"price_da_mid": values["price_da"], "price_da_pos": zero, "price_da_neg": zero,
+             "price_sr_up_hi": values["price_sr_up"], "price_sr_up_neg": zero,
+             "price_sr_dn_hi": values["price_sr_dn"], "price_sr_dn_neg": zero, "tariff_hpa": tariff}
+    uncertain = {unit.name: Uncertain(values[unit.name], zero, 0, -1.0 if kind in ("wind", "pv", "csp") else 1.0)
+                 for kind, unit in case.units()}
+    data = DayData(nt=nt, dt=case.dt_h, price=price, gamma={name: 0 for name in PRICES}, uncertain=uncertain)
+    lam = values["price_da"]
+    heat = max(case.markets.hpa_tariff_eur_per_mwh) * 2.0 if c_heat is None else c_heat
+    prices = {"short": lam + (m_def - 1.0) * np.abs(lam), "long": lam - (1.0 - m_sur) * np.abs(lam),
+              "reserve_up": m_sr * values["price_sr_up"], "reserve_dn": m_sr * values["price_sr_dn"],
+              "heat": np.full(nt, heat)}
+    model = ReferenceModel(ReferenceCase(**{**vars(case), "delivery_date": day}), data, settlement=prices)
+    model.fix_market(market.sort_values("t") if "t" in market else market)
+    profit = model.solve()
+    solution = model.h.getSolution().col_value
+    energy = {name: sum(solution[v.index] for v in series) * case.dt_h for name, series in model.slacks.items()}
+    return {"net_cost_eur": -profit, "deficit_mwh": energy["s_neg"], "surplus_mwh": energy["s_pos"],
+            "reserve_short_mwh": energy["q_up"] + energy["q_dn"], "unserved_heat_mwh": energy["g"]}

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rvpp import load_case, solve
+from rvpp import load_case, solve, with_options
 from rvpp.backtest import BacktestSettings, BacktestVariant, metrics, run_backtest, variants_of
 from rvpp.backtest.engine import DayTask, day_case, plan, run_day
 from rvpp.backtest.export import export
@@ -68,25 +68,99 @@ def test_each_day_starts_from_the_state_the_settlement_of_the_day_before_left(we
                 assert later[0] - stop >= 6, f"{strategy}: off for {later[0] - stop} h only"
 
 
+# A chain whose state moves at every midnight: a full tank (1,100 MWh_th) that can discharge only
+# 20 MW_th, so a day cannot empty it, and heat bought for 10 EUR/MWh_th, so the tank's heat goes to the
+# turbine rather than to the thermal demands; the tank may run down to its minimum (storage_end 0).
+MOVING = (dt.date(2025, 5, 1), dt.date(2025, 5, 4))
+SLOW_DISCHARGE_MW_TH = 20.0
+
+
+@pytest.fixture(scope="module")
+def slow_tank(paper_case):
+    csp = paper_case.csp[0].model_dump(mode="python")
+    csp["storage"].update(e_init_mwh_th=1100.0, p_dis_max_mw_th=SLOW_DISCHARGE_MW_TH)
+    csp["power_block"].update(initially_on=True, initial_status_h=3.0)
+    return with_options(paper_case.replace(csp=[csp]), hpa_flat=10.0)
+
+
+@pytest.fixture(scope="module")
+def moving(slow_tank, tmp_path_factory):
+    store = BacktestStore(f"sqlite:///{tmp_path_factory.mktemp('moving') / 'store.sqlite3'}")
+    settings = BacktestSettings(*MOVING, variants_of(["deterministic"], [], perfect=False), storage_end=0.0)
+    ident = run_backtest(slow_tank, settings, store)
+    chain = store.records(ident).sort_values("day").to_dict("records")
+    return chain, settings
+
+
+def hours_in_status(online: list[int], start: dict) -> float | None:
+    """Hours the turbine has been in its last status at the end of a day, counted here from the settled
+    schedule: the last run, plus the start state's hours when the turbine never switched."""
+    run = 0
+    while run < len(online) and online[-1 - run] == online[-1]:
+        run += 1
+    if run == len(online) and bool(online[-1]) == start["online"]:
+        return None if start["status_h"] is None else start["status_h"] + run
+    return float(run)
+
+
 @pytest.mark.slow
-def test_the_plan_of_a_day_starts_from_the_settled_end_of_the_day_before(week, stocked):
-    store, ident, settings = week
-    records = store.records(ident)
-    chain = records[records["strategy"] == "deterministic"].sort_values("day").to_dict("records")
-    before, after = chain[2], chain[3]
-    case = day_case(stocked.replace(solver={"threads": 1}), dt.date.fromisoformat(after["day"]),
-                    BacktestVariant("deterministic"), before["end_state"], settings.storage_end,
-                    tuple(before["plan_integer_ones"]))
-    result = solve(case)
-    assert result.status == "optimal"
-    assert result.objective_eur == pytest.approx(after["plan_objective_eur"], rel=1e-9)
-    csp = result.csp.iloc[0]
-    first = csp["ts_energy_mwh"] - 0.95 * csp["ts_charge_mw"] + csp["ts_discharge_mw"] / 0.95
-    assert first == pytest.approx(before["end_state"]["CSP1"]["e_mwh_th"], abs=1e-4)
-    online = result.csp["online"].to_numpy()
-    end = before["end_state"]["CSP1"]
-    if end["online"] and end["status_h"] is not None and end["status_h"] < 6:
-        assert online[: int(6 - end["status_h"])].all()
+def test_the_state_at_every_midnight_moves_and_is_the_next_days_start(moving, slow_tank):
+    chain, settings = moving
+    assert [r["day"] for r in chain] == [d.isoformat() for d in settings.days]
+    midnights = [chain[0]["start_state"]["CSP1"]] + [r["end_state"]["CSP1"] for r in chain]
+    assert midnights[0] == {"e_mwh_th": 1100.0, "online": True, "status_h": 3.0}
+    # Every midnight differs from the one before in the tank level and the hours in status, and the
+    # turbine is found both on and off at midnight: a chain that restarts each day cannot pass.
+    for before, after in zip(midnights, midnights[1:]):
+        assert abs(after["e_mwh_th"] - before["e_mwh_th"]) > 50.0, (before, after)
+        assert after["status_h"] != before["status_h"], (before, after)
+    assert {m["online"] for m in midnights} == {True, False}
+    for before, after in zip(chain, chain[1:]):
+        assert after["start_state"] == before["end_state"], after["day"]
+    for record in chain:
+        assert record["status"] == "optimal" and record["plan_status"] == "optimal"
+        start, end, settled = record["start_state"]["CSP1"], record["end_state"]["CSP1"], record["settled_csp"]["CSP1"]
+        # The end state read off the settled schedule by hand.
+        assert end["e_mwh_th"] == pytest.approx(settled["e_mwh_th"][-1], abs=1e-6)
+        assert end["online"] == bool(settled["online"][-1])
+        assert end["status_h"] == hours_in_status(settled["online"], start)
+        # The first settled hour moves from the start level by at most one hour's discharge or charge.
+        step = settled["e_mwh_th"][0] - start["e_mwh_th"]
+        assert -SLOW_DISCHARGE_MW_TH / 0.95 - 1e-6 <= step <= 140 * 0.95 + 1e-6, (record["day"], step)
+    # Day 1 by hand: the turbine runs all day (3 h before midnight, so 3 + 24 = 27 h online at its
+    # end) and the tank gives its 20 MW_th every hour: 1100 - 24 x 20 / 0.95 = 594.737 MWh_th.
+    first = chain[0]
+    assert first["settled_csp"]["CSP1"]["online"] == [1] * 24
+    assert np.allclose(np.diff([1100.0] + first["settled_csp"]["CSP1"]["e_mwh_th"]), -20.0 / 0.95, atol=1e-6)
+    assert first["end_state"]["CSP1"] == pytest.approx({"e_mwh_th": 1100.0 - 24 * 20.0 / 0.95, "online": True,
+                                                        "status_h": 27.0})
+
+
+@pytest.mark.slow
+def test_the_plan_of_a_day_starts_from_the_settled_end_of_the_day_before(moving, slow_tank):
+    chain, settings = moving
+    carried = []
+    for before, after in zip(chain, chain[1:]):
+        case = day_case(slow_tank.replace(solver={"threads": 1}), dt.date.fromisoformat(after["day"]),
+                        BacktestVariant("deterministic"), before["end_state"], settings.storage_end,
+                        tuple(before["plan_integer_ones"]))
+        end = before["end_state"]["CSP1"]
+        unit = case.csp[0]
+        assert (unit.storage.e_init_mwh_th, unit.power_block.initially_on, unit.power_block.initial_status_h) == (
+            end["e_mwh_th"], end["online"], end["status_h"])
+        result = solve(case)
+        assert result.status == "optimal"
+        assert result.objective_eur == pytest.approx(after["plan_objective_eur"], rel=1e-9)
+        csp = result.csp.iloc[0]
+        first = csp["ts_energy_mwh"] - 0.95 * csp["ts_charge_mw"] + csp["ts_discharge_mw"] / 0.95
+        assert first == pytest.approx(end["e_mwh_th"], abs=1e-4)
+        if end["status_h"] is not None and end["status_h"] < 6:
+            # A minimum up or down time (6 h) begun before midnight is completed first.
+            online = result.csp["online"].to_numpy()
+            assert (online[: int(6 - end["status_h"])] == int(end["online"])).all(), after["day"]
+            carried.append(after["day"])
+    # The chain holds such a day: the turbine stopped at 23:00 on 2 May, so 3 May stays off until 05:00.
+    assert carried == ["2025-05-03"]
 
 
 @pytest.mark.slow

@@ -65,6 +65,27 @@ def test_a_minimum_down_time_begun_the_day_before_keeps_the_turbine_off():
         assert online(result).index(1) + 1 == first_on, status_h
 
 
+@pytest.mark.parametrize("dt_h", [1.0, 0.5, 0.25])
+def test_minimum_times_begun_the_day_before_are_hours_whatever_the_period_length(dt_h):
+    # As in the two tests above, at periods of 1 h, 30 min and 15 min: on for the 6 − 2 = 4 h left of
+    # the minimum up time, off for the 6 − 1 = 5 h left of the minimum down time, and a start within
+    # the day keeps the turbine on for 6 h.
+    nt = round(24 / dt_h)
+    falling = 300.0 - np.arange(nt) * dt_h
+    negative = np.full(nt, -5.0)
+    up = tiny_case(csp_units=[csp_unit(on=True, status_h=2.0, e_init=600, e_end_min=100)], dt_h=dt_h)
+    kept_on = online(solved(tiny_problem(up, C=(0, 0, 0), price_da=(negative, negative, negative))))
+    assert kept_on == [1] * round(4 / dt_h) + [0] * (nt - round(4 / dt_h))
+    down = tiny_case(csp_units=[csp_unit(on=False, status_h=1.0, e_init=900, e_end_min=100)], dt_h=dt_h)
+    kept_off = online(solved(tiny_problem(down, C=(0, 0, 0), price_da=(falling, falling, falling))))
+    assert kept_off.index(1) * dt_h == 5.0
+    # Started within the day for one good hour (300 EUR/MWh, then −5), it runs its whole 6 h minimum.
+    spike = np.where(np.arange(nt) * dt_h < 1.0, 300.0, -5.0)
+    fresh = tiny_case(csp_units=[csp_unit(on=False, e_init=900, e_end_min=100)], dt_h=dt_h)
+    ran = online(solved(tiny_problem(fresh, C=(0, 0, 0), price_da=(spike, spike, spike))))
+    assert ran == [1] * round(6 / dt_h) + [0] * (nt - round(6 / dt_h))
+
+
 def test_the_storage_may_run_down_to_its_end_target_and_no_further():
     # No sun, price 100: the turbine sells all it can. Starting at 600 with a 300 MWh_th target, it
     # spends exactly 300 MWh_th; starting at 250 (below the target), it may not end below 250.

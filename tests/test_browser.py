@@ -4,7 +4,7 @@
 Skipped when Chromium is not installed at ``/usr/bin/chromium`` (``.ci/run`` installs
 it). Screenshots (1280×800, every page) and the server logs are written to
 ``test-artifacts/``. Accessibility is measured with axe-core (``tests/node``, installed
-by ``make axe`` or, when npm is there, by the fixture) on every page.
+by ``make axe`` or, when missing, by ``npm ci`` here) on every page; without axe-core that test fails.
 """
 
 from __future__ import annotations
@@ -374,13 +374,17 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
 
 
 def axe_script() -> str:
-    """axe-core's axe.min.js from tests/node (``make axe``); installed here when npm is available."""
+    """axe-core's axe.min.js from tests/node (``make axe``, which ``make test`` runs); installed here by
+    ``npm ci`` when missing. Without it the accessibility check fails: it never passes by not running."""
     script = AXE_DIR / "node_modules" / "axe-core" / "axe.min.js"
+    why = "npm is not installed (Debian: apt-get install nodejs npm; .ci/run does)"
     if not script.exists() and shutil.which("npm"):
-        subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--prefix", str(AXE_DIR)], check=False,
-                       capture_output=True, timeout=300)
+        done = subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--prefix", str(AXE_DIR)], check=False,
+                              capture_output=True, text=True, timeout=300)
+        why = f"npm ci ended with code {done.returncode}: {done.stderr.strip()[-300:]}"
     if not script.exists():
-        pytest.skip(f"axe-core is not installed in {AXE_DIR} (make axe, which needs npm)")
+        pytest.fail(f"axe-core is not installed in {AXE_DIR.relative_to(ROOT)} and could not be installed "
+                    f"({why}); run `make axe`", pytrace=False)
     return script.read_text(encoding="utf-8")
 
 

@@ -5,7 +5,8 @@ renamed, numbers replaced by extremes (0, -1, 1e308, nan, inf, huge integers), t
 swapped (text for a list, a list for a mapping), units duplicated, sections reordered,
 and bytes of the YAML text cut, doubled or replaced. Whatever comes in, the only
 acceptable failure is an :class:`rvpp.errors.RvppError` whose message names the problem;
-any other exception is a bug.
+any other exception is a bug. A case that loads must hold only finite numbers within the
+bounds docs/case-format.md gives, and a short solve of it must pass the audit.
 """
 
 from __future__ import annotations
@@ -18,14 +19,16 @@ from typing import Any
 import pandas as pd
 import pytest
 import yaml
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
+from rvpp import solve
 from rvpp.data.case import parse_case
 from rvpp.data.variants import with_options
 from rvpp.data.history import History
 from rvpp.errors import CaseError, RvppError
 from rvpp.outputs.bundle import read_case_files
+from rvpp.settle.audit import audit_result
 
 from tests.factories import PAPER
 
@@ -101,29 +104,114 @@ def mutated_cases(draw) -> dict:
     return data
 
 
-def load_or_refuse(load) -> None:
-    """Call ``load``; success and RvppError are fine, the error must name something."""
+# docs/case-format.md: no quantity above 1,000,000 in its unit; efficiencies, shares, flexibilities in [0, 1].
+LARGEST = 1e6
+FRACTIONS = {"kappa", "reserve_share", "flex_up", "flex_dn", "heat_efficiency", "eta_ch", "eta_dis",
+             "startup_fraction"}
+
+
+def numbers(data: Any, where: str = "") -> list[tuple[str, float]]:
+    """Every number in nested data, with where it stands (booleans are not numbers)."""
+    if isinstance(data, dict):
+        return [n for key, value in data.items() for n in numbers(value, f"{where}.{key}")]
+    if isinstance(data, (list, tuple)):
+        return [n for i, value in enumerate(data) for n in numbers(value, f"{where}[{i}]")]
+    if isinstance(data, (int, float)) and not isinstance(data, bool):
+        return [(where, data)]
+    return []
+
+
+def assert_within_documented_bounds(case) -> None:
+    """The rules of docs/case-format.md, checked on a loaded case by code of this test's own."""
+    data = case.model_dump(mode="python", exclude={"history"})
+    for where, value in numbers(data):
+        assert math.isfinite(value) and abs(value) <= LARGEST, f"{where} = {value!r}"
+        if where.rsplit(".", 1)[-1] in FRACTIONS:
+            assert 0.0 <= value <= 1.0, f"{where} = {value!r}"
+    assert case.dt_h in (1.0, 0.5, 0.25)
+    markets, uncertainty = data["markets"], data["uncertainty"]
+    assert len(markets["hpa_tariff_eur_per_mwh"]) == 24 and min(markets["hpa_tariff_eur_per_mwh"]) >= 0
+    assert markets["reserve_duration_min"] > 0
+    assert 1 <= uncertainty["window_days"] <= 366 and 0 < uncertainty["q_lo"] < 0.5 < uncertainty["q_hi"] < 1
+    for unit in data["wind"] + data["pv"]:
+        assert unit["p_max_mw"] > 0 and unit["series_scale"] > 0, unit
+    for unit in data["ed"]:
+        assert unit["p_min_mw"] <= unit["p_max_mw"], unit
+    for unit in data["td"]:
+        assert unit["h_min_mw_th"] <= unit["h_max_mw_th"], unit
+    for unit in data["csp"]:
+        ts, pb = unit["storage"], unit["power_block"]
+        assert ts["e_min_mwh_th"] < ts["e_max_mwh_th"] and ts["eta_ch"] > 0 and ts["eta_dis"] > 0, ts
+        if ts["e_init_mwh_th"] is not None:
+            assert ts["e_min_mwh_th"] <= ts["e_init_mwh_th"] <= ts["e_max_mwh_th"], ts
+        inputs = [point[0] for point in pb["breakpoints"]]
+        outputs = [point[0] * point[1] for point in pb["breakpoints"]]
+        assert inputs[0] == 0 and all(b > a for a, b in zip(inputs, inputs[1:])), pb
+        assert all(0 <= point[1] <= 1 for point in pb["breakpoints"]), pb
+        assert all(b >= a for a, b in zip(outputs, outputs[1:])) and inputs[-1] >= pb["p_in_max_mw_th"], pb
+        for field in ("min_up_h", "min_down_h"):
+            periods = pb[field] / case.dt_h
+            assert pb[field] >= 0 and periods == round(periods), (field, pb[field])
+    assert not [name for name, gamma in data["budgets"]["overrides"] if gamma < 0]
+    frame = case.history.frame.select_dtypes("number")
+    assert frame.notna().all().all() and (frame.abs() <= LARGEST).all().all()
+
+
+def load_or_refuse(load):
+    """Call ``load``; a loaded case must keep the documented bounds; a refusal (RvppError) must name
+    something. Returns the case, or ``None`` when it was refused."""
     try:
-        load()
+        case = load()
     except RvppError as err:
         message = str(err)
         assert message.strip() and "Traceback" not in message
         if isinstance(err, CaseError):
             assert err.problems and all(isinstance(p, str) and p for p in err.problems)
+        return None
+    assert_within_documented_bounds(case)
+    return case
 
 
-def _check_mutation(data: dict, history: History) -> None:
-    load_or_refuse(lambda: parse_case(data, history))
+def _check_mutation(data: dict, history: History):
+    return load_or_refuse(lambda: parse_case(data, history))
 
 
-def _check_text(text: bytes, csv: bytes) -> None:
-    load_or_refuse(lambda: read_case_files({"case.yaml": text, "history.csv": csv}))
+def _check_text(text: bytes, csv: bytes):
+    return load_or_refuse(lambda: read_case_files({"case.yaml": text, "history.csv": csv}))
+
+
+def changed(path: tuple, value: Any) -> dict:
+    """The default case with the value at ``path`` replaced."""
+    data = copy.deepcopy(RAW)
+    _parent(data, path)[path[-1]] = value
+    return data
 
 
 @settings(max_examples=100, **FAST)
 @given(data=mutated_cases())
+# Values past a documented bound, tried on every run: a percentage where a fraction belongs, a
+# quantity past 1,000,000, a tank level outside the tank.
+@example(data=changed(("units", "wind", 0, "p_max_mw"), 1e308))
+@example(data=changed(("units", "csp", 0, "storage", "eta_ch"), 95))
+@example(data=changed(("units", "ed", 1, "flex_up"), 10))
+@example(data=changed(("markets", "hpa_tariff_eur_per_mwh", 7), 2e6))
+@example(data=changed(("units", "csp", 0, "storage", "e_init_mwh_th"), 5000))
+@example(data=changed(("units", "csp", 0, "power_block", "min_up_h"), 2.5))
 def test_a_mutated_case_loads_or_is_refused_by_rule(short_history, data):
     _check_mutation(data, short_history)
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(data=mutated_cases())
+def test_a_mutated_case_that_loads_solves_to_a_plan_that_passes_the_audit(short_history, data):
+    case = _check_mutation(data, short_history)
+    assume(case is not None)  # about one mutation in eight loads; the others are refused by rule
+    result = solve(case.replace(solver={"time_limit_s": 20.0, "threads": 1}))
+    assert result.status in ("optimal", "time_limit", "infeasible"), (result.status, result.message)
+    if result.has_plan:
+        assert audit_result(result) == []
+    else:
+        assert result.message, "a case without a plan says why"
 
 
 @settings(max_examples=60, **FAST)

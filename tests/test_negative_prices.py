@@ -47,6 +47,33 @@ def test_short_price_is_never_below_long_price_for_any_sign(price, m_def, m_sur)
         assert short[0] == pytest.approx((2.0 - m_def) * price) and long[0] == pytest.approx((2.0 - m_sur) * price)
 
 
+def short_and_long(price, m_def: float, m_sur: float) -> tuple[np.ndarray, np.ndarray]:
+    """MODEL_SPEC §10 written out here: π_def = λ + (m_def − 1)·|λ|, π_sur = λ − (1 − m_sur)·|λ| [EUR/MWh]."""
+    lam = np.asarray(price, dtype=float)
+    return lam + (m_def - 1.0) * np.abs(lam), lam - (1.0 - m_sur) * np.abs(lam)
+
+
+@pytest.mark.parametrize("m_def, m_sur, price, short, long", [
+    # λ = 60: a deficit is bought back at 60 + 1.5·60 = 150, a surplus sold at 60 − 0.6·60 = 24.
+    (2.5, 0.4, 60.0, 150.0, 24.0),
+    # λ = −20: a deficit is bought back at −20 + 1.5·20 = 10, a surplus costs −20 − 0.6·20 = −32.
+    (2.5, 0.4, -20.0, 10.0, -32.0),
+    (2.5, 0.4, -7.5, 3.75, -12.0),
+    (2.5, 0.4, 0.0, 0.0, 0.0),
+    # m_def = 1, m_sur = 1: both at the DAM price, whatever its sign.
+    (1.0, 1.0, -45.0, -45.0, -45.0),
+    (1.0, 1.0, 45.0, 45.0, 45.0),
+    # m_def = 3, m_sur = 0: a surplus earns nothing above zero and costs 2|λ| below it.
+    (3.0, 0.0, 12.0, 36.0, 0.0),
+    (3.0, 0.0, -12.0, 12.0, -24.0),
+])
+def test_imbalance_prices_follow_the_formula_for_either_sign(m_def, m_sur, price, short, long):
+    assert short_and_long([price], m_def, m_sur) == (pytest.approx([short]), pytest.approx([long]))
+    mine = Penalties(m_def=m_def, m_sur=m_sur).imbalance_prices(np.array([price]))
+    assert mine[0].tolist() == pytest.approx([short], abs=1e-12) and mine[1].tolist() == pytest.approx([long],
+                                                                                                          abs=1e-12)
+
+
 def test_imbalance_prices_by_hand_at_zero_and_negative_prices():
     short, long = Penalties(m_def=2.0, m_sur=0.5).imbalance_prices(np.array([-10.0, 0.0, 40.0]))
     # λ = −10: a deficit is bought back at −10 + 10 = 0, a surplus sold at −10 − 5 = −15 (the producer pays).
@@ -144,7 +171,7 @@ def test_settlement_is_bounded_and_exact_for_any_sign_of_the_price(price, availa
     penalties = Penalties(m_def=m_def, m_sur=m_sur)
     outcome, slack, net_cost = _settle(case, bids, Realization(DAY, values), penalties)
     assert outcome.status is Outcome.OPTIMAL
-    short, long = penalties.imbalance_prices(np.array(price))
+    short, long = short_and_long(price, m_def, m_sur)
     assert net_cost == pytest.approx(_hand_net_cost(price, available, bid, short, long, 3.0), rel=1e-6, abs=1e-4)
     strict = short > long + 1e-9
     assert np.all((slack["s_neg"] * slack["s_pos"])[strict] < 1e-6)
@@ -194,3 +221,67 @@ def test_a_real_negative_price_day_of_2024(tmp_path):
     outcome, slack, net_cost = _settle(case, first_stage(result), real, Penalties())
     assert outcome.status is Outcome.OPTIMAL and np.isfinite(net_cost)
     assert np.all(slack["s_neg"] * slack["s_pos"] < 1e-6)
+
+
+def test_a_paper_case_day_settles_to_the_cent_at_the_hand_computed_slacks(paper_case):
+    """A fixed bid on the paper case settled against a realization chosen by hand, in four blocks of six hours.
+
+    The realization: wind 30 MW per farm, PV 20 MW per plant (120 MW of renewables at most), no sun for
+    the CSP (its tank starts at its minimum, so the CSP stays off), electrical demands 25 / 40 / 25 MW
+    (90 MW; the day's minimum energies 600 / 800 / 600 MWh are met at these levels, and they may rise
+    to 70 / 80 / 60 MW at no cost), thermal demands 30 MW_th each, bought through the HPA (60 MW_th
+    bid). The net injection is then anything between −210 MW (renewables off, demands at their
+    maximum) and +30 MW (renewables at full output, demands as realized). With m_def = 2.5, m_sur = 0.4:
+
+    ======  =====  =====  =====  =====  ==============================================================
+    hours   λ      π_def  π_sur  bid    cheapest settlement
+    ======  =====  =====  =====  =====  ==============================================================
+    1-6     60     150    24     50     full output (saves 150 − O&M), injects 30: deficit 20 MW
+    7-12    50     125    20     10     full output (20 > O&M 15 and 7.5), injects 30: surplus 20 MW
+    13-18   −20    10     −32    −250   renewables off, demands at 210 MW: surplus 40 MW, which costs
+    19-24   −10    5      −16    40     a deficit (5) is cheaper than output (O&M ≥ 7.5): renewables
+                                        off, demands as realized (−90 MW): deficit 130 MW
+    ======  =====  =====  =====  =====  ==============================================================
+    """
+    hours = np.arange(24)
+    block = hours // 6
+    price = np.array([60.0, 50.0, -20.0, -10.0])[block]
+    bid = np.array([50.0, 10.0, -250.0, 40.0])[block]
+    real = pd.DataFrame({"price_da": price, "price_sr_up": 12.0, "price_sr_dn": 7.0,
+                         "WF1": 30.0, "WF2": 30.0, "PV1": 20.0, "PV2": 20.0, "PV3": 20.0, "CSP1": 0.0,
+                         "ED_industry": 25.0, "ED_service": 40.0, "ED_residential": 25.0,
+                         "TD_industry": 30.0, "TD_residential": 30.0}, index=pd.RangeIndex(1, NT + 1, name="t"))
+    case = paper_case.replace(solver={"rel_gap": 1e-9, "threads": 1})
+    zero = np.zeros(NT)
+    bids = FirstStage(bid, zero, zero.copy(), np.full(NT, 60.0))
+    record = evaluate(case, bids, Realization(case.delivery_date, real), Penalties(m_def=2.5, m_sur=0.4))
+    assert record["status"] == "optimal"
+
+    short, long = short_and_long(price, 2.5, 0.4)
+    assert short[[0, 6, 12, 18]].tolist() == [150.0, 125.0, 10.0, 5.0]
+    assert long[[0, 6, 12, 18]].tolist() == [24.0, 20.0, -32.0, -16.0]
+    deficit = np.array([20.0, 0.0, 0.0, 130.0])[block]  # [MW]
+    surplus = np.array([0.0, 20.0, 40.0, 0.0])[block]
+    output = np.array([1, 1, 0, 0])[block]  # renewables at full output or off
+    opex = output * (2 * 30.0 * 15.0 + 3 * 20.0 * 7.5)  # wind 15, PV 7.5 EUR/MWh
+    tariff = np.array([70, 70, 70, 70, 70, 70, 85, 85, 100, 100, 100, 100,
+                       100, 100, 95, 95, 95, 95, 120, 120, 120, 120, 90, 90], dtype=float)
+    revenue_dam = (price * bid).sum()  # 18,000 + 3,000 + 30,000 − 2,400
+    cost_hpa = (tariff * 60.0).sum()
+    penalty_deficit = (short * deficit).sum()  # 150·20·6 + 5·130·6
+    penalty_surplus = -(long * surplus).sum()  # −20·20·6 + 32·40·6
+    assert (revenue_dam, cost_hpa, opex.sum()) == (48_600.0, 133_800.0, 16_200.0)
+    assert (penalty_deficit, penalty_surplus) == (21_900.0, 5_280.0)
+
+    cent = 0.005
+    assert record["deficit_mwh"] == pytest.approx(deficit.sum(), abs=1e-6)   # 120 + 780
+    assert record["surplus_mwh"] == pytest.approx(surplus.sum(), abs=1e-6)   # 120 + 240
+    assert record["unserved_heat_mwh"] == pytest.approx(0.0, abs=1e-6)
+    assert record["revenue_dam_eur"] == pytest.approx(revenue_dam, abs=cent)
+    assert record["cost_hpa_eur"] == pytest.approx(cost_hpa, abs=cent)
+    assert record["cost_opex_eur"] == pytest.approx(opex.sum(), abs=cent)
+    assert record["penalty_deficit_eur"] == pytest.approx(penalty_deficit, abs=cent)
+    assert record["penalty_surplus_eur"] == pytest.approx(penalty_surplus, abs=cent)
+    assert record["penalty_eur"] == pytest.approx(penalty_deficit + penalty_surplus, abs=cent)
+    assert record["market_cost_eur"] == pytest.approx(-revenue_dam + cost_hpa + opex.sum(), abs=cent)
+    assert record["net_cost_eur"] == pytest.approx(-48_600.0 + 133_800.0 + 16_200.0 + 21_900.0 + 5_280.0, abs=cent)

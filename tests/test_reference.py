@@ -1,8 +1,11 @@
 """rvpp's optimum against an independent reference implementation (tests/reference_model.py).
 
-The reference builds MODEL_SPEC §1-§9 from the specification alone with highspy: from
-the case's units and history it derives its own periods, forecast bands, budgets and
-budget placement, and takes nothing from rvpp's plan. Both sides are solved to a
+The reference builds MODEL_SPEC §1-§9 from the specification alone with highspy: it reads
+the case folder itself (``case.yaml`` and the history CSV, each configuration written as
+an edit of the YAML), derives its own periods, forecast bands, budgets and budget
+placement, and takes nothing from rvpp's plan; rvpp loads the same folder with its own
+reader and applies the configuration with ``with_options``. A unit or default misread by
+either reader shows as a different optimum. Both sides are solved to a
 relative gap of 1e-7, so their optima must agree to well within ``REL_TOL``. A second
 check fixes rvpp's bid (DAM energy, SR bands, HPA heat) in the reference: the best
 profit the reference physics allows for that bid must be rvpp's objective, so the bid
@@ -12,13 +15,14 @@ is feasible and its value is not overstated.
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 
 import numpy as np
 import pytest
 
 from rvpp import solve, with_options
-from tests.factories import cyclic_storage, with_storage
-from tests.reference_model import ReferenceModel, ReferenceNotOptimal, day_data, reference_optimum
+from tests.factories import PAPER, cyclic_storage, with_storage
+from tests.reference_model import ReferenceModel, ReferenceNotOptimal, day_data, read_case, reference_optimum
 
 GAP = 1e-7
 REL_TOL = 1e-6
@@ -79,6 +83,52 @@ CASE_CHANGES = {"non-default parameters": non_default_parameters, "DAM": cyclic_
                 "forecast bands": forecast_bands}
 
 
+def yaml_edit(name: str):
+    """The configuration ``name`` as an edit of the parsed case.yaml (what the reference reads)."""
+    config = CONFIGS[name]
+
+    def edit(data: dict) -> None:
+        data["delivery_date"] = config["date"]
+        if "strategy" in config:
+            data["budgets"]["strategy"] = config["strategy"]
+        if "markets" in config:
+            chosen = config["markets"].split(",")
+            data["markets"].update(srm="SRM" in chosen, hpa="HPA" in chosen)
+        if config.get("csp") is False:
+            data["units"]["csp"] = []
+        if "dt_h" in config:
+            data["dt_h"] = config["dt_h"]
+        units = data["units"]
+        if name in ("DAM", "DAM+SRM"):
+            del units["csp"][0]["storage"]["e_init_mwh_th"]
+        if name == "non-default parameters":
+            units["csp"][0]["storage"]["e_init_mwh_th"] = 400.0
+            units["csp"][0]["power_block"].update(startup_duration_h=2.0, initially_on=True, min_up_h=4.0,
+                                                  min_down_h=3.0)
+            for i, unit in enumerate(units["ed"]):
+                unit.update(ramp_up_mw_per_min=0.1 * (i + 1), ramp_dn_mw_per_min=0.3 * (i + 1), flex_up=0.05,
+                            flex_dn=0.2)
+            for unit in units["wind"]:
+                unit.update(p_min_mw=1.0, ramp_up_mw_per_min=0.2)
+        if name == "forecast bands":
+            for unit in units["wind"]:
+                unit["forecast_series"] = f"{unit['name']}_fc"
+            data["uncertainty"].update(bands={"wind": "forecast", "price_da": "forecast"},
+                                       price_forecast="same_hour_last_week")
+
+    return edit
+
+
+def reference_case(name: str):
+    """The reference's own reading of the paper folder in configuration ``name``."""
+    case = read_case(PAPER, yaml_edit(name))
+    if name == "forecast bands":  # the persistence forecast: the same hour the day before
+        frame = case.history.frame
+        for unit in case.wind:
+            frame[f"{unit.name}_fc"] = frame[unit.name].shift(24).bfill()
+    return case
+
+
 def relative_difference(value: float, reference: float) -> float:
     return abs(value - reference) / max(1.0, abs(reference))
 
@@ -102,14 +152,14 @@ def solved(paper_case):
 def test_optimum_matches_reference(solved, name):
     case, result = solved(name)
     assert result.status == "optimal", result.message
-    reference = reference_optimum(case)
+    reference = reference_optimum(reference_case(name))
     assert relative_difference(result.objective_eur, reference) <= REL_TOL, (result.objective_eur, reference)
 
 
 @pytest.mark.parametrize("name", list(CONFIGS))
 def test_bid_is_worth_its_objective_in_reference(solved, name):
     case, result = solved(name)
-    best_for_bid = reference_optimum(case, market=result.market)
+    best_for_bid = reference_optimum(reference_case(name), market=result.market)
     assert relative_difference(result.objective_eur, best_for_bid) <= REL_TOL, (result.objective_eur, best_for_bid)
 
 
@@ -117,7 +167,7 @@ def test_bid_is_worth_its_objective_in_reference(solved, name):
 def test_plan_tables_carry_the_bands_the_reference_derives(solved, name):
     """rvpp's exported bands are those of MODEL_SPEC §6 as the reference computes them."""
     case, result = solved(name)
-    data = day_data(case)
+    data = day_data(reference_case(name))
     assert data.nt == len(result.market) and data.gamma == {k: result.summary()["budgets"][k] for k in data.gamma}
     for column, values in data.price.items():
         np.testing.assert_allclose(result.market[column], values, rtol=1e-9, atol=1e-9, err_msg=column)
@@ -213,3 +263,52 @@ def test_minimum_discharge_power_keeps_the_optimum(paper_case):
     assert result.status == "optimal", result.message
     reference = reference_optimum(case)
     assert relative_difference(result.objective_eur, reference) <= REL_TOL, (result.objective_eur, reference)
+
+
+# ----------------------------------------------------------------------------- the studies' figures
+
+
+def deterministic(*more_edits):
+    """An edit of case.yaml: the deterministic strategy, then ``more_edits``."""
+    def edit(data: dict) -> None:
+        data["budgets"]["strategy"] = "deterministic"
+        for more in more_edits:
+            more(data)
+    return edit
+
+
+def test_a_market_set_cell_is_the_reference_optimum_without_the_reserve_market(paper_case):
+    from rvpp.studies import markets
+    from rvpp.studies.settings import StudySettings
+
+    settings = StudySettings(strategies=("deterministic",), market_sets=("DAM+HPA",), market_sets_without_csp=(),
+                             hpa_flat_prices=(), png=False)
+    out = markets.run(paper_case.replace(solver={"rel_gap": GAP}), settings)
+    cell = out.tables["table10_markets"].loc["deterministic", "DAM+HPA"]
+    no_reserve = read_case(PAPER, deterministic(lambda data: data["markets"].update(srm=False)))
+    # The table shows the cost in kEUR: minus the profit, over a thousand.
+    assert cell == pytest.approx(-reference_optimum(no_reserve) / 1000.0, rel=REL_TOL)
+
+
+def test_an_out_of_sample_row_averages_the_reference_settlements_of_its_plan(paper_case, monkeypatch):
+    from rvpp.studies import out_of_sample
+    from rvpp.studies.settings import StudySettings
+    from tests.reference_model import reference_settlement
+
+    plans = {}
+    bids_of = out_of_sample.first_stage
+
+    def kept(result, fix_commitment=False):
+        plans[result.case.budgets.strategy] = result.market
+        return bids_of(result, fix_commitment)
+
+    monkeypatch.setattr(out_of_sample, "first_stage", kept)
+    settings = StudySettings(strategies=("deterministic",), test_days=2, png=False)
+    out = out_of_sample.run(paper_case.replace(solver={"rel_gap": GAP}), settings)
+    row = out.tables["table13_out_of_sample"].set_index("method").loc["deterministic"]
+    assert row["settlements_optimal"] == "2 / 2"
+    # The test window starts on the delivery day; the reference reads those days from the history itself.
+    reference = read_case(PAPER, deterministic())
+    days = [reference.delivery_date + dt.timedelta(days=k) for k in range(2)]
+    costs = [reference_settlement(reference, day, plans["deterministic"])["net_cost_eur"] for day in days]
+    assert row["avg_net_cost_keur"] == pytest.approx(np.mean(costs) / 1000.0, rel=REL_TOL)

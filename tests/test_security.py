@@ -206,18 +206,40 @@ def _bomb(n_bytes: int) -> bytes:
     return buffer.getvalue()
 
 
-def test_a_zip_bomb_is_stopped_while_it_inflates():
+@pytest.fixture
+def inflated(monkeypatch) -> list[int]:
+    """The bytes every zip member read hands out, counted at the zipfile module itself."""
+    counted = [0]
+    read = zipfile.ZipExtFile.read
+
+    def counting(self, n=-1):
+        data = read(self, n)
+        counted[0] += len(data)
+        return data
+
+    monkeypatch.setattr(zipfile.ZipExtFile, "read", counting)
+    return counted
+
+
+# How far past the limit inflating may go: the chunk that crosses it (64 KiB) and the small case.yaml.
+OVERSHOOT = 64 * 1024 + len(CASE_YAML.encode())
+
+
+def test_a_zip_bomb_is_stopped_while_it_inflates(inflated):
     limit = UploadLimits().unzipped_bytes
     data = _bomb(limit + 16 * 1024 ** 2)
     assert len(data) < limit / 500
     err = refused({"bomb.zip": data}, UploadLimitError)
     assert err.problems == [f"bomb.zip: unpacks to more than {limit // 1024 ** 2} MiB; a case is usually a few MiB"]
+    # Inflating went up to the limit and stopped there, 16 MiB short of the member's end.
+    assert limit < inflated[0] <= limit + OVERSHOOT
 
 
-def test_a_zip_bomb_inside_a_workbook_is_stopped_too():
+def test_a_zip_bomb_inside_a_workbook_is_stopped_too(inflated):
     data = zip_of({"xl/worksheets/sheet1.xml": b"0" * (2 * 1024 ** 2)})
     err = refused({"case.xlsx": data}, UploadLimitError, UploadLimits(unzipped_bytes=1024 ** 2))
     assert err.problems == ["case.xlsx: unpacks to more than 1 MiB; a case is usually a few MiB"]
+    assert 1024 ** 2 < inflated[0] <= 1024 ** 2 + OVERSHOOT
 
 
 def test_an_oversized_upload_is_refused_before_it_is_read():
