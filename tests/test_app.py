@@ -351,7 +351,7 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     assert len(trace(storage, "Charge")["x"]) == expected.problem.nt
     flexibility = at.dataframe[-1].value
     np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
-    assert [b.label for b in at.get("download_button")] == ["Bids (CSV)", "Full plan (Excel)",
+    assert [b.label for b in at.get("download_button")] == ["Bids as shown (CSV)", "Bids (CSV)", "Full plan (Excel)",
                                                            "Case as edited (zip)", "Case as edited (Excel)"]
     texts = [e.value for e in (*at.markdown, *at.caption)]
     assert not [text for text in texts if EMOJI_NAME.search(text)]
@@ -471,14 +471,15 @@ def test_learn_gamma_slider_sweeps_once_then_moves_without_solving(paper_case, p
 
     solving.solver().sweeps.clear()  # cold, whichever test of this process swept before
     at = open_app("learn")
-    slider = at.select_slider(key="learn_sweep_gamma_24")
-    assert slider.disabled and slider.options == [str(g) for g in range(25)]
+    assert "learn_sweep_gamma_24" not in [s.key for s in at.select_slider]  # a line says where it will be
+    assert "a slider from 0 to 24 appears here" in " ".join(m.value for m in at.markdown)
     assert "25 solves" in at.button(key="learn_sweep").label
     assert [g for _, g in solver_processes if g is not None] == []  # nothing swept before the click
     click(at, "learn_sweep")
     sweeps = [(case, g) for case, g in solver_processes if g is not None]
     assert len(sweeps) == 1 and sweeps[0][1] == tuple(range(25))
-    assert not at.select_slider(key="learn_sweep_gamma_24").disabled
+    slider = at.select_slider(key="learn_sweep_gamma_24")
+    assert not slider.disabled and slider.options == [str(g) for g in range(25)]
     curve = next(spec for title, spec in figures(at).items() if title.startswith("Price of robustness"))
     assert len(values(curve["data"][0]["x"])) == 25
     before = len(solver_processes)
@@ -512,7 +513,7 @@ def test_compare_names_the_plans_not_proven_optimal_until_solved_again(paper_cas
 
 def test_compare_gamma_slider_reuses_the_sweep_in_a_new_session(paper_case, paper_solve, solver_processes):
     at = open_app("compare")
-    if at.select_slider(key="compare_sweep_gamma_24").disabled:
+    if "compare_sweep_gamma_24" not in [s.key for s in at.select_slider]:  # not swept yet
         click(at, "compare_sweep")
     swept = len(solver_processes)
     assert swept <= 1
@@ -761,7 +762,7 @@ def test_learn_names_the_tied_gammas_before_a_sweep(paper_case):
         at = open_app()
         at.session_state["case"] = case
         at.switch_page("pages/learn.py").run()
-        assert not at.exception and at.select_slider(key="learn_sweep_gamma_24").disabled
+        assert not at.exception and "learn_sweep_gamma_24" not in [s.key for s in at.select_slider]
         said = " ".join(c.value for c in at.caption)
         assert ("At Γ = 1, 2, 3, 4 this day has deviations tied at the Γ boundary (CSP1)" in said) is warned, \
             case.budgets.ties
