@@ -60,6 +60,8 @@ AGGREGATE_COLUMNS = {
     "days_without_plan": st.column_config.NumberColumn("Days without plan"),
     "audit_violations": st.column_config.NumberColumn("Audit violations"),
 }
+AGGREGATE_HEADLINE = ("label", "days_settled", "mean_net_cost_eur", "median_net_cost_eur", "cvar95_net_cost_eur",
+                      "total_net_cost_eur", "mean_regret_eur")
 MONTHLY_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "month": st.column_config.TextColumn("Month"),
@@ -331,8 +333,10 @@ st.plotly_chart(distribution_figure(records), key="backtest_distribution")
 st.subheader("Per strategy")
 table = metrics.aggregates(records)
 table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
-st.dataframe(table[[c for c in AGGREGATE_COLUMNS if c in table]], hide_index=True, width="stretch",
-             column_config=AGGREGATE_COLUMNS)
+# Two tables of a few columns each rather than one wider than the page.
+for columns in (AGGREGATE_HEADLINE, ["label", *(c for c in AGGREGATE_COLUMNS if c not in AGGREGATE_HEADLINE)]):
+    st.dataframe(table[[c for c in columns if c in table]], hide_index=True, width="stretch",
+                 column_config=AGGREGATE_COLUMNS)
 with st.expander("Per month", icon=":material/calendar_month:"):
     monthly = metrics.monthly(records)
     st.dataframe(monthly[[c for c in MONTHLY_COLUMNS if c in monthly]], hide_index=True, width="stretch",

@@ -17,6 +17,11 @@ state.through_app("pages/compare.py")
 KEUR = st.column_config.NumberColumn(format="%,.1f")
 MODES = ("Strategies of the current case", "Saved runs")
 RUNS_MAX = 4
+NARROW_PX = 84  # a short header's column [px]
+# Short headers (the full name is each one's help), so the table of parts fits beside the sidebar.
+SHORT_HEADERS = {"Operating cost [kEUR]": "O&M [kEUR]", "Robust protection [kEUR]": "Prot. [kEUR]",
+                 "DAM revenue [kEUR]": "DAM [kEUR]", "SR revenue [kEUR]": "SR [kEUR]",
+                 "HPA cost [kEUR]": "HPA [kEUR]"}
 
 
 def save_all(cases: dict, results: dict) -> None:
@@ -35,13 +40,24 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     st.subheader("The day's economics")
     st.plotly_chart(waterfall_figure(results), key=f"compare_economics_{len(results)}")
     st.subheader("Net cost and its parts")
-    st.caption(widgets.MONEY)
+    st.caption(widgets.MONEY + " DAM and SR are the revenues; HPA, O&M and protection the costs.")
     if baseline:
         st.caption(f"What being safer costs: each plan's extra cost over **{widgets.literal(baseline)}**, the least "
                    "safe plan; a positive number is more cost. A percentage is given only when that plan's net cost "
                    "is at least 5 % of the day's money flows; otherwise the absolute difference says more.")
     kpis = kpi_table(results, baseline=baseline)
-    st.dataframe(kpis, column_config=widgets.number_formats(kpis))
+    config = widgets.number_formats(kpis)
+    for column, setting in list(config.items()):  # short headers, the full name in their help: the table fits
+        short = SHORT_HEADERS.get(column) or ("Extra [kEUR]" if column.endswith("[kEUR]") and column.startswith(
+            "Extra cost vs") else "Extra [%]" if column.startswith("Extra cost vs") else None)
+        if short:
+            config[column] = st.column_config.NumberColumn(short, format=setting["type_config"].get("format"),
+                                                           help=column, width=NARROW_PX)
+    hidden = ["Solve time [s]"] + (["Status"] if (kpis["Status"] == "optimal").all() else [])
+    st.dataframe(kpis, column_config=config, column_order=[c for c in kpis.columns if c not in hidden])
+    st.caption("Solve times: " + ", ".join(f"{widgets.literal(run)} {seconds:.1f} s"
+                                           for run, seconds in kpis["Solve time [s]"].items())
+               + (" (every plan optimal)." if "Status" in hidden else "."))
     st.subheader("Trades")
     idle = idle_trades(results)
     if idle:
