@@ -81,7 +81,7 @@ def _ties_note(run: Case, grid: list[int]) -> None:
 
 
 def _expected(run: Case, grid: list[int]) -> str:
-    """`` · about N s`` for the button, from the last sweep of such a case (on this server or in
-    ``benchmarks/dashboard.py``), or nothing."""
+    """`` · about N s`` for the button, measured by this server (:meth:`dashboard.solving.Solver.expected_s`),
+    or nothing."""
     expected = solving.solver().expected_s(run, grid)
     return f" · about {expected[0]:.0f} s" if expected and expected[0] >= 1 else ""
