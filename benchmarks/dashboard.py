@@ -35,11 +35,14 @@
 
 Every browser timing is measured ``REPEAT`` times on the same server; the JSON keeps
 each measurement and the median. Needs Chromium at ``/usr/bin/chromium`` for the
-browser timings: ``python benchmarks/dashboard.py``.
+browser timings: ``python benchmarks/dashboard.py``; ``--first-chart`` measures only
+Home's first chart (fresh server and later sessions) and prints it; ``--port N`` runs
+the server on port N.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import socket
@@ -58,7 +61,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import rvpp  # noqa: E402
-from benchmarks.common import header, write_result  # noqa: E402
+from benchmarks.common import header, load_average, write_result  # noqa: E402
 from rvpp.data.case import STRATEGIES  # noqa: E402
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -168,6 +171,9 @@ class BenchmarkStepFailed(Exception):
 
 
 def free_port() -> int:
+    """A free local port: ``--port N`` if given, else one the system chooses."""
+    if "--port" in sys.argv[:-1]:
+        return int(sys.argv[sys.argv.index("--port") + 1])
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         return probe.getsockname()[1]
@@ -291,7 +297,7 @@ def nav(page, name: str) -> None:
     page.get_by_test_id("stSidebarNav").get_by_role("link", name=name, exact=True).click()
 
 
-def browser_timings(data_dir: Path) -> dict:
+def browser_timings(data_dir: Path, first_chart_only: bool = False) -> dict:
     port = free_port()
     url = f"http://127.0.0.1:{port}"
     env = {**os.environ, "RVPP_DATA_DIR": str(data_dir)}
@@ -322,6 +328,9 @@ def browser_timings(data_dir: Path) -> dict:
             timings["first_chart_cold_s"] = round(first_chart[0], 2)
             timings["first_chart_warm_s"] = first_chart[1:]
             timings["first_chart_warm_median_s"] = median(first_chart[1:])
+            if first_chart_only:
+                browser.close()
+                return timings
             nav(page, "Results")
             page.get_by_role("button", name="Solve", exact=True).wait_for()
             page.wait_for_timeout(FIRST_CLICK_DELAY_MS)
@@ -399,7 +408,22 @@ def print_table(report: dict) -> None:
             print(f"  {key}: {value}")
 
 
+def first_chart_main() -> None:
+    """``--first-chart``: only Home's first chart on a fresh server and in later sessions, printed
+    (the results file is left as the full run wrote it)."""
+    if not CHROMIUM.exists():
+        sys.exit(f"no Chromium at {CHROMIUM}")
+    report = {"load_average_before": load_average()}
+    with tempfile.TemporaryDirectory(prefix="rvpp-bench-") as folder:
+        report.update(browser_timings(Path(folder), first_chart_only=True))
+    report["load_average_after"] = load_average()
+    print(json.dumps(report, indent=2))
+
+
 def main() -> None:
+    if "--first-chart" in sys.argv[1:]:
+        first_chart_main()
+        return
     case = rvpp.load_case(ROOT / "data" / "cases" / "paper")
     report = {**header("dashboard", "full"), "case": case.name}
     report["solve_s_by_case"] = solve_times(case)

@@ -39,7 +39,6 @@ waiting, and the solve finishes and is kept for when the page is shown again.
 from __future__ import annotations
 
 import hashlib
-import json
 import multiprocessing
 import os
 import threading
@@ -56,7 +55,7 @@ from rvpp import Case, CaseError, Problem, Result, RvppError
 from rvpp.service import Outcome, tied_budgets
 
 from . import widgets, worker
-from .state import REQUESTED, ROOT, case_key
+from .state import REQUESTED, case_key
 
 MAX_WORKERS = 2        # solves at once; more would compete for a small server's cores
 WORKERS = max(1, min(MAX_WORKERS, os.cpu_count() or 1))
@@ -65,7 +64,6 @@ KEPT_SWEEPS = 4        # sweeps kept in memory (25 plans, about 30 MB, on the de
 POLL_S = 0.1           # how often a waiting page refreshes its progress [s]
 JOIN_S = 5.0           # how long to wait for a finished solver process to exit [s]
 PRELOAD = ["dashboard.preload"]  # what every solver process starts with
-BENCHMARKS = ROOT / "benchmarks" / "results"
 CONTEXT = multiprocessing.get_context("forkserver")
 CANCELLED = "solve_cancelled"  # session key: the last solve of this session was cancelled
 
@@ -159,6 +157,7 @@ class Solver:
         self.sweeps: OrderedDict[str, list[Result]] = OrderedDict()
         self.seconds: dict[str, float] = {}        # case key -> wall time of its last solve [s]
         self.shape_seconds: dict[tuple, float] = {}  # case shape -> wall time of its last solve [s]
+        self.last_solve: tuple[float, int] | None = None  # the last single solve without ties: [s], periods
 
     def result(self, key: str) -> Result | None:
         with self.lock:
@@ -230,11 +229,20 @@ class Solver:
                     self.seconds[job.key] = job.elapsed_s
                     prepared = (job.result if job.gammas is None else job.result[0]).problem
                     self.shape_seconds[shape(job.case, job.gammas, prepared)] = job.elapsed_s
+                    if job.gammas is None and not tied_budgets(prepared):
+                        self.last_solve = (job.elapsed_s, periods_of(job.case))
         job.done.set()
 
     def expected_s(self, case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:
         """How long a solve of ``case`` (or its sweep over ``gammas``) should take and where
-        that number comes from."""
+        that number comes from: always a time measured by this server, never a recorded one.
+
+        The last solve (sweep) of the same case, else of a case of the same shape, else an
+        extrapolation: the last solve measured here, scaled by the number of periods (and, for a
+        sweep, times its number of Γ: each re-solve of a sweep is at most as long as a solve, so
+        this errs on the long side). ``None`` before this server has solved anything, and for a
+        day with ties without a measured solve of its shape (such days are several times slower).
+        """
         work = "solve" if gammas is None else "sweep"
         key = case_key(case) if gammas is None else sweep_key(case, gammas)
         if key in self.seconds:
@@ -242,9 +250,14 @@ class Solver:
         like = shape(case, gammas)
         if like in self.shape_seconds:
             return self.shape_seconds[like], f"the last {work} of a case like this one on this server"
-        if like[-1]:
-            return None  # a day with ties: the benchmark's time is a day without
-        return benchmark_s(case, gammas)
+        if like[-1] or self.last_solve is None:
+            return None
+        last_s, last_periods = self.last_solve
+        periods = periods_of(case)
+        estimate = last_s * periods / last_periods * (1 if gammas is None else len(gammas))
+        plans = "" if gammas is None else f"{len(gammas)} plans × "
+        scale = "" if periods == last_periods else f" of {last_periods} periods, scaled to {periods}"
+        return estimate, f"{plans}the last solve on this server{scale}"
 
     def _keep(self, key: str, result: Result) -> None:
         self.results[key] = result
@@ -326,19 +339,9 @@ def sweep_grid(nt: int, dt_h: float) -> list[int]:
     return sorted({*range(0, nt + 1, step), nt})
 
 
-def benchmark_s(case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:
-    """The solve (or sweep) time of ``case``'s shape measured by ``benchmarks/dashboard.py``, if recorded."""
-    table = "solve_s_by_case" if gammas is None else "sweep_s_by_case"
-    wanted = (f"{case.name}/{case.dt_h * 60:g} min/{case.budgets.strategy}" if gammas is None
-              else f"{case.name}/{case.dt_h * 60:g} min/{len(gammas)} Γ")
-    for path in sorted(BENCHMARKS.glob("*.json")):
-        try:
-            measured = json.loads(path.read_text(encoding="utf-8")).get(table, {})
-        except (OSError, ValueError, AttributeError):
-            continue
-        if wanted in measured:
-            return float(measured[wanted]), f"benchmarks/results/{path.name}"
-    return None
+def periods_of(case: Case) -> int:
+    """The number of periods of ``case``'s delivery day (a whole day of its period length)."""
+    return round(24 / case.dt_h)
 
 
 @st.cache_resource(show_spinner=False)

@@ -61,7 +61,7 @@ def _modified_ns(path: Path) -> int | None:
 def init() -> None:
     """Set every shared key once per session (the default case on first load)."""
     if CASE not in st.session_state:
-        load(_load(str(DEFAULT_CASE)), source=f"data/cases/{DEFAULT_CASE.name}")
+        load(_load(str(DEFAULT_CASE)), source=f"the shipped case {DEFAULT_CASE.name}")
 
 
 def through_app(page: str) -> None:
@@ -129,7 +129,7 @@ def load_shipped(name: str) -> Case:
     if name not in known_case_folders():
         raise rvpp.CaseError(f"no shipped case {name!r}; the shipped cases are {', '.join(known_case_folders())}")
     case = _load(str(CASES_DIR / Path(name).name))
-    load(case, source=name)
+    load(case, source=f"the shipped case {name}")
     return case
 
 

@@ -40,9 +40,10 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
     points = solving.swept(run, grid)
     if points is None:
         if not state.is_requested_key(key):
-            left, right = st.columns([3, 2], vertical_alignment="bottom")
-            left.select_slider(label, grid, key=slider_key, disabled=True,
-                               help="Compute the plans first: then every Γ shows at once.")
+            left, right = st.columns([3, 2], vertical_alignment="center")
+            # Words, not a disabled slider: Streamlit draws a disabled control's label too faint to read.
+            left.markdown(f"**{label}**: a slider from 0 to {nt} appears here once the plans are computed; "
+                          "then every Γ shows at once.")
             right.button(f"Compute the plans for every Γ ({len(grid)} solves{_expected(run, grid)})",
                          key=f"{page}_sweep", icon=":material/play_arrow:", on_click=state.mark_requested_key,
                          args=(key,), help="One model of the day re-solved for each Γ in the background; the plans "
@@ -80,7 +81,7 @@ def _ties_note(run: Case, grid: list[int]) -> None:
 
 
 def _expected(run: Case, grid: list[int]) -> str:
-    """`` · about N s`` for the button, from the last sweep of such a case (on this server or in
-    ``benchmarks/dashboard.py``), or nothing."""
+    """`` · about N s`` for the button, measured by this server (:meth:`dashboard.solving.Solver.expected_s`),
+    or nothing."""
     expected = solving.solver().expected_s(run, grid)
     return f" · about {expected[0]:.0f} s" if expected and expected[0] >= 1 else ""

@@ -12,17 +12,23 @@ import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
 from rvpp.service import (EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, case_workbook_bytes, case_zip_bytes,
-                          economics, excerpt, explanation, plain_message, plan_workbook_bytes)
+                          describe_edits, economics, excerpt, explanation, plain_message, plan_workbook_bytes)
 
 from . import library, state
 
 KIND_TITLES = {kind: info.group for kind, info in KINDS.items()}
 KPI_COLUMNS = 4
-NET = "Net result [kEUR]"
+BIDS_HEIGHT_PX = 300  # about eight periods at a time; the table scrolls
+NET = "Net cost [kEUR]"
+# The one money convention of every page, chart, table and export label, said once.
+MONEY = ("Money is in kEUR (EUR where small), as **cost: positive when the plant pays**, negative when it earns; "
+         "the net cost is the costs and the price protection minus the revenues. A revenue is what the plant "
+         "earns.")
 PERCENT = 100.0
 KILO = 1000.0
-UNIT_FORMATS = {"[EUR]": "%.0f", "[kEUR]": "%.1f", "[%]": "%.1f", "[s]": "%.2f", "[MWh]": "%.1f", "[h]": "%.2f",
-                "[MW]": "%.0f"}
+# Column formats by the unit a header ends with; money and energy with thousands separators.
+UNIT_FORMATS = {"[EUR]": "%,.0f", "[kEUR]": "%,.1f", "[EUR/day]": "%,.0f", "[%]": "%.1f", "[s]": "%.2f",
+                "[MWh]": "%,.1f", "[h]": "%.2f", "[MW]": "%,.0f"}
 LABEL_CHARS = LABEL_LENGTH  # a saved run's label is shown whole (the library keeps none longer)
 # Markdown's special characters, each shown as typed once backslash-escaped: links and images, emphasis,
 # code, headings, lists, tables, raw HTML and autolinks (<), LaTeX ($), entities (&) and Streamlit's own
@@ -57,9 +63,10 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
     """
     parts = result.parts
     protection = sum(result.protection_eur.values()) if result.protection_eur else None
+    net_cost = None if result.objective_eur is None else -result.objective_eur
     money = {
-        NET: (result.objective_eur, "The objective: revenues minus costs minus the robust protection. Negative is a "
-                                    "net cost (the paper's cost), positive a net profit."),
+        NET: (net_cost, "What the day costs the plant: costs and robust protection minus revenues (the paper's "
+                        "cost, minus the objective). Positive: the plant pays; negative: it earns."),
         "DAM revenue [kEUR]": (parts.get("revenue_dam_eur"), "Day-ahead sales minus purchases at median prices."),
         "Reserve revenue [kEUR]": (parts.get("revenue_sr_eur"), "Up and down secondary-reserve bands at their "
                                                          "upper-percentile prices."),
@@ -81,7 +88,7 @@ def kpis(result: Result) -> dict[str, tuple[str, str]]:
 
 def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
     """KPI cards; money in kEUR with the exact amount in each card's help; the net
-    result's card says in words whether the day is a cost or a profit."""
+    cost's card says in words whether the plant pays or earns."""
     values = kpis(result)
     names = list(only or values)
     for start in range(0, len(names), KPI_COLUMNS):
@@ -90,12 +97,48 @@ def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
             value, help_text = values[name]
             sign = {}
             if name == NET and result.objective_eur is not None:
-                sign = dict(delta="net cost" if result.objective_eur < 0 else "net profit", delta_color="off",
-                            delta_arrow="off")
+                sign = dict(delta="the plant pays" if result.objective_eur <= 0 else "the plant earns",
+                            delta_color="off", delta_arrow="off")
             column.metric(name, value, help=help_text, border=True, **sign)
     if result.has_plan:
         st.caption(":material/info: " + explanation(economics(result)) + " Hover a card's question mark for the "
                    "exact amount in EUR.")
+
+
+BID_COLUMNS = {  # market.csv column -> (header, format, help); short headers: the table fits 1280 px
+    "clock": ("Period", None, "Start of the period, local time of the delivery day"),
+    "p_da_mw": ("DAM [MW]", "%.1f", "Day-ahead energy bid: positive sells, negative buys"),
+    "r_sr_up_mw": ("Up [MW]", "%.1f", "Upward secondary-reserve band offered"),
+    "r_sr_dn_mw": ("Down [MW]", "%.1f", "Downward secondary-reserve band offered"),
+    "h_hpa_mw": ("HPA [MW_th]", "%.1f", "Heat bought through the heat purchase agreement"),
+    "price_da_mid": ("DAM [EUR/MWh]", "%.2f", "Forecast day-ahead price (middle of its band)"),
+    "price_sr_up_hi": ("Up [EUR/MW]", "%.2f", "Forecast up-reserve price, per MW and hour of band"),
+    "price_sr_dn_hi": ("Down [EUR/MW]", "%.2f", "Forecast down-reserve price, per MW and hour of band"),
+    "tariff_hpa": ("HPA [EUR/MWh_th]", "%.2f", "Heat purchase agreement tariff"),
+}
+
+
+def bids_table(result: Result) -> pd.DataFrame:
+    """The bids of a plan as an operator submits them: one row per period, the quantities [MW]
+    and the forecast prices they are bid against, under readable headers."""
+    market = result.market[list(BID_COLUMNS)]
+    return market.rename(columns={column: header for column, (header, _, _) in BID_COLUMNS.items()})
+
+
+def bids(result: Result, key: str) -> None:
+    """The bids table with its own download (the table as shown)."""
+    table = bids_table(result)
+    st.caption("Quantities: DAM energy (+ sell, − buy), up and down reserve bands, heat bought through the HPA; "
+               "then the forecast prices they are bid against.")
+    config = {header: (st.column_config.NumberColumn(header, format=fmt, help=help_text) if fmt else
+                       st.column_config.TextColumn(header, help=help_text))
+              for header, fmt, help_text in BID_COLUMNS.values()}
+    st.dataframe(table, hide_index=True, column_config=config, width="stretch", height=BIDS_HEIGHT_PX,
+                 key=f"{key}_bids_table")
+    st.download_button("Bids as shown (CSV)", table.to_csv(index=False, float_format="%.3f"),
+                       file_name=f"{result.case.name}_{result.day:%Y%m%d}_{result.case.budgets.strategy}_bids_table.csv",
+                       mime="text/csv", on_click="ignore", key=f"{key}_bids_table_csv", icon=":material/download:",
+                       help="This table as a CSV file, with its headers")
 
 
 def number_formats(frame: pd.DataFrame) -> dict:
@@ -165,10 +208,37 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
                   icon=":material/undo:")
         return
     if new != state.case():
+        st.session_state[f"{key}_accepted"] = changes(state.case(), new)
         state.set_case(new)
         if not _same_cells(build(), edited):
             reset_editor(key)
             st.rerun()
+    if accepted := st.session_state.pop(f"{key}_accepted", None):
+        st.success("**Edit accepted**: " + "; ".join(literal(c, limit=None) for c in accepted)
+                   + ". The current case now holds it; solve again on Results to see its plan.",
+                   icon=":material/check:")
+
+
+def changes(before: Case, after: Case) -> list[str]:
+    """What changed from ``before`` to ``after`` in the words of the forms, each with its old
+    value when it can be paired (``WF1 80 MW (was 50 MW)``)."""
+    switches = [f"{what} {b} (was {a})" for what, a, b in (
+        ("strategy", before.budgets.label, after.budgets.label), ("markets", before.markets.label, after.markets.label))
+        if a != b]
+    new, old = describe_edits(before, after), describe_edits(after, before)
+    if len(new) != len(old):
+        return switches + new or ["the case"]
+    return switches + [n if o == n else f"{n} (was {_was(o, n)})" for n, o in zip(new, old)] or ["the case"]
+
+
+def _was(old: str, new: str) -> str:
+    """``old`` without the words it shares with the start of ``new`` (``WF1 50 MW`` -> ``50 MW``)."""
+    shared = 0
+    for a, b in zip(old.split(), new.split()):
+        if a != b:
+            break
+        shared += 1
+    return " ".join(old.split()[shared:]) or old
 
 
 def _same_cells(left: pd.DataFrame, right: pd.DataFrame) -> bool:

@@ -9,17 +9,21 @@ import streamlit as st
 from dashboard import backtests as bt
 from dashboard import state, widgets
 from rvpp import RvppError
-from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, PERFECT, RecordKey, STORE_ERRORS,
-                          STRATEGIES, Verdict, cumulative_figure, distribution_figure, export_zip, launch, metrics,
-                          parse_numbers, recommendation_from, reopen_case, robustness_figure, variants_of)
+from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS,
+                          PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict, beats_presets_on_training,
+                          cumulative_figure, distribution_figure, export_zip, launch, metrics, parse_numbers,
+                          recommendation_from, reopen_case, robustness_figure, shortfalls, variants_of)
+
 state.through_app("pages/backtest.py")
 
 DEFAULT_DAYS = 14     # a first backtest small enough to watch: 14 days × 5 variants, a minute or two
-POLL_S = 2.0          # how often the progress of a running backtest is read again [s]
+POLL_S = 1.0          # how often the progress of a running backtest is read again [s]
+PENDING_POLL_S = 0.5  # how often the store is read for a backtest started but not yet listed [s]
+PENDING = "backtest_pending"  # the id of the backtest this session started, until the store lists it
 WORST_DAYS = 10
 PERCENT = 100.0
 CHOSEN = "backtest_chosen"
-EUR_DAY = "%.0f"
+EUR_DAY = "%,.0f"  # whole euros with thousands separators
 AGGREGATE_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "days_settled": st.column_config.NumberColumn("Days settled"),
@@ -37,6 +41,8 @@ AGGREGATE_COLUMNS = {
     "days_without_plan": st.column_config.NumberColumn("Days without plan"),
     "audit_violations": st.column_config.NumberColumn("Audit violations"),
 }
+AGGREGATE_HEADLINE = ("label", "days_settled", "mean_net_cost_eur", "median_net_cost_eur", "cvar95_net_cost_eur",
+                      "total_net_cost_eur", "mean_regret_eur")
 MONTHLY_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "month": st.column_config.TextColumn("Month"),
@@ -91,9 +97,11 @@ def launch_backtest(run, first, last, strategies, fractions_text, perfect, end_t
         return
     st.session_state["backtest_problem"] = None
     st.session_state[CHOSEN] = launched.backtest_id
+    title = label.strip() or f"{run.name} backtest"
+    st.session_state[PENDING] = (launched.backtest_id, f"{title} · {first} .. {last}")
     st.session_state["backtest_notice"] = (
-        f"Started in the background (process {launched.pid}). It shows below with its progress as soon as its "
-        "process has read the case, within a few seconds; you may leave this page meanwhile.")
+        f"Started in the background (process {launched.pid}). It shows below with its progress; you may leave "
+        "this page meanwhile.")
 
 
 def already_running(err: launch.AlreadyRunning) -> None:
@@ -140,18 +148,38 @@ def remember(ident: str, rec) -> None:
                                            "strategies now offer it as the recommended strategy.")
 
 
+def pending_panel(ident: str, title: str) -> None:
+    """A backtest this session started whose process has not registered it in the store yet: read
+    the store again every PENDING_POLL_S and draw the whole page once it is listed."""
+
+    @st.fragment(run_every=PENDING_POLL_S)
+    def panel() -> None:
+        if ident in listed_ids():
+            st.rerun()
+        st.progress(0.0, text=f"{widgets.literal(title, widgets.LABEL_CHARS)}: starting, its process is reading "
+                              "the case and the history…")
+
+    panel()
+
+
+def listed_ids() -> set[str]:
+    return {b.id for b in bt.store().list()}
+
+
 def progress_panel(ident: str) -> None:
-    """Where the backtest's process stands, read from the store again every POLL_S while it runs."""
+    """Where the backtest's process stands, read from the store again every POLL_S while it runs
+    (or has not written its progress yet)."""
     first = bt.progress(ident)
     was_running = first is not None and first.running
+    watch = first is None or first.running
 
-    @st.fragment(run_every=POLL_S if was_running else None)
+    @st.fragment(run_every=POLL_S if watch else None)
     def panel() -> None:
         info = bt.progress(ident)
-        if (info is not None and info.running) != was_running:
-            st.rerun()  # it ended (or started): draw the whole page again with its records
+        if info is not None and (info.running != was_running or first is None):
+            st.rerun()  # it started or ended: draw the whole page again with its records
         if info is None:
-            st.caption("Not started yet: its process has not written any progress.")
+            st.progress(0.0, text="Starting: its process has not written any progress yet…")
             return
         share = info.done / info.total if info.total else 0.0
         text = f"{info.done} of {info.total} days × strategies settled · {info.state}"
@@ -236,9 +264,15 @@ try:
 except (RvppError, *STORE_ERRORS) as err:
     widgets.problems([f"the store cannot be read: {err}"], "Backtests unavailable", note="Nothing was changed.")
     st.stop()
+pending = st.session_state.get(PENDING)
+if pending is not None and pending[0] in {b.id for b in listed}:
+    st.session_state[CHOSEN] = st.session_state.pop(PENDING)[0]  # shown below once listed
+elif pending is not None:
+    pending_panel(*pending)
 if not listed:
-    st.info("No backtest in the store yet. Start one above: it appears here with its progress.",
-            icon=":material/history:")
+    if pending is None:
+        st.info("No backtest in the store yet. Start one above: it appears here with its progress.",
+                icon=":material/history:")
     st.stop()
 
 progresses = {b.id: bt.progress(b.id) for b in listed}
@@ -251,7 +285,8 @@ st.dataframe(
      for b in listed],
     hide_index=True, width="stretch",
     column_config={"Progress": st.column_config.ProgressColumn("Progress", min_value=0.0, max_value=1.0,
-                                                               format="percent")})
+                                                               format="percent"),
+                   "Strategies": st.column_config.TextColumn("Strategies", width="medium")})
 ids = [b.id for b in listed]
 if st.session_state.get(CHOSEN) not in ids:
     st.session_state[CHOSEN] = ids[0]
@@ -279,8 +314,10 @@ st.plotly_chart(distribution_figure(records), key="backtest_distribution")
 st.subheader("Per strategy")
 table = metrics.aggregates(records)
 table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
-st.dataframe(table[[c for c in AGGREGATE_COLUMNS if c in table]], hide_index=True, width="stretch",
-             column_config=AGGREGATE_COLUMNS)
+# Two tables of a few columns each rather than one wider than the page.
+for columns in (AGGREGATE_HEADLINE, ["label", *(c for c in AGGREGATE_COLUMNS if c not in AGGREGATE_HEADLINE)]):
+    st.dataframe(table[[c for c in columns if c in table]], hide_index=True, width="stretch",
+                 column_config=AGGREGATE_COLUMNS)
 with st.expander("Per month", icon=":material/calendar_month:"):
     monthly = metrics.monthly(records)
     st.dataframe(monthly[[c for c in MONTHLY_COLUMNS if c in monthly]], hide_index=True, width="stretch",
@@ -333,7 +370,9 @@ if len(grid) < 2 or len(days) < 2:
 st.markdown("The more periods Γ protects, the more the plan holds back: its market cost rises while the "
             "penalties of bad surprises fall. The Γ with the lowest cost on the **training days** is the "
             "recommendation; the **test days**, later and unseen by the choice, show whether it holds up against "
-            "the presets.")
+            f"the presets. A recommendation needs at least {MIN_TRAIN_DAYS} training days (every weekday "
+            f"twice: demand and prices follow the week) and {MIN_TEST_DAYS} test days (every weekday "
+            "once), and must beat every preset on the training days to be offered.")
 split = max(1, round(len(days) * 2 / 3))
 t1, t2, t3 = st.columns(3)
 train = t1.date_input("Training days", value=(days[0], days[split - 1]), min_value=days[0], max_value=days[-1],
@@ -362,6 +401,15 @@ st.dataframe(rec.comparison[[c for c in COMPARISON_COLUMNS if c in rec.compariso
 remembered = bt.recommended()
 if remembered is not None:
     st.caption("Now remembered: " + bt.recommendation_note(remembered))
-st.button(f"Remember this Γ ({rec.fraction:g} of the day) for Results and Compare", key="backtest_remember",
-          on_click=remember, args=(ident, rec), icon=":material/bookmark_add:",
-          help="Kept in the store: every session and every restart offers it as the recommended strategy.")
+thin = shortfalls(rec)
+if thin:
+    st.warning("**Small sample: read this as an example, not a recommendation.** "
+               + "; ".join(thin) + f". Give the backtest at least {MIN_TRAIN_DAYS} training and "
+               f"{MIN_TEST_DAYS} test days to be offered a Γ to remember.", icon=":material/warning:")
+elif not beats_presets_on_training(rec):
+    st.info(f"Γ = {rec.fraction:g} of the day does not beat every preset on the training days, so there is "
+            "nothing to remember: bid with the best preset.", icon=":material/info:")
+else:
+    st.button(f"Remember this Γ ({rec.fraction:g} of the day) for Results and Compare", key="backtest_remember",
+              on_click=remember, args=(ident, rec), icon=":material/bookmark_add:",
+              help="Kept in the store: every session and every restart offers it as the recommended strategy.")

@@ -10,9 +10,14 @@ from rvpp.service import (MARKET_SETS, Outcome, STRATEGIES, TRADE_NAMES, Variant
 
 state.through_app("pages/compare.py")
 
-KEUR = st.column_config.NumberColumn(format="%.1f")
+KEUR = st.column_config.NumberColumn(format="%,.1f")
 MODES = ("Strategies of the current case", "Saved runs")
 RUNS_MAX = 4
+NARROW_PX = 84  # a short header's column [px]
+# Short headers (the full name is each one's help), so the table of parts fits beside the sidebar.
+SHORT_HEADERS = {"Operating cost [kEUR]": "O&M [kEUR]", "Robust protection [kEUR]": "Prot. [kEUR]",
+                 "DAM revenue [kEUR]": "DAM [kEUR]", "SR revenue [kEUR]": "SR [kEUR]",
+                 "HPA cost [kEUR]": "HPA [kEUR]"}
 
 
 def save_all(cases: dict, results: dict) -> None:
@@ -30,13 +35,25 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     """Economics, KPI table, trades and flexibility of labelled plans."""
     st.subheader("The day's economics")
     st.plotly_chart(waterfall_figure(results), key=f"compare_economics_{len(results)}")
-    st.subheader("Net result and its parts")
+    st.subheader("Net cost and its parts")
+    st.caption(widgets.MONEY + " DAM and SR are the revenues; HPA, O&M and protection the costs.")
     if baseline:
-        st.caption(f"What being safer costs: each plan's extra cost over the {baseline} plan. A percentage is "
-                   "given only when the base is at least 5 % of the day's money flows; otherwise the absolute "
-                   "difference says more.")
+        st.caption(f"What being safer costs: each plan's extra cost over **{widgets.literal(baseline)}**, the least "
+                   "safe plan; a positive number is more cost. A percentage is given only when that plan's net cost "
+                   "is at least 5 % of the day's money flows; otherwise the absolute difference says more.")
     kpis = kpi_table(results, baseline=baseline)
-    st.dataframe(kpis, column_config=widgets.number_formats(kpis))
+    config = widgets.number_formats(kpis)
+    for column, setting in list(config.items()):  # short headers, the full name in their help: the table fits
+        short = SHORT_HEADERS.get(column) or ("Extra [kEUR]" if column.endswith("[kEUR]") and column.startswith(
+            "Extra cost vs") else "Extra [%]" if column.startswith("Extra cost vs") else None)
+        if short:
+            config[column] = st.column_config.NumberColumn(short, format=setting["type_config"].get("format"),
+                                                           help=column, width=NARROW_PX)
+    hidden = ["Solve time [s]"] + (["Status"] if (kpis["Status"] == "optimal").all() else [])
+    st.dataframe(kpis, column_config=config, column_order=[c for c in kpis.columns if c not in hidden])
+    st.caption("Solve times: " + ", ".join(f"{widgets.literal(run)} {seconds:.1f} s"
+                                           for run, seconds in kpis["Solve time [s]"].items())
+               + (" (every plan optimal)." if "Status" in hidden else "."))
     st.subheader("Trades")
     idle = idle_trades(results)
     if idle:
@@ -47,6 +64,13 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     st.caption("Paper Table 9 layout: reserve energy over the day and the same divided by installed capacity [h].")
     flexibility = flexibility_table(results)
     st.dataframe(flexibility, column_config=widgets.number_formats(flexibility))
+
+
+def least_safe(results: dict) -> str:
+    """The label of the least safe plan: the smallest total budget Γ over its sources (the cheaper of
+    equal ones), against which the others' extra cost reads forwards."""
+    return min(results, key=lambda label: (sum(s.gamma for s in results[label].problem.sources.values()),
+                                           results[label].cost_keur))
 
 
 st.title("Compare strategies")
@@ -63,7 +87,7 @@ if mode == MODES[1]:
     labels = {r.id: r.label for r in runs}
     wanted = [i for i in st.session_state.get("compare_runs", []) if i in labels] or [r.id for r in runs[:2]]
     st.session_state["compare_runs"] = wanted
-    chosen = st.multiselect(f"Saved runs (two to {RUNS_MAX})", list(labels), format_func=labels.get,
+    chosen = st.multiselect(f"Saved runs (two, three or {RUNS_MAX})", list(labels), format_func=labels.get,
                             key="compare_runs", max_selections=RUNS_MAX,
                             help="Any runs of the library, of any case, strategy or market set.")
     if len(chosen) < 2:
@@ -81,7 +105,7 @@ if mode == MODES[1]:
         st.warning("Without a plan, left out: " + ", ".join(widgets.literal(label) for label in missing),
                    icon=":material/warning:")
     if len(with_plan) >= 2:
-        side_by_side(with_plan, baseline=next(iter(with_plan)))
+        side_by_side(with_plan, baseline=least_safe(with_plan))
     st.stop()
 
 run = state.run_case()
@@ -124,8 +148,8 @@ if cases and (clicked or ready):
         st.warning("Not proven optimal, so compare them with care; press the button above to search on:\n\n"
                    + "\n".join(f"- {u}" for u in unproven), icon=":material/done_all:")
 
-    st.subheader("Cost [kEUR]")
-    st.caption("Cost = −net result, as in the paper's Tables 10 and 11; lower is better.")
+    st.subheader("Net cost [kEUR]")
+    st.caption("Net cost, positive when the plant pays, as in the paper's Tables 10 and 11; lower is better.")
     st.dataframe(cost_table(results), column_config={m: KEUR for m in market_sets})
 
     shown = market_sets[0] if len(market_sets) == 1 else st.segmented_control(

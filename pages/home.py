@@ -13,7 +13,7 @@ state.through_app("pages/home.py")
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
 DESCRIPTION_CHARS = 1000  # of a case's description, shown on one line
-HEADLINE = ("Net result [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection [kEUR]")
+HEADLINE = ("Net cost [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection [kEUR]")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
     ("pages/markets.py", "Markets & tariffs", "DAM and reserve price bands, market switches, the HPA tariff"),
@@ -56,51 +56,45 @@ def load_from(load, name: str) -> None:
 
 
 st.title("Robust day-ahead bids for a renewable virtual power plant")
-st.markdown(
-    "**rvpp** plans tomorrow's bids of a virtual power plant made of a concentrated solar power plant "
-    "with thermal storage, wind farms, PV plants and flexible electrical and thermal demands: energy in the "
-    "day-ahead market, up and down secondary reserve, and heat bought through a heat purchase agreement. "
-    "Prices, production and consumption are uncertain; a budget Γ per source sets in how many periods each "
-    "may go against you, so a plan can be optimistic, balanced or pessimistic. "
-    "The plan is the solution of a robust mixed-integer program."
-)
-
 case = state.case()
-left, right = st.columns([2, 1], gap="large")
-with left:
+ask, about = st.columns([3, 2], gap="large")
+with ask:
+    st.subheader("What should I bid tomorrow?")
+    balanced = Variant(strategy="balanced").apply(state.run_case())
+    clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve",
+                        icon=":material/play_arrow:")
+    expected = solving.solver().expected_s(balanced)
+    if expected:
+        st.caption(f":material/timer: About {expected[0]:.1f} s ({expected[1]}), with {balanced.dt_h * 60:g}-minute "
+                   "periods. Longer solves show their progress and can be stopped early or cancelled.")
+    else:
+        st.caption(f":material/timer: Not solved on this server yet ({balanced.dt_h * 60:g}-minute periods; "
+                   "15-minute periods take several times longer than hourly ones). The solve shows its progress "
+                   "and can be stopped early or cancelled.")
+    st.caption("One click plans tomorrow's bids for the current case with the balanced budgets of the paper's "
+               "Table 7: energy in the day-ahead market (DAM), up and down secondary reserve, heat bought through "
+               "the heat purchase agreement (HPA).")
+    requested = clicked or state.is_requested(balanced)
+    if not requested:
+        problem = solving.prepare(state.run_case())
+        if problem is not None:
+            st.plotly_chart(band_figure(problem, "price_da"), key="home_price_band")
+with about:
     st.subheader("The case")
-    st.markdown(f"**{widgets.literal(case.name)}** · loaded from "
-                f"{widgets.literal(state.source(), widgets.LABEL_CHARS)}")
-    if case.description:
-        st.caption(widgets.literal(case.description, DESCRIPTION_CHARS))
-    st.markdown(f":material/calendar_today: **{case.delivery_date:%A %d %B %Y}** · strategy "
-                f"**{case.budgets.strategy}** · markets **{case.markets.label}** · {case.dt_h * 60:g}-minute periods")
+    st.markdown(f"**{widgets.literal(case.name)}** · {case.delivery_date:%a %d %b %Y} · "
+                f"{case.budgets.strategy} · {case.markets.label} · {case.dt_h * 60:g}-min periods  \n"
+                f"loaded from {widgets.literal(state.source(), widgets.LABEL_CHARS)}")
     widgets.case_summary(case)
-with right:
-    st.subheader("Explore")
-    for page, title, description in LINKS:
-        st.page_link(page, label=title, icon=":material/arrow_forward:")
-        st.caption(description)
 
-st.subheader("What should I bid tomorrow?")
-balanced = Variant(strategy="balanced").apply(state.run_case())
-expected = solving.solver().expected_s(balanced)
-if expected:
-    st.caption(f":material/timer: Solving this case took {expected[0]:.1f} s ({expected[1]}); with "
-               f"{balanced.dt_h * 60:g}-minute periods. Longer solves show their progress and can be stopped "
-               "early or cancelled.")
-else:
-    st.caption(f":material/timer: This case has not been solved on this server yet ({balanced.dt_h * 60:g}-minute "
-               "periods; 15-minute periods take several times longer than hourly ones). The solve shows its "
-               "progress and can be stopped early or cancelled.")
-clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve", icon=":material/play_arrow:")
-if clicked or state.is_requested(balanced):
+if requested:
     state.mark_requested(balanced)
     result = solving.solve(balanced, "Solving the balanced strategy", again=clicked, stoppable=True)
     if result is not None:
         widgets.status_line(result)
         if result.has_plan:
             widgets.kpi_cards(result, only=HEADLINE)
+            st.markdown("**Bids** (scroll for every period)")
+            widgets.bids(result, key="home")
             st.plotly_chart(trades_figure(result), key="home_trades")
             st.markdown("The protection cost is what the balanced strategy sets aside against adverse prices. "
                         "**What does it cost to be safer?**")
@@ -108,12 +102,21 @@ if clicked or state.is_requested(balanced):
                          icon=":material/compare_arrows:")
             st.page_link("pages/results.py", label="Every chart and download of the current case",
                          icon=":material/insights:")
-else:
-    st.caption("One click solves the current case with the balanced budgets of the paper's Table 7. The prices it "
-               "bids against:")
-    problem = solving.prepare(state.run_case())
-    if problem is not None:
-        st.plotly_chart(band_figure(problem, "price_da"), key="home_price_band")
+
+st.subheader("About rvpp")
+st.markdown(
+    "**rvpp** plans tomorrow's bids of a virtual power plant made of a concentrated solar power plant "
+    "with thermal storage, wind farms, PV plants and flexible electrical and thermal demands: energy in the "
+    "day-ahead market, up and down secondary reserve, and heat bought through a heat purchase agreement. "
+    "Prices, production and consumption are uncertain; a budget Γ per source sets in how many periods each "
+    "may go against you, so a plan can be optimistic, balanced or pessimistic. "
+    "The plan is the solution of a robust mixed-integer program. " + widgets.MONEY)
+if case.description:
+    st.caption(widgets.literal(case.description, DESCRIPTION_CHARS))
+for column, (page, title, description) in zip(st.columns(3) * 2, LINKS):
+    with column:
+        st.page_link(page, label=title, icon=":material/arrow_forward:")
+        st.caption(description)
 
 st.subheader("Load another case")
 folders = state.server_folders_allowed()  # off unless the server was started with RVPP_ALLOW_SERVER_FOLDERS=1

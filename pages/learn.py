@@ -37,7 +37,7 @@ st.markdown(
 @st.fragment
 def budget_demo() -> None:
     left, right = st.columns([1, 3])
-    source = left.pills("Source", units, default=units[0], key="learn_source", required=True)
+    source = left.selectbox("Source", units, key="learn_source")
     src = problem.sources[source]
     gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
                         key="learn_gamma")
@@ -69,12 +69,11 @@ if plan is None or not plan.has_plan:
 @st.fragment
 def protection_demo() -> None:
     left, right = st.columns([1, 3])
-    price = left.pills("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, default="price_da",
-                       key="learn_price", required=True)
+    price = left.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price")
     gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
                         value=problem.sources[price].gamma, key="learn_price_gamma")
     exposure = price_exposures(plan.problem, plan.market)[price]
-    left.metric("Protection", widgets.eur(protection_exact(exposure, gamma)),
+    left.metric("Protection [EUR]", widgets.eur(protection_exact(exposure, gamma)).removesuffix(" EUR"),
                 help="Sum of the Γ largest losses.")
     left.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma}; the model charged "
                  f"{widgets.eur(plan.protection_eur[price])}. Here the plan stays fixed and only the "
@@ -103,12 +102,15 @@ if all(state.is_requested(c) for c in variants.values()) or st.button(
         st.stop()
     paper, chosen = solved
     if paper.has_plan and chosen.has_plan:
-        source = st.pills("Source", units, default=units[0], key="learn_mode_source", required=True)
-        c1, c2 = st.columns(2)
-        c1.metric("Net result, paper mode", widgets.eur(paper.objective_eur))
-        c2.metric("Net result, planner-chosen", widgets.eur(chosen.objective_eur),
-                  delta=widgets.eur(chosen.objective_eur - paper.objective_eur).replace(" EUR", ""),
-                  help="Never lower than paper mode: the planner picks the periods that suit it.")
+        c1, c2, c3 = st.columns(3)
+        source = c1.selectbox("Source", units, key="learn_mode_source")
+        c2.metric("Net cost, paper mode [kEUR]", widgets.keur(-paper.objective_eur), border=True,
+                  help=f"Positive: the plant pays. Exact: {widgets.eur(-paper.objective_eur)}.")
+        difference = paper.objective_eur - chosen.objective_eur  # the planner-chosen plan's extra cost
+        c3.metric("Net cost, planner-chosen [kEUR]", widgets.keur(-chosen.objective_eur), border=True,
+                  delta=f"{widgets.keur(difference)} kEUR vs paper mode", delta_color="off", delta_arrow="off",
+                  help="Never above paper mode: the planner picks the periods that suit it, so it is protected "
+                       f"against less, not better. Exact: {widgets.eur(-chosen.objective_eur)}.")
         for column, (label, result) in zip(st.columns(2), (("paper mode", paper), ("planner-chosen", chosen))):
             figure = bands_figure(result.problem, source, deviating_periods(result, source))
             figure.update_layout(title_text=f"{source}, {label}")

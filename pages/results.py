@@ -12,6 +12,8 @@ state.through_app("pages/results.py")
 
 LABEL_KEY = "results_run_label"
 LABEL_FOR = "results_label_for"  # the case key the label field was filled for
+SHOWN = "results_shown"    # (case key, net cost [kEUR], run case) of the plan Results shows
+BEFORE = "results_before"  # the same of the plan it showed before
 BIDS = {"case": "the current case's budgets", "recommended": "the recommended Γ"}
 FLEXIBILITY_COLUMNS = {
     "kind": st.column_config.TextColumn("Unit kind"),
@@ -33,6 +35,24 @@ def save(result, edited, run) -> None:
         return
     st.session_state["results_save_problem"] = None
     st.session_state["results_saved"] = (info.id, info.label, state.case_key(run))
+
+
+def what_changed(result, run) -> None:
+    """After an edit: the net cost of the plan shown before and of this one, and the fields edited
+    between them."""
+    key = state.case_key(run)
+    shown = st.session_state.get(SHOWN)
+    if shown is None or shown[0] != key:
+        st.session_state[BEFORE] = shown
+        st.session_state[SHOWN] = shown = (key, result.cost_keur, run)
+    before = st.session_state.get(BEFORE)
+    if before is None or before[1] is None or shown[1] is None:
+        return
+    edits = widgets.changes(before[2], run)
+    difference = shown[1] - before[1]
+    st.info(f"**What changed** since the plan shown before: net cost {before[1]:,.1f} → {shown[1]:,.1f} kEUR "
+            f"({difference:+,.1f} kEUR); " + "; ".join(widgets.literal(e, limit=None) for e in edits) + ".",
+            icon=":material/compare_arrows:")
 
 
 st.title("Results")
@@ -70,6 +90,7 @@ widgets.status_line(result)
 if not result.has_plan:
     st.stop()
 
+what_changed(result, run)
 widgets.kpi_cards(result)
 # Every figure before the first is drawn: the browser draws each chart twice (Streamlit applies its theme
 # once a chart is mounted), and the second drawing of a chart sent alone comes before the next chart's first.
@@ -96,6 +117,7 @@ with st.expander("Save this run to the library", icon=":material/bookmark_add:",
     st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
 
 st.subheader("Bids")
+widgets.bids(result, key="results")
 st.plotly_chart(figures["trades"], key="results_trades")
 st.subheader("Heat")
 if figures.get("heat") is None:

@@ -26,8 +26,8 @@ COLUMNS = {
     "strategy": st.column_config.TextColumn("Strategy"),
     "markets": st.column_config.TextColumn("Markets"),
     "status": st.column_config.TextColumn("Status"),
-    "net_keur": st.column_config.NumberColumn("Net result [kEUR]", format="%.1f",
-                                              help="The objective; negative is a net cost"),
+    "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format="%,.1f",
+                                                   help="Positive: the plant pays; negative: it earns"),
     "link": st.column_config.LinkColumn("Link", display_text="open", width="small",
                                         help="Opens the run in a new tab; copy it to share the run"),
 }
@@ -112,11 +112,11 @@ table = pd.DataFrame({
     "strategy": [r.strategy for r in runs],
     "markets": [r.markets for r in runs],
     "status": [r.status for r in runs],
-    "net_keur": [None if r.objective_eur is None else r.objective_eur / 1000.0 for r in runs],
+    "net_cost_keur": [None if r.objective_eur is None else -r.objective_eur / 1000.0 for r in runs],
     "link": [library.link(r.id) for r in runs],
 })
 st.caption(f"{len(runs)} saved run{'s' if len(runs) > 1 else ''}, newest first. Tick the boxes at the left of the "
-           f"rows to act on them; tick two to {COMPARE_MAX} to compare them.")
+           f"rows to act on them; tick two, three or {COMPARE_MAX} to compare them.")
 selection = st.dataframe(table, hide_index=True, column_config=COLUMNS, key=table_key(runs), on_select="rerun",
                          selection_mode="multi-row", height=min(38 + 35 * len(runs), 560))
 chosen = [runs[i] for i in selection.selection.rows if i < len(runs)]
@@ -146,7 +146,7 @@ else:
                                                 icon=":material/compare_arrows:"):
         st.switch_page("pages/compare.py")
     if len(chosen) > COMPARE_MAX:
-        st.caption(f"Compare takes two to {COMPARE_MAX} runs; {len(chosen)} are ticked.")
+        st.caption(f"Compare takes two, three or {COMPARE_MAX} runs; {len(chosen)} are ticked.")
 with st.popover(f"Delete {len(chosen)} run{'s' if len(chosen) > 1 else ''}…", icon=":material/delete:"):
     st.markdown("Deleted runs cannot be brought back. Export them first to keep a copy.")
     st.button("Delete for good", key="runs_delete", on_click=delete, args=(ids,), type="primary")

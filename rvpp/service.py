@@ -22,11 +22,12 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .backtest.engine import reopen_case
     from .backtest.export import export_zip
     from .backtest.figures import cumulative_figure, distribution_figure, robustness_figure
-    from .backtest.recommend import CRITERION_NAMES, Verdict, recommendation_from
+    from .backtest.recommend import (CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS, Verdict, beats_presets_on_training,
+                                     recommendation_from, shortfalls)
     from .backtest.settings import CARRY, FRACTION, PERFECT, PRESET, BacktestSettings, BacktestVariant, variants_of
     from .data.case import PRICE_MODELS, STRATEGIES, parse_case
-    from .data.edits import (FIELDS, PERIOD_NAMES, follow_capacity, label, plain_message, run_label, table_message,
-                             with_period_length)
+    from .data.edits import (FIELDS, PERIOD_NAMES, describe_edits, follow_capacity, label, plain_message, run_label,
+                             table_message, with_period_length)
     from .data.files import EXCERPT_CHARS, excerpt
     from .data.history import PRICE_COLUMNS
     from .data.kinds import KINDS, UNIT_KINDS, UnitKind, power_unit
@@ -72,6 +73,10 @@ _WHERE = {
     "distribution_figure": ".backtest.figures",
     "robustness_figure": ".backtest.figures",
     "CRITERION_NAMES": ".backtest.recommend",
+    "MIN_TEST_DAYS": ".backtest.recommend",
+    "MIN_TRAIN_DAYS": ".backtest.recommend",
+    "beats_presets_on_training": ".backtest.recommend",
+    "shortfalls": ".backtest.recommend",
     "Verdict": ".backtest.recommend",
     "recommendation_from": ".backtest.recommend",
     "BacktestSettings": ".backtest.settings",
@@ -85,6 +90,7 @@ _WHERE = {
     "STRATEGIES": ".data.case",
     "parse_case": ".data.case",
     "FIELDS": ".data.edits",
+    "describe_edits": ".data.edits",
     "PERIOD_NAMES": ".data.edits",
     "follow_capacity": ".data.edits",
     "label": ".data.edits",
@@ -175,31 +181,23 @@ _WHERE = {
 }
 
 __all__ = [
-    # cases
-    "CARRY", "CasePathError", "EXCERPT_CHARS", "FIELDS", "KINDS", "PERIOD_NAMES", "PRICE_COLUMNS", "PRICE_MODELS",
-    "SERIES_FIELDS", "STRATEGIES", "UNIT_KINDS", "UnitKind", "Variant", "case_data", "case_workbook_bytes",
-    "case_zip_bytes", "delivery_periods", "excerpt", "follow_capacity", "label", "new_unit_row", "parse_case",
-    "plain_message", "power_unit", "read_case_files", "run_label", "table_message", "unit_columns",
-    "with_period_length", "workbook",
-    # solving
-    "Outcome", "STRATEGY_BUDGETS_H", "SourceKind", "band_specs", "has_forecast", "prepare", "solve", "solve_problem",
-    "strategy_budgets", "sweep_gamma", "tied_budgets", "top_gamma_deviation",
-    # results
-    "GREY", "KIND_LABELS", "MARKET_SETS", "SOURCE_TITLES", "TRADE_NAMES", "band_overlays", "bands_figure",
-    "compare_trades_figure", "cost_table", "curve_figure", "deviating_periods", "economics", "explanation",
-    "exposure_figure", "flexibility_table", "idle_trades", "kpi_table", "plan_workbook_bytes", "plots",
-    "price_exposures", "protection_exact", "tariff_figure", "thin_clock_ticks", "trades_figure", "waterfall_figure",
-    # studies
-    "HPA_FLAT_PRICES", "MARKET_SETS_WITHOUT_CSP", "Penalties", "STUDIES", "StudyOutput", "StudySettings",
-    "evaluation_days", "figures", "markets", "parse_numbers", "realizations_used", "sensitivity", "table_csv",
-    "tables_workbook_bytes", "training_days",
-    # backtests
-    "BacktestProgress", "BacktestSettings", "BacktestVariant", "CRITERION_NAMES", "FRACTION", "PERFECT", "PRESET",
-    "Verdict", "cumulative_figure", "distribution_figure", "export_zip", "launch", "metrics",
-    "recommendation_from", "reopen_case", "robustness_figure", "variants_of",
-    # run library and backtest store
-    "BacktestStore", "LABEL_LENGTH", "RecordKey", "RunInfo", "RunLibrary", "STORE_ERRORS", "SavedRun",
-    "StoredRecommendation", "default_url",
+    "BacktestProgress", "BacktestSettings", "BacktestStore", "BacktestVariant", "CARRY", "CasePathError",
+    "CRITERION_NAMES", "EXCERPT_CHARS", "FIELDS", "FRACTION", "GREY", "HPA_FLAT_PRICES", "KIND_LABELS", "KINDS",
+    "LABEL_LENGTH", "MARKET_SETS", "MARKET_SETS_WITHOUT_CSP", "MIN_TEST_DAYS", "MIN_TRAIN_DAYS", "Outcome", "Penalties",
+    "PERFECT", "PERIOD_NAMES", "PRESET", "PRICE_COLUMNS", "PRICE_MODELS", "RecordKey", "RunInfo", "RunLibrary",
+    "SavedRun", "SERIES_FIELDS", "SOURCE_TITLES", "SourceKind", "STORE_ERRORS", "StoredRecommendation", "STRATEGIES",
+    "STRATEGY_BUDGETS_H", "STUDIES", "StudyOutput", "StudySettings", "TRADE_NAMES", "UNIT_KINDS", "UnitKind", "Variant",
+    "Verdict", "band_overlays", "band_specs", "bands_figure", "beats_presets_on_training", "case_data",
+    "case_workbook_bytes", "case_zip_bytes", "compare_trades_figure", "cost_table", "cumulative_figure", "curve_figure",
+    "default_url", "delivery_periods", "describe_edits", "deviating_periods", "distribution_figure", "economics",
+    "evaluation_days", "excerpt", "explanation", "export_zip", "exposure_figure", "figures", "flexibility_table",
+    "follow_capacity", "has_forecast", "idle_trades", "kpi_table", "label", "launch", "markets", "metrics",
+    "new_unit_row", "parse_case", "parse_numbers", "plain_message", "plan_workbook_bytes", "plots", "power_unit",
+    "prepare", "price_exposures", "protection_exact", "read_case_files", "realizations_used", "recommendation_from",
+    "reopen_case", "robustness_figure", "run_label", "sensitivity", "shortfalls", "solve", "solve_problem",
+    "strategy_budgets", "sweep_gamma", "table_csv", "table_message", "tables_workbook_bytes", "tariff_figure",
+    "thin_clock_ticks", "tied_budgets", "top_gamma_deviation", "trades_figure", "training_days", "unit_columns",
+    "variants_of", "waterfall_figure", "with_period_length", "workbook",
 ]
 
 

@@ -32,7 +32,7 @@ from tests.factories import click, open_app, wait_for
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
 TIMEOUT_S = 180  # a generous ceiling for a run that solves (never a performance assertion)
-NET = "Net result [kEUR]"
+NET = "Net cost [kEUR]"
 # Streamlit 1.67's markdown loads its emoji code for any text its frontend reads as an emoji name.
 EMOJI_NAME = re.compile(r":(?!material/|streamlit:)[\w+-][\w_+-]*:")
 KPI_MONEY = (NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "HPA cost [kEUR]", "Operating cost [kEUR]",
@@ -56,7 +56,7 @@ def shown_kpis(at: AppTest) -> dict[str, tuple[str, str]]:
 def expected_kpis(result: rvpp.Result) -> dict[str, float]:
     """The library's numbers [EUR] under the app's card labels."""
     parts = result.parts
-    return dict(zip(KPI_MONEY, (result.objective_eur, parts["revenue_dam_eur"], parts["revenue_sr_eur"],
+    return dict(zip(KPI_MONEY, (-result.objective_eur, parts["revenue_dam_eur"], parts["revenue_sr_eur"],
                                 parts["cost_hpa_eur"], parts["cost_opex_eur"], sum(result.protection_eur.values()))))
 
 
@@ -116,7 +116,7 @@ def test_home_balanced_solve_shows_the_library_numbers(paper_solve):
     assert_kpis_match(at, expected, labels=(NET, "DAM revenue [kEUR]", "Reserve revenue [kEUR]",
                                             "Protection [kEUR]"))
     net = [m for m in at.metric if m.label == NET][0]
-    assert net.proto.delta == "net cost"  # the sign in words: the default day costs money
+    assert net.proto.delta == "the plant pays"  # the sign in words: the default day costs money
     spec = figures(at)["Day-ahead energy and secondary-reserve bands"]
     np.testing.assert_allclose(values(trace(spec, "DAM energy (+ sell, − buy)")["y"]), expected.market["p_da_mw"])
 
@@ -197,7 +197,7 @@ def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_ca
     assert expected.status == "optimal"
     assert_kpis_match(at, expected)
     assert number(shown_kpis(at)[NET][0]) != pytest.approx(
-        rvpp.solve(paper_case).objective_eur / 1000, abs=0.05)
+        -rvpp.solve(paper_case).objective_eur / 1000, abs=0.05)
 
 
 def test_portfolio_adds_a_unit_and_switches_the_csp_off(paper_case, paper_solve):
@@ -310,7 +310,7 @@ def test_a_tie_day_is_not_expected_to_take_a_day_without_ties(paper_case):
     assert shape(tie_day) != shape(quiet_day)
     assert shape(rvpp.with_options(tie_day, ties="earliest")) == shape(quiet_day)
     solver = Solver(workers=1)
-    assert solver.expected_s(tie_day) is None  # the benchmark times a day without ties
+    assert solver.expected_s(tie_day) is None  # nothing measured on this server yet
     solver.shape_seconds[shape(tie_day)] = 7.0
     assert solver.expected_s(tie_day) == (7.0, "the last solve of a case like this one on this server")
     assert solver.expected_s(quiet_day) != (7.0, "the last solve of a case like this one on this server")
@@ -334,12 +334,12 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     expected = paper_solve()
     assert_kpis_match(at, expected)
     specs = figures(at)
-    assert set(specs) == {"The day's economics: from revenues to the net result (balanced)",
+    assert set(specs) == {"The day's economics: from revenues and costs to the net cost (balanced)",
                           "Day-ahead energy and secondary-reserve bands", "Heat supply against thermal demand",
                           "Electrical dispatch by unit (consumption negative)", "CSP1: thermal storage",
                           "Reserve by unit kind"}
-    waterfall = specs["The day's economics: from revenues to the net result (balanced)"]["data"][0]
-    np.testing.assert_allclose(values(waterfall["y"])[-1], expected.objective_eur / 1000)
+    waterfall = specs["The day's economics: from revenues and costs to the net cost (balanced)"]["data"][0]
+    np.testing.assert_allclose(values(waterfall["y"])[-1], -expected.objective_eur / 1000)
     market = expected.market
     trades = specs["Day-ahead energy and secondary-reserve bands"]
     np.testing.assert_allclose(values(trace(trades, "SR up band")["y"]), market["r_sr_up_mw"])
@@ -351,7 +351,7 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     assert len(trace(storage, "Charge")["x"]) == expected.problem.nt
     flexibility = at.dataframe[-1].value
     np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
-    assert [b.label for b in at.get("download_button")] == ["Bids (CSV)", "Full plan (Excel)",
+    assert [b.label for b in at.get("download_button")] == ["Bids as shown (CSV)", "Bids (CSV)", "Full plan (Excel)",
                                                            "Case as edited (zip)", "Case as edited (Excel)"]
     texts = [e.value for e in (*at.markdown, *at.caption)]
     assert not [text for text in texts if EMOJI_NAME.search(text)]
@@ -421,10 +421,10 @@ def test_learn_moves_the_adversary_live(paper_solve):
     # rises by its upward deviation where it buys; the adversary takes the 3 largest.
     da, sold = plan.problem.sources["price_da"], plan.market["p_da_mw"].to_numpy(float)
     loss = np.where(sold > 0, da.deviation * sold, -da.deviation_up * sold) * plan.problem.dt_h
-    protection = [m for m in at.metric if m.label == "Protection"][0]
+    protection = [m for m in at.metric if m.label == "Protection [EUR]"][0]
     assert number(protection.value) == pytest.approx(plan.protection_eur["price_da"], abs=0.51)
     at.slider(key="learn_price_gamma").set_value(3).run()
-    protection = [m for m in at.metric if m.label == "Protection"][0]
+    protection = [m for m in at.metric if m.label == "Protection [EUR]"][0]
     assert number(protection.value) == pytest.approx(sum(sorted(np.maximum(loss, 0.0))[-3:]), abs=0.51)
     at.slider(key="learn_gamma").set_value(9).run()
     band = next(spec for title, spec in figures(at).items() if title.startswith("WF1 ("))
@@ -459,8 +459,9 @@ def assert_shows_gamma_plan(at: AppTest, paper_case, paper_solve, gamma: int) ->
     expected = paper_solve(gammas={source: gamma for source in paper_case.sources()})
     assert expected.status == "optimal"
     tolerance = 1.0 + paper_case.solver.rel_gap * abs(expected.objective_eur)  # + whole euros shown
-    assert exact_eur(at, NET) == pytest.approx(expected.objective_eur, abs=tolerance)
-    assert number(shown_kpis(at)[NET][0]) == pytest.approx(expected.objective_eur / 1000, abs=0.051 + tolerance / 1000)
+    assert exact_eur(at, NET) == pytest.approx(-expected.objective_eur, abs=tolerance)
+    assert number(shown_kpis(at)[NET][0]) == pytest.approx(-expected.objective_eur / 1000,
+                                                           abs=0.051 + tolerance / 1000)
     assert f"Bids at Γ = {gamma}: day-ahead energy and reserve bands" in figures(at)
 
 
@@ -470,14 +471,15 @@ def test_learn_gamma_slider_sweeps_once_then_moves_without_solving(paper_case, p
 
     solving.solver().sweeps.clear()  # cold, whichever test of this process swept before
     at = open_app("learn")
-    slider = at.select_slider(key="learn_sweep_gamma_24")
-    assert slider.disabled and slider.options == [str(g) for g in range(25)]
+    assert "learn_sweep_gamma_24" not in [s.key for s in at.select_slider]  # a line says where it will be
+    assert "a slider from 0 to 24 appears here" in " ".join(m.value for m in at.markdown)
     assert "25 solves" in at.button(key="learn_sweep").label
     assert [g for _, g in solver_processes if g is not None] == []  # nothing swept before the click
     click(at, "learn_sweep")
     sweeps = [(case, g) for case, g in solver_processes if g is not None]
     assert len(sweeps) == 1 and sweeps[0][1] == tuple(range(25))
-    assert not at.select_slider(key="learn_sweep_gamma_24").disabled
+    slider = at.select_slider(key="learn_sweep_gamma_24")
+    assert not slider.disabled and slider.options == [str(g) for g in range(25)]
     curve = next(spec for title, spec in figures(at).items() if title.startswith("Price of robustness"))
     assert len(values(curve["data"][0]["x"])) == 25
     before = len(solver_processes)
@@ -511,7 +513,7 @@ def test_compare_names_the_plans_not_proven_optimal_until_solved_again(paper_cas
 
 def test_compare_gamma_slider_reuses_the_sweep_in_a_new_session(paper_case, paper_solve, solver_processes):
     at = open_app("compare")
-    if at.select_slider(key="compare_sweep_gamma_24").disabled:
+    if "compare_sweep_gamma_24" not in [s.key for s in at.select_slider]:  # not swept yet
         click(at, "compare_sweep")
     swept = len(solver_processes)
     assert swept <= 1
@@ -602,7 +604,7 @@ def test_saved_runs_keep_distinct_labels_and_reopen_without_a_solve(run_library,
     assert not fresh.exception, fresh.exception
     assert case_of(fresh).wind[0].p_max_mw == 80.0
     assert number(shown_kpis(fresh)[NET][0]) == pytest.approx(
-        edited.result.objective_eur / 1000, abs=0.051)
+        -edited.result.objective_eur / 1000, abs=0.051)
     assert "WF1 80 MW" in "\n".join(m.value for m in fresh.sidebar.markdown)
 
 
@@ -615,7 +617,8 @@ def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_sol
     table = at.dataframe[0].value
     assert list(table["label"]) == [second.label, first.label]
     assert list(table["link"]) == [f"/?run={second.id}", f"/?run={first.id}"]
-    np.testing.assert_allclose(table["net_keur"], [balanced.objective_eur / 1000, pessimistic.objective_eur / 1000])
+    np.testing.assert_allclose(table["net_cost_keur"], [-balanced.objective_eur / 1000,
+                                                        -pessimistic.objective_eur / 1000])
     with pytest.raises(Exception):
         library.rename(first.id, second.label)  # the page relies on the library refusing a taken label
 
@@ -625,11 +628,14 @@ def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_sol
     assert not at.exception, at.exception
     kpis = at.dataframe[0].value
     assert list(kpis.index) == [first.label, second.label]
-    extra = kpis.loc[second.label, f"Extra cost vs {first.label} [kEUR]"]
-    assert extra == pytest.approx((pessimistic.objective_eur - balanced.objective_eur) / 1000)
-    economics = figures(at)["The day's economics: from revenues to the net result"]
+    # Read forwards: the extra cost of the safer (pessimistic) run over the least safe (balanced) one,
+    # positive when it costs more.
+    extra = kpis.loc[first.label, f"Extra cost vs {second.label} [kEUR]"]
+    assert extra == pytest.approx((balanced.objective_eur - pessimistic.objective_eur) / 1000)
+    assert extra > 0 and kpis.loc[second.label, f"Extra cost vs {second.label} [kEUR]"] == 0
+    economics = figures(at)["The day's economics: from revenues and costs to the net cost"]
     assert [values(t["y"])[-1] for t in economics["data"]] == pytest.approx(
-        [pessimistic.objective_eur / 1000, balanced.objective_eur / 1000])
+        [-pessimistic.objective_eur / 1000, -balanced.objective_eur / 1000])
     library.delete(first.id)
     assert [r.label for r in RunLibrary(run_library).list()] == [second.label]
 
@@ -741,7 +747,7 @@ def test_a_sweep_names_its_gammas_with_tied_deviations(paper_case):
     assert tied_gammas(rvpp.with_options(tie_day, ties="earliest"), range(25)) == {}
     solver = Solver(workers=1)
     grid = list(range(25))
-    assert solver.expected_s(tie_day, grid) is None  # the benchmark sweeps a day without ties
+    assert solver.expected_s(tie_day, grid) is None  # nothing measured on this server yet
     solver.shape_seconds[shape(tie_day, grid)] = 40.0
     assert solver.expected_s(tie_day, grid) == (40.0, "the last sweep of a case like this one on this server")
     assert solver.expected_s(paper_case, grid) != (40.0, "the last sweep of a case like this one on this server")
@@ -756,7 +762,7 @@ def test_learn_names_the_tied_gammas_before_a_sweep(paper_case):
         at = open_app()
         at.session_state["case"] = case
         at.switch_page("pages/learn.py").run()
-        assert not at.exception and at.select_slider(key="learn_sweep_gamma_24").disabled
+        assert not at.exception and "learn_sweep_gamma_24" not in [s.key for s in at.select_slider]
         said = " ".join(c.value for c in at.caption)
         assert ("At Γ = 1, 2, 3, 4 this day has deviations tied at the Γ boundary (CSP1)" in said) is warned, \
             case.budgets.ties

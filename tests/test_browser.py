@@ -67,9 +67,16 @@ MARKET_COLUMNS = ["t", "start", "clock", "p_da_mw", "r_sr_up_mw", "r_sr_dn_mw", 
 
 
 def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
+    """A free local port; from the range ``RVPP_TEST_PORTS`` (``8610-8619``) when set."""
+    first, _, last = os.environ.get("RVPP_TEST_PORTS", "0-0").partition("-")
+    for port in range(int(first), int(last or first) + 1):
+        with socket.socket() as probe:
+            try:
+                probe.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return probe.getsockname()[1]
+    raise OSError(f"no free port in RVPP_TEST_PORTS={os.environ['RVPP_TEST_PORTS']}")
 
 
 def require_browser() -> None:
@@ -152,7 +159,7 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         charts.first.locator(".main-svg").first.wait_for()
         charts.nth(5).locator(".main-svg").first.wait_for()
         assert charts.count() == 6
-        page.get_by_text(f"{expected.objective_eur / 1000:,.1f}".replace("-", "−"), exact=True).first.wait_for()
+        page.get_by_text(f"{-expected.objective_eur / 1000:,.1f}".replace("-", "−"), exact=True).first.wait_for()
 
         with page.expect_download() as download:
             page.get_by_role("button", name="Bids (CSV)").click()
@@ -206,9 +213,9 @@ def test_the_learn_gamma_slider_moves_by_keyboard_to_the_plan_of_each_gamma(app_
             page.keyboard.press("ArrowRight")
             page.locator(".gtitle", has_text=f"Bids at Γ = {gamma}:").first.wait_for()
             expected = paper_solve(gammas={source: gamma for source in paper_case.sources()})
-            card = page.get_by_test_id("stMetric").filter(has_text="Net result [kEUR]").first
+            card = page.get_by_test_id("stMetric").filter(has_text="Net cost [kEUR]").first
             shown = float(card.get_by_test_id("stMetricValue").inner_text().replace("−", "-").replace(",", ""))
-            assert shown == pytest.approx(expected.objective_eur / 1000, abs=0.051 + 1e-4 * abs(expected.cost_keur))
+            assert shown == pytest.approx(-expected.objective_eur / 1000, abs=0.051 + 1e-4 * abs(expected.cost_keur))
         page.screenshot(path=ARTIFACTS / "learn-gamma-slider.png", full_page=True)
 
 
@@ -250,6 +257,62 @@ def test_a_study_page_runs_its_study_with_progress_and_downloads_its_table(app_u
         assert list(table["status"]) == ["optimal", "optimal"]
         assert table["cost_keur"][0] == pytest.approx(-deterministic.objective_eur / 1000, rel=1e-6)
         assert table["cost_keur"][1] > table["cost_keur"][0]
+
+
+def test_homes_first_screen_holds_the_question_the_solve_button_and_the_case():
+    require_browser()
+    with streamlit_server("streamlit-first-screen.log") as url, chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(url)
+        question = page.get_by_role("heading", name="What should I bid tomorrow?")
+        solve = page.get_by_role("button", name="Solve the balanced strategy")
+        case = page.get_by_test_id("stTable").first
+        for element in (question, solve, case):
+            element.wait_for()
+        settle(page)
+        page.screenshot(path=ARTIFACTS / "home-first-screen.png")
+        for name, element in (("question", question), ("Solve", solve), ("case", case)):
+            box = element.bounding_box()
+            assert box["y"] >= 0 and box["y"] + box["height"] <= 800, (name, box)
+            assert box["x"] + box["width"] <= 1280, (name, box)
+
+
+def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_path):
+    """Started on the page, the backtest appears there without a reload and its progress is
+    redrawn as days settle, until it says finished."""
+    require_browser()
+    with streamlit_server("streamlit-backtest.log", tmp_path) as url, \
+            chromium_page({"width": 1280, "height": 1600}) as page:
+        page.goto(url)
+        open_page(page, "Backtest")
+        page.get_by_text("Start a backtest of the current case").click()
+        first_day = page.get_by_test_id("stDateInput").first.locator("input")
+        last_day = page.get_by_test_id("stDateInput").nth(1).locator("input").input_value()
+        first_day.fill(last_day)  # one day: five chains (four presets and perfect information)
+        first_day.press("Enter")
+        page.get_by_test_id("stTextInput").filter(has_text="Label").locator("input").fill("browser backtest")
+        page.get_by_role("button", name="Start the backtest").click()
+        started = time.monotonic()
+        page.get_by_test_id("stProgress").filter(has_text="browser backtest").first.wait_for()  # at once: starting
+        appeared_s = time.monotonic() - started
+        bar = page.get_by_test_id("stProgress").filter(has_text="days × strategies settled")
+        bar.first.wait_for()  # listed once its process registered it, without a reload
+        listed_s = time.monotonic() - started
+        seen = []
+        while True:
+            text = bar.first.inner_text()
+            if not seen or seen[-1] != text:
+                seen.append(text)
+            if "finished" in text:
+                break
+            assert time.monotonic() - started < WAIT_MS / 1000, seen  # a ceiling for the work, not a speed test
+            page.wait_for_timeout(200)
+        print(f"backtest shown {appeared_s:.2f} s, listed {listed_s:.2f} s after the click; progress seen: {seen}")
+        done = [int(re.match(r"(\d+) of (\d+)", t).group(1)) for t in seen]
+        assert done == sorted(done) and len(set(done)) >= 2, seen  # it moved, forwards
+        assert seen[-1].startswith("5 of 5 days × strategies settled · finished"), seen
+        page.screenshot(path=ARTIFACTS / "backtest-finished.png")
+        shown = page.get_by_test_id("stSelectbox").filter(has_text="Backtest shown below")
+        assert shown.locator("input").input_value().startswith("browser backtest · ")
 
 
 # ----------------------------------------------------------------------------- saved runs, edits
@@ -364,8 +427,8 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
         page.goto(f"{url}/?run={run_id}")
         page.get_by_role("heading", name="Results").wait_for()
         page.get_by_test_id("stMetric").first.wait_for()
-        net = page.get_by_test_id("stMetric").filter(has_text="Net result").inner_text()
-        assert f"{expected.objective_eur / 1000:,.1f}".replace("-", "−") in net
+        net = page.get_by_test_id("stMetric").filter(has_text="Net cost").inner_text()
+        assert f"{-expected.objective_eur / 1000:,.1f}".replace("-", "−") in net
         assert page.get_by_role("button", name="Cancel").count() == 0  # shown from the library, not solved
         page.screenshot(path=ARTIFACTS / "results-from-link.png")
 

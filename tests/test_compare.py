@@ -43,7 +43,7 @@ def test_flexibility_and_kpi_tables(paper_solve):
     np.testing.assert_allclose(balanced["Upward reserve [MWh]"], expected["r_up_mwh"])
     np.testing.assert_allclose(balanced["Downward reserve to capacity [h]"], expected["r_dn_h"])
     kpis = kpi_table(results)
-    assert kpis.loc["deterministic", "Net result [kEUR]"] == pytest.approx(results["deterministic"].objective_eur / 1000)
+    assert kpis.loc["deterministic", "Net cost [kEUR]"] == pytest.approx(-results["deterministic"].objective_eur / 1000)
     assert kpis.loc["balanced", "Robust protection [kEUR]"] == pytest.approx(
         sum(results["balanced"].protection_eur.values()) / 1000)
     assert "Profit [EUR]" not in kpis and "Cost [kEUR]" not in kpis  # one number for the objective

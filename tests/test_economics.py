@@ -45,14 +45,19 @@ def test_the_explanation_states_the_sign_and_the_cost_per_mwh(balanced):
     assert f"net cost per MWh served is {-balanced.objective_eur / day.served_mwh:,.1f} EUR" in line
 
 
-def test_the_waterfall_ends_at_the_net_result(balanced, paper_solve):
+def test_the_waterfall_ends_at_the_net_cost(balanced, paper_solve):
     fig = waterfall_figure({"balanced": balanced})
     [trace] = fig.data
-    assert list(trace.x) == ["DAM revenue", "SR revenue", "HPA cost", "Operating cost", "Robust protection", "Net"]
+    assert list(trace.x) == ["DAM revenue", "SR revenue", "HPA cost", "Operating cost", "Robust protection",
+                             "Net cost"]
     assert list(trace.measure) == ["relative"] * 5 + ["total"]
     values = np.asarray(trace.y, float)
-    assert values[:5].sum() == pytest.approx(values[5]) == pytest.approx(balanced.objective_eur / 1000)
+    parts = balanced.parts
+    # A cost is positive when the plant pays: revenues count negative, costs and protection positive.
+    assert values[0] == pytest.approx(-parts["revenue_dam_eur"] / 1000)
+    assert values[2] == pytest.approx(parts["cost_hpa_eur"] / 1000)
+    assert values[:5].sum() == pytest.approx(values[5]) == pytest.approx(-balanced.objective_eur / 1000)
     assert fig.layout.title.text.startswith("The day's economics")
-    assert fig.layout.yaxis.title.text == "Amount [kEUR]" and fig.layout.xaxis.title.text
+    assert fig.layout.yaxis.title.text.startswith("Cost [kEUR]") and fig.layout.xaxis.title.text
     two = waterfall_figure({"balanced": balanced, "deterministic": paper_solve(strategy="deterministic")})
     assert len(two.data) == 2 and [a.text for a in two.layout.annotations] == ["balanced", "deterministic"]

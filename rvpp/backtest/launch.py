@@ -141,6 +141,8 @@ def start(case: Case, settings: BacktestSettings, store: BacktestStore | None = 
                                            start_new_session=True,
                                            env={**os.environ, "PYTHONPATH": str(ROOT), URL_VARIABLE: url})
             _STARTED[ident] = process
+            # Reaped as soon as it ends, so a finished backtest leaves no zombie behind while the server runs.
+            threading.Thread(target=process.wait, name=f"rvpp-backtest-{process.pid}", daemon=True).start()
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise

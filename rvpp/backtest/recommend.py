@@ -30,6 +30,12 @@ from .settings import FRACTION, PERFECT, PRESET, BacktestError, BacktestSettings
 from .export import export
 
 CRITERIA = {"mean": "mean_net_cost_eur", "cvar95": "cvar95_net_cost_eur"}
+# The least evidence a recommendation is offered on. Two training weeks hold every weekday twice (demand
+# and prices follow the week) and one test week holds each once; a choice on fewer days follows the
+# weather of a few days more than Γ.
+MIN_TRAIN_DAYS = 14
+MIN_TEST_DAYS = 7
+CVAR_DAYS = 20  # under 20 days the CVaR 95 % is the single worst day
 CRITERION_NAMES = {"mean": "mean daily net cost", "cvar95": "CVaR 95 % of the daily net cost"}
 
 
@@ -108,6 +114,33 @@ def recommendation_from(records: pd.DataFrame, train: tuple[dt.date, dt.date], t
     comparison = _comparison(table, fraction, periods, column)
     outcome, verdict = _verdict(comparison, fraction, criterion, test)
     return Recommendation(backtest_id, criterion, train, test, fraction, curve, comparison, verdict, outcome)
+
+
+def shortfalls(rec: Recommendation) -> list[str]:
+    """Why ``rec`` rests on too little evidence to be followed, in words (empty when it does not):
+    fewer settled training or test days than :data:`MIN_TRAIN_DAYS` / :data:`MIN_TEST_DAYS`, and
+    a CVaR 95 % that is only the worst day."""
+    mine = rec.comparison.iloc[0]
+    train, test = int(mine["train_days_settled"]), int(mine["test_days_settled"])
+    found = []
+    if train < MIN_TRAIN_DAYS:
+        found.append(f"{train} settled training day{'s' * (train != 1)}, fewer than the {MIN_TRAIN_DAYS} a "
+                     "choice needs (every weekday twice)")
+    if test < MIN_TEST_DAYS:
+        found.append(f"{test} settled test day{'s' * (test != 1)}, fewer than the {MIN_TEST_DAYS} a check needs "
+                     "(every weekday once)")
+    if rec.criterion == "cvar95" and train < CVAR_DAYS:
+        found.append(f"under {CVAR_DAYS} training days the CVaR 95 % is the single worst day")
+    return found
+
+
+def beats_presets_on_training(rec: Recommendation) -> bool:
+    """Whether the recommendation's criterion on the training days is strictly lower (less cost)
+    than every preset's: otherwise a preset does as well and there is nothing to recommend."""
+    column = f"train_{CRITERIA[rec.criterion]}"
+    presets = rec.comparison[rec.comparison["variant"].isin(STRATEGIES)][column].dropna()
+    mine = rec.comparison.iloc[0][column]
+    return bool(pd.notna(mine) and (presets.empty or mine < presets.min()))
 
 
 def check_periods(train, test) -> None:

@@ -861,6 +861,20 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
     if not isinstance(data, Mapping):
         raise CaseError(f"{CASE_FILE}: the top level must be a mapping of settings, got {kind_of(data)}")
     problems: list[str] = []
+    sections, units = settings_of(data, problems)
+    if problems:
+        raise CaseError(in_file_order(problems, data))
+    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "provenance")
+           if k in data and not (k == "provenance" and data[k] is None)}
+    case = validate_into(Case, {**top, **sections, **units, "history": history}, "", problems)
+    if problems:
+        raise CaseError(problems)
+    return case
+
+
+def settings_of(data: Mapping[str, Any], problems: list[str]) -> tuple[dict[str, Any], dict[str, tuple]]:
+    """The sections and unit lists of ``data``, validated without the history; ``problems`` gets
+    what breaks a rule."""
     for key in data:
         if key not in _TOP_FIELDS:
             problems.append(f'{CASE_FILE}: unknown setting "{excerpt(key)}" (known: {", ".join(sorted(_TOP_FIELDS))})')
@@ -872,15 +886,25 @@ def parse_case(data: Mapping[str, Any], history: History) -> Case:
                             "hpa_tariff_eur_per_mwh")
             continue
         sections[key] = validate_into(model, {} if raw is None else raw, key, problems)  # blank: the defaults
-    units = _parse_units(data.get("units"), problems)
-    if problems:
-        raise CaseError(problems)
-    top = {k: data[k] for k in ("name", "description", "delivery_date", "timezone", "dt_h", "provenance")
-           if k in data and not (k == "provenance" and data[k] is None)}
-    case = validate_into(Case, {**top, **sections, **units, "history": history}, "", problems)
-    if problems:
-        raise CaseError(problems)
-    return case
+    return sections, _parse_units(data.get("units"), problems)
+
+
+# The setting a problem names: an unknown one, a quoted one ("history") or its leading key (units: ...).
+_SETTING_OF = re.compile(rf'(?:{re.escape(CASE_FILE)}: )?'
+                         r'(?:unknown setting "(?P<unknown>[^"]*)"|"(?P<quoted>\w+)"|(?P<key>\w+))')
+
+
+def in_file_order(problems: list[str], data: Mapping[str, Any]) -> list[str]:
+    """``problems`` ordered by where the setting each names stands in the file (a setting the file
+    lacks after those it has); problems of one setting keep their order."""
+    order = {str(key): position for position, key in enumerate(data)}
+
+    def position(problem: str) -> int:
+        found = _SETTING_OF.match(problem)
+        named = found and (found["unknown"] or found["quoted"] or found["key"])
+        return order.get(named, len(order))
+
+    return sorted(problems, key=position)
 
 
 def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:

@@ -14,7 +14,7 @@ from typing import Any
 import yaml
 
 from ..errors import CaseError, CaseFileError, CasePathError, require
-from .case import CASE_FILE, Case, parse_case
+from .case import CASE_FILE, Case, in_file_order, parse_case, settings_of
 from .case_messages import kind_of
 from .files import MIB, decode_text, excerpt, inside_folder, read_file, relative_path
 from .history import History
@@ -66,8 +66,16 @@ def load_case(path: str | Path) -> Case:
 
 
 def history_path(data: Mapping[str, Any], file: str) -> PurePosixPath:
-    """The ``history:`` of a case, checked to stay inside the case folder (nothing is opened)."""
-    return relative_path(data.get("history"), "history", file)
+    """The ``history:`` of a case, checked to stay inside the case folder (nothing is opened).
+
+    Refused with every problem of the file found without the history, in file order: a
+    ``units: 5`` above a missing ``history:`` is named first."""
+    try:
+        return relative_path(data.get("history"), "history", file)
+    except CasePathError as err:
+        problems: list[str] = []
+        settings_of(data, problems)
+        raise CasePathError(in_file_order([*problems, *err.problems], data)) from None
 
 
 def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:

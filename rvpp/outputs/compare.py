@@ -67,18 +67,20 @@ def flexibility_table(results: Mapping[str, Result]) -> pd.DataFrame:
 
 
 def kpi_table(results: Mapping[str, Result], baseline: str | None = None) -> pd.DataFrame:
-    """One row per labelled plan: status, net result and its parts [kEUR], solve time [s].
+    """One row per labelled plan: status, net cost (positive when the plant pays) and its
+    parts [kEUR], solve time [s].
 
     With ``baseline`` (a label of ``results`` with a plan), each plan's extra cost over
-    the baseline [kEUR]: what being safer costs. The same in [%] only when the
-    baseline's net result is at least :data:`PERCENT_BASE_SHARE` of its gross money
-    flows (revenues plus costs): a percentage of a near-zero base says nothing.
+    the baseline [kEUR], positive when the plan costs more: what being safer costs. The
+    same in [%] only when the baseline's net cost is at least :data:`PERCENT_BASE_SHARE`
+    of its gross money flows (revenues plus costs): a percentage of a near-zero base says
+    nothing.
     """
     rows = []
     for label, result in results.items():
         parts = result.parts
         money = {
-            "Net result [kEUR]": result.objective_eur,
+            "Net cost [kEUR]": None if result.objective_eur is None else -result.objective_eur,
             "DAM revenue [kEUR]": parts.get("revenue_dam_eur"),
             "SR revenue [kEUR]": parts.get("revenue_sr_eur"),
             "HPA cost [kEUR]": parts.get("cost_hpa_eur"),
@@ -91,7 +93,7 @@ def kpi_table(results: Mapping[str, Result], baseline: str | None = None) -> pd.
     table = pd.DataFrame(rows).set_index("Run")
     if baseline is not None and results[baseline].has_plan:
         base = results[baseline]
-        extra = base.objective_eur / KILO - table["Net result [kEUR]"].astype(float)
+        extra = table["Net cost [kEUR]"].astype(float) + base.objective_eur / KILO
         table.insert(2, f"Extra cost vs {baseline} [kEUR]", extra)
         if abs(base.objective_eur) >= PERCENT_BASE_SHARE * gross_eur(base):
             table.insert(3, f"Extra cost vs {baseline} [%]", PERCENT * extra * KILO / abs(base.objective_eur))

@@ -26,7 +26,7 @@ from .style import FIGURE_HEIGHT, FIGURE_MARGIN, GAIN_COLOR, GRID_COLOR, LOSS_CO
 KILO = 1000.0
 NAMES_MARGIN_B = {"full": 110, "short": 92}  # [px] below a waterfall for its tilted part names
 SHORT = {"DAM revenue": "DAM", "SR revenue": "SR", "HPA cost": "HPA", "Operating cost": "O&M",
-         "Robust protection": "Protection", "Net": "Net"}  # step names in narrow panels
+         "Robust protection": "Protection", "Net cost": "Net cost"}  # step names in narrow panels
 
 
 @dataclass(frozen=True)
@@ -110,10 +110,12 @@ def explanation(day: DayEconomics) -> str:
 
 
 def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
-    """The parts of each plan's objective as a waterfall [kEUR], one panel per plan.
+    """The parts of each plan's net cost as a waterfall [kEUR], one panel per plan, in the
+    dashboard's one money convention: a cost is positive when the plant pays.
 
-    Revenues go up, costs and the robust protection go down, the last bar is the net
-    result; every bar carries its signed value, so colour is not needed to read it.
+    Revenues go down (they lower the cost), costs and the robust protection go up, the
+    last bar is the net cost (minus the objective); every bar carries its signed value, so
+    colour is not needed to read it.
     """
     if not results:
         raise ValueError("no plans to draw")
@@ -121,13 +123,14 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
     naming = "full" if len(labels) == 1 else "short"
     traces = []
     for col, label in enumerate(labels, start=1):
-        steps = economics(results[label]).steps()
+        steps = {("Net cost" if name == "Net" else name): -value
+                 for name, value in economics(results[label]).steps().items()}
         values = [v / KILO for v in steps.values()]
         traces.append(dict(
             type="waterfall", x=list(steps) if naming == "full" else [SHORT[k] for k in steps], y=values,
             measure=["relative"] * (len(steps) - 1) + ["total"], name=label,
             text=[f"{v:+,.1f}".replace("-", "−") for v in values], textposition="outside", cliponaxis=False,
-            increasing={"marker": {"color": GAIN_COLOR}}, decreasing={"marker": {"color": LOSS_COLOR}},
+            increasing={"marker": {"color": LOSS_COLOR}}, decreasing={"marker": {"color": GAIN_COLOR}},
             totals={"marker": {"color": NET_COLOR}}, connector={"line": {"color": GRID_COLOR}},
             hovertemplate="%{x}: %{y:+,.1f} kEUR<extra>" + label + "</extra>", showlegend=False,
             **cell_axes(1, col, cols=len(labels))))
@@ -135,11 +138,12 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
                              subplot_titles=labels if len(labels) > 1 else None)
     for name, axis in layout.items():
         if name.startswith("xaxis"):
-            axis.update(title={"text": "Part of the objective"}, gridcolor=GRID_COLOR, tickangle=-30)
+            axis.update(title={"text": "Part of the net cost"}, gridcolor=GRID_COLOR, tickangle=-30)
         elif name.startswith("yaxis"):
             axis.update(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
-    layout["yaxis"]["title"] = {"text": "Amount [kEUR]"}
-    title = "The day's economics: from revenues to the net result" + (f" ({labels[0]})" if len(labels) == 1 else "")
+    layout["yaxis"]["title"] = {"text": "Cost [kEUR], positive: the plant pays"}
+    title = "The day's economics: from revenues and costs to the net cost" + (
+        f" ({labels[0]})" if len(labels) == 1 else "")
     layout.update(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT + 40,
                   paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT,
                   margin={**FIGURE_MARGIN, "b": NAMES_MARGIN_B[naming]})

@@ -1,0 +1,275 @@
+"""The dashboard as a newcomer meets it, through Streamlit's AppTest: the bids on screen, one
+money convention on every page, edits confirmed, estimates measured here, recommendations
+with their evidence, a refused upload named in file order.
+
+Expected numbers come from ``rvpp.solve`` of the same case in this process (or the store's
+records), converted here by hand: a cost is minus the objective.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import re
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rvpp
+from rvpp.backtest import BacktestSettings, variants_of
+from rvpp.backtest.engine import run_backtest
+from rvpp.store import BacktestStore, RunLibrary
+from tests.factories import click, one_day_backtest_form, open_app, wait_for
+from tests.test_app import NET, TIMEOUT_S, case_of, errors, figures, number, shown_kpis
+
+pytestmark = pytest.mark.usefixtures("run_library")  # every test writes into a data folder of its own
+
+MONEY_WORDS = re.compile(r"cost|revenue|protection|penalty|regret|price|tariff|result|profit|EUR", re.I)
+STORE_FILE = "rvpp.sqlite3"
+
+
+def headers(at) -> list[str]:
+    """Every column header of every table drawn, as the page shows it (the label its column
+    settings give, else the column's name; a table's index names too)."""
+    found = []
+    for frame in at.dataframe:
+        value = frame.value
+        config = json.loads(frame.proto.columns or "{}")
+        shown = {name: settings.get("label") for name, settings in config.items() if settings.get("label")}
+        found += [shown.get(str(c), str(c)) for c in value.columns] + [str(n) for n in value.index.names if n]
+    for table in at.table:
+        found += [str(c) for c in table.value.columns]
+    return found
+
+
+def money_labels(at) -> list[str]:
+    return [label for label in [m.label for m in at.metric] + headers(at) if MONEY_WORDS.search(label)]
+
+
+# ----------------------------------------------------------------------------- bids
+
+
+@pytest.mark.parametrize("page, button", [(None, "home_solve"), ("results", "results_solve")])
+def test_home_and_results_show_the_bids_as_a_table(page, button, paper_solve):
+    at = click(open_app(page), button)
+    expected = paper_solve().market
+    table = next(f.value for f in at.dataframe if "DAM [MW]" in f.value.columns)
+    assert list(table.columns) == ["Period", "DAM [MW]", "Up [MW]", "Down [MW]", "HPA [MW_th]", "DAM [EUR/MWh]",
+                                   "Up [EUR/MW]", "Down [EUR/MW]", "HPA [EUR/MWh_th]"]
+    assert list(table["Period"]) == [f"{hour:02d}:00" for hour in range(24)]
+    np.testing.assert_allclose(table["DAM [MW]"], expected["p_da_mw"])
+    np.testing.assert_allclose(table["Down [MW]"], expected["r_sr_dn_mw"])
+    np.testing.assert_allclose(table["HPA [MW_th]"], expected["h_hpa_mw"])
+    np.testing.assert_allclose(table["DAM [EUR/MWh]"], expected["price_da_mid"])
+    downloads = [d for d in at.get("download_button") if d.proto.label == "Bids as shown (CSV)"]
+    assert len(downloads) == 1
+
+
+# ----------------------------------------------------------------------------- one money convention
+
+
+def test_every_page_speaks_of_money_one_way(paper_solve):
+    """Cards and table headers on every page: a net is a net cost (never a net result or profit),
+    every money label names its unit, and the net cost card is minus the objective."""
+    expected = paper_solve()
+    at = click(open_app(), "home_solve")
+    seen = {"Home": money_labels(at)}
+    net = shown_kpis(at)[NET]
+    assert number(net[0]) == pytest.approx(-expected.objective_eur / 1000, abs=0.051) and number(net[0]) > 0
+    for page, button in (("results", "results_solve"), ("compare", "compare_solve"), ("portfolio", None),
+                         ("markets", None), ("uncertainty", None), ("runs", None), ("sensitivity", None),
+                         ("market_sets", None), ("out_of_sample", None), ("backtest", None), ("learn", None)):
+        at.switch_page(f"pages/{page}.py").run()
+        assert not at.exception, (page, at.exception)
+        if button:
+            click(at, button)
+        if page == "results":
+            click(at, "results_save")
+        if page == "learn":
+            click(at, "learn_modes")
+        seen[page] = money_labels(at)
+    at.switch_page("pages/runs.py").run()
+    seen["runs"] = money_labels(at)
+    for page, labels in seen.items():
+        for label in labels:
+            assert not re.search(r"net result|profit", label, re.I), (page, label)
+            if not re.search(r"price|tariff", label, re.I) or "[" in label:
+                assert re.search(r"\[(k?EUR|EUR/[\w ]+|%)\]", label), (page, label)
+    assert "Net cost [kEUR]" in seen["runs"] and "Net cost [kEUR]" in seen["compare"]
+    assert "Net cost, planner-chosen [kEUR]" in seen["learn"]
+
+
+def test_the_compare_cost_table_is_the_net_cost(paper_solve):
+    at = click(open_app("compare"), "compare_solve")
+    cost = at.dataframe[0].value
+    assert cost.loc["Balanced", "DAM+SRM+HPA"] == pytest.approx(-paper_solve().objective_eur / 1000)
+    kpis = at.dataframe[1].value
+    extra = kpis["Extra cost vs deterministic [kEUR]"]
+    assert extra["deterministic"] == 0 and (extra.drop("deterministic") > 0).all()  # safer costs more
+
+
+def test_the_reserve_chart_says_when_a_plan_offers_no_up_reserve(paper_solve):
+    assert not paper_solve().market["r_sr_up_mw"].any()  # the default day offers none
+    at = click(open_app("results"), "results_solve")
+    layout = figures(at)["Reserve by unit kind"]["layout"]
+    assert [a["text"] for a in layout.get("annotations", [])] == ["No up reserve in this plan"]
+    assert list(layout["yaxis"]["range"]) == [0, 1]
+
+
+# ----------------------------------------------------------------------------- Learn
+
+
+def test_learn_reaches_every_source_and_states_the_variants_difference_in_kEUR(paper_case):
+    at = open_app("learn")
+    assert not at.get("button_group")  # no pill rows to clip
+    sources = at.selectbox(key="learn_source")
+    wanted = [u.name for _, u in paper_case.units()]
+    assert set(sources.options) <= set(wanted) and "CSP1" in sources.options and "PV3" in sources.options
+    assert len(at.selectbox(key="learn_price").options) == 3
+    click(at, "learn_modes")
+    cards = {m.label: m for m in at.metric}
+    paper, chosen = cards["Net cost, paper mode [kEUR]"], cards["Net cost, planner-chosen [kEUR]"]
+    difference = number(chosen.value) - number(paper.value)
+    assert chosen.proto.delta.endswith("kEUR vs paper mode")
+    assert number(chosen.proto.delta) == pytest.approx(difference, abs=0.11)
+    from streamlit.proto.Metric_pb2 import Metric
+
+    assert chosen.proto.color == Metric.MetricColor.GRAY  # neutral: a lower cost here is less protection
+
+
+# ----------------------------------------------------------------------------- edits
+
+
+def test_an_accepted_edit_is_confirmed_and_results_says_what_changed(paper_case, paper_solve):
+    at = click(open_app("results"), "results_solve")
+    assert not [i for i in at.info if "What changed" in i.value]  # nothing changed yet
+    at.switch_page("pages/portfolio.py").run()
+    at.session_state["portfolio_pv_0"] = {"edited_rows": {0: {"p_max_mw": 20.0}}, "added_rows": [],
+                                          "deleted_rows": []}
+    at.run()
+    assert not errors(at)
+    said = "\n".join(s.value for s in at.success)
+    assert "Edit accepted" in said and "PV1 20 MW \\(was 50 MW\\)" in said
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    before = -paper_solve().objective_eur / 1000
+    after = -rvpp.solve(case_of(at)).objective_eur / 1000
+    changed = next(i.value for i in at.info if "What changed" in i.value)
+    assert f"net cost {before:,.1f} → {after:,.1f} kEUR" in changed
+    assert "PV1 20 MW \\(was 50 MW\\)" in changed
+
+
+# ----------------------------------------------------------------------------- estimates
+
+
+def test_estimates_are_measured_on_this_server_never_read_from_a_file(paper_case):
+    from dashboard.solving import Solver
+
+    solver = Solver(workers=1)
+    assert solver.expected_s(paper_case) is None and solver.expected_s(paper_case, range(25)) is None
+    solver.last_solve = (2.0, 24)  # a solve of 2 s on a day of 24 hourly periods
+    quarter = rvpp.with_options(paper_case, dt_h=0.25, strategy="pessimistic")
+    assert solver.expected_s(quarter) == (8.0, "the last solve on this server of 24 periods, scaled to 96")
+    assert solver.expected_s(paper_case, list(range(25))) == (50.0, "25 plans × the last solve on this server")
+    at = open_app()
+    said = " ".join(c.value for c in at.caption) + " ".join(m.value for m in at.markdown)
+    assert "benchmarks" not in said and ".json" not in said
+
+
+# ----------------------------------------------------------------------------- upload order
+
+
+def test_an_upload_is_refused_for_its_first_problem_in_file_order():
+    at = open_app()
+    at.file_uploader(key="home_upload").set_value([("case.yaml", b"units: 5\n", "text/yaml")]).run()
+    click(at, "home_load_upload")
+    problems = [line for line in errors(at).splitlines() if line.startswith("- ")]
+    assert problems[0].startswith("- units"), problems
+    assert any("history" in p for p in problems[1:])
+
+
+# ----------------------------------------------------------------------------- wording
+
+
+def test_saved_runs_says_how_many_to_tick_in_words(paper_solve):
+    library = RunLibrary(f"sqlite:///{Path(os.environ['RVPP_DATA_DIR']) / STORE_FILE}")
+    library.save("one", paper_solve().case, paper_solve(), settings={"csp": True})
+    at = open_app("runs")
+    said = " ".join(c.value for c in at.caption)
+    assert "tick two, three or 4 to compare" in said and "two to 4" not in said
+
+
+# ----------------------------------------------------------------------------- recommendations
+
+
+FIRST, LAST = dt.date(2025, 5, 2), dt.date(2025, 5, 4)
+
+
+@pytest.fixture(scope="module")
+def three_days(paper_case, tmp_path_factory):
+    """A data folder holding a finished three-day backtest of the deterministic plan and Γ 0.25."""
+    folder = tmp_path_factory.mktemp("newcomer") / "rvpp-data"
+    folder.mkdir()
+    store = BacktestStore(f"sqlite:///{folder / STORE_FILE}")
+    ident = run_backtest(paper_case, BacktestSettings(FIRST, LAST, variants_of(["deterministic"], [0.25])), store,
+                         label="three May days")
+    records = store.records(ident)
+    store.engine.dispose()
+    return folder, ident, records
+
+
+def copy_store(three_days, data_dir: Path) -> str:
+    folder, ident, _ = three_days
+    shutil.copytree(folder, data_dir, dirs_exist_ok=True)
+    return ident
+
+
+@pytest.mark.slow
+def test_a_recommendation_from_three_days_warns_and_offers_nothing_to_remember(three_days, data_dir):
+    copy_store(three_days, data_dir)
+    at = open_app("backtest")
+    warned = "\n".join(w.value for w in at.warning)
+    assert "Small sample" in warned
+    assert "2 settled training days, fewer than the 14" in warned and "1 settled test day, fewer than the 7" in warned
+    assert "backtest_remember" not in [b.key for b in at.button]
+
+
+@pytest.mark.slow
+def test_remember_is_not_offered_when_the_recommendation_does_not_beat_the_presets_on_training(three_days, data_dir,
+                                                                                        monkeypatch):
+    copy_store(three_days, data_dir)
+    _, _, records = three_days
+    evidence = sys.modules["rvpp.backtest.recommend"]  # the module (the package's `recommend` is a function)
+    monkeypatch.setattr(evidence, "MIN_TRAIN_DAYS", 1)
+    monkeypatch.setattr(evidence, "MIN_TEST_DAYS", 1)
+    at = open_app("backtest")
+    assert not [w for w in at.warning if "Small sample" in w.value]
+    # By hand: mean daily net cost on the two training days of Γ 0.25 against the deterministic preset.
+    train = records[records["day"].astype(str) <= str(FIRST + dt.timedelta(days=1))]
+    mean = train.groupby("label")["net_cost_eur"].mean()
+    assert mean["deterministic"] <= mean["Γ 0.25 of the day"]  # the recommendation is Γ = 0, the preset itself
+    assert "backtest_remember" not in [b.key for b in at.button]
+    assert any("does not beat every preset" in i.value for i in at.info)
+
+
+# ----------------------------------------------------------------------------- a backtest's process
+
+
+@pytest.mark.slow
+def test_a_finished_backtest_leaves_no_zombie_process(data_dir):
+    at = one_day_backtest_form(open_app("backtest"), LAST, "one day")
+    click(at, "backtest_start")
+    pid = int(re.search(r"process (\d+)", at.info[0].value).group(1))
+    store = BacktestStore(f"sqlite:///{data_dir / STORE_FILE}")
+    wait_for(lambda: store.list() and store.progress(store.list()[0].id) is not None
+             and not store.progress(store.list()[0].id).running, TIMEOUT_S)
+    # Reaped once it ended: gone from the process table, not left as a zombie until the server exits.
+    wait_for(lambda: not Path(f"/proc/{pid}").exists(), TIMEOUT_S, every_s=0.2)
+    time.sleep(0.1)
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pid, os.WNOHANG)
