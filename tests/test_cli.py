@@ -446,6 +446,7 @@ def test_ctrl_c_during_a_solve_writes_the_best_plan_found_so_far(tmp_path):
 
 def test_a_second_ctrl_c_gives_up_and_the_command_says_so(monkeypatch, capsys):
     import rvpp.cli.solve as cli
+    from rvpp.cli.options import INTERRUPTED
 
     stop = cli.SearchStop(lambda _m: None)
     before = signal.getsignal(signal.SIGINT)
@@ -459,7 +460,7 @@ def test_a_second_ctrl_c_gives_up_and_the_command_says_so(monkeypatch, capsys):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(cli, "_run_solve", interrupted)
-    assert main(["solve"]) == cli.INTERRUPTED == 130
+    assert main(["solve"]) == INTERRUPTED == 130
     assert capsys.readouterr().err == "error: interrupted; nothing more was written\n"
 
 
