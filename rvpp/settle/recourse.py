@@ -45,6 +45,7 @@ from ..data.periods import delivery_periods, period_labels
 from ..uncertainty.problem import Problem, Source, source_columns
 from ..solving.highs import model_lifetime, run_highs
 from ..uncertainty.bands import realized_values
+from ..uncertainty.forecast import band_specs
 
 FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
 # Settling a day: the feasibility-jump heuristic costs more than it finds (51 settlements, four
@@ -190,7 +191,8 @@ def realization(case: Case, day: dt.date) -> Realization:
     if case.markets.imbalance_prices is not None:
         columns.update({name: (getattr(case.markets.imbalance_prices, side), 1.0)
                         for name, side in zip(IMBALANCE_COLUMNS, ("short", "long"))})
-    values = realized_values(case.history, day, periods, columns, case.timezone)
+    limits = {name: (spec.low, spec.high) for name, spec in band_specs(case).items()}
+    values = realized_values(case.history, day, periods, columns, case.timezone, limits)
     return Realization(day=day, values=values)
 
 
