@@ -152,6 +152,10 @@ class ThermalStorage(_Frozen):
     eta_dis: Annotated[Number, Field(gt=0.0, le=1.0)]
     e_init_mwh_th: NonNegative | None = None
     e_end_min_mwh_th: NonNegative | None = None
+    # What a MWh_th left in the tank at the day's end, above the day's start, is worth to the
+    # next day [EUR/MWh_th] (MODEL_SPEC §8 beyond the paper; 0: the paper's day, heat has no value
+    # after midnight). Only a day from a fixed ``e_init`` has it; a cyclic day ends where it starts.
+    end_value_eur_per_mwh_th: NonNegative = 0.0
 
     @property
     def cyclic(self) -> bool:

@@ -662,5 +662,12 @@ def _audit_objective(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: 
     for field, value in (("revenue_dam_eur", revenue_dam), ("revenue_sr_eur", revenue_sr),
                          ("cost_hpa_eur", cost_hpa), ("cost_opex_eur", opex)):
         a.eq(f"objective.{field}", summary[field], value, scale=scale)
-    total = revenue_dam + revenue_sr - cost_hpa - opex - sum(protection.values())
+    kept = 0.0
+    for c in case.csp:
+        ts = c.storage
+        if ts.e_init_mwh_th is not None and ts.end_value_eur_per_mwh_th > 0.0:
+            kept += ts.end_value_eur_per_mwh_th * (float(by_csp[c.name]["ts_energy_mwh"].to_numpy(float)[-1])
+                                                    - ts.e_init_mwh_th)
+    a.eq("objective.value_heat_kept_eur", summary.get("value_heat_kept_eur", 0.0), kept, scale=scale)
+    total = revenue_dam + revenue_sr - cost_hpa - opex - sum(protection.values()) + kept
     a.eq("objective.total", summary["objective_eur"], total, scale=scale)

@@ -284,8 +284,13 @@ def build_recourse_model(problems: Sequence[Problem], penalties: Penalties,
     for k, problem in enumerate(problems):
         add_scenario(m, m.scenario[k], problem, penalties, bids)
     weight = 1.0 / len(problems)
+    # The heat kept past midnight is valued as the plan valued it (0 unless the case sets
+    # end_value_eur_per_mwh_th), so the settlement does not spend it for less; it is not cash
+    # and stays out of net_cost.
     m.expected_net_cost = pyo.Objective(
-        expr=weight * sum(m.scenario[k].net_cost for k in m.scenario), sense=pyo.minimize)
+        expr=weight * sum(m.scenario[k].net_cost - sum(m.scenario[k].csp[c.name].heat_kept_value
+                                                        for c in problems[k].case.csp)
+                          for k in m.scenario), sense=pyo.minimize)
     return m
 
 
