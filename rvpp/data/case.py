@@ -507,9 +507,11 @@ class SolverSettings(_Frozen):
 
 class ColumnSource(_Frozen):
     """Where a history column comes from: ``real`` (a public record, named with its
-    fingerprint) or ``synthetic`` (generated), and how it was made from its source."""
+    fingerprint), ``real-derived`` (made from a public record by a stated model, e.g. a
+    solar field's heat from the solar fleet's clear-sky index), ``modelled`` or
+    ``synthetic`` (generated; the two words mean the same), and how it was made from its source."""
 
-    origin: Literal["real", "synthetic"]
+    origin: Literal["real", "real-derived", "modelled", "synthetic"]
     source: Annotated[str, Field(min_length=1), ONE_LINE]
     note: Prose = ""
 
@@ -550,10 +552,12 @@ class Case(_Frozen):
         return dict(self.provenance)
 
     def provenance_summary(self) -> str | None:
-        """One line naming the real and the synthetic history columns (``None`` if unlabelled)."""
+        """One line naming the history columns of each origin (``None`` if unlabelled)."""
         if not self.provenance:
             return None
-        by_origin = {origin: [c for c, p in self.provenance if p.origin == origin] for origin in ("real", "synthetic")}
+        word = {"synthetic": "modelled"}  # the older cases' word for the same origin
+        by_origin = {origin: [c for c, p in self.provenance if word.get(p.origin, p.origin) == origin]
+                     for origin in ("real", "real-derived", "modelled")}
         parts = [f"{origin}: {', '.join(columns)}" for origin, columns in by_origin.items() if columns]
         return "History columns — " + "; ".join(parts) + " (sources and fingerprints in the case's provenance)."
 

@@ -90,8 +90,9 @@ def _within_keeping_mean(rows: np.ndarray, means: np.ndarray, floor: np.ndarray,
 def band_to_periods(lo: np.ndarray, mid: np.ndarray, hi: np.ndarray, per_hour: int, low: float | None = None,
                     high: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An hourly band ``lo <= mid <= hi`` brought to finer periods by :func:`hourly_to_periods`,
-    still ordered in every period: the three held to ``[low, high]``, the lower bound first, then the two gaps (each >= 0 and no
-    higher than the room left below ``high``), so every hour keeps the means of all three."""
+    still ordered in every period: the three held to ``[low, high]``, the lower bound first,
+    then the two gaps (each >= 0 and no higher than the room left below ``high``), so every
+    hour keeps the means of all three."""
     lo, mid, hi = (np.clip(np.asarray(x, dtype=float), -np.inf if low is None else low,
                            np.inf if high is None else high) for x in (lo, mid, hi))
     fine_lo = hourly_to_periods(lo, per_hour, low, high)
