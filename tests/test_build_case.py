@@ -72,10 +72,14 @@ def test_units_take_the_fleet_capacity_factor_and_scaled_forecast_errors(tmp_pat
     assert frame.at[pd.Timestamp("2021-05-11 13:00", tz=TZ).tz_convert("UTC"), "price_da"] == -1.0
     assert frame["price_sr_up"].between(0.0, 40.0).all() and frame["price_sr_dn"].between(0.0, 30.0).all()
     provenance = case.provenance_map
-    assert {c: p.origin for c, p in provenance.items() if p.origin == "real"}.keys() == {
-        "price_da", "WF1", "WF1_fc", "WF2", "WF2_fc", "PV1", "PV1_fc", "PV2", "PV2_fc", "PV3", "PV3_fc"}
-    assert {"price_sr_up", "price_sr_dn", "CSP1", "ED_industry", "TD_residential"} <= {
-        c for c, p in provenance.items() if p.origin == "synthetic"}
+    assert [c for c, p in provenance.items() if p.origin == "real"] == ["price_da"]
+    assert {"WF1", "WF1_fc", "WF2", "WF2_fc", "PV1", "PV1_fc", "PV2", "PV2_fc", "PV3", "PV3_fc"} <= {
+        c for c, p in provenance.items() if p.origin == "real-derived"}
+    assert {"price_sr_up", "price_sr_dn", "ED_industry", "TD_residential", "TD_residential_fc"} <= {
+        c for c, p in provenance.items() if p.origin == "modelled"}  # the table gives no system load
+    assert provenance["CSP1"].origin == provenance["CSP1_fc"].origin == "real-derived"
+    assert case.csp[0].solar_field.forecast_series == "CSP1_fc"
+    assert case.uncertainty.band_method("CSP1", "csp") == "forecast"
     assert "series.csv" in provenance["price_da"].source and "sha256" in provenance["price_da"].source
     assert case.uncertainty.band_method("WF1", "wind") == "forecast"
     assert case.uncertainty.band_method("price_sr_up") == "climatology"
@@ -86,9 +90,116 @@ def test_forecast_errors_scale_zero_is_a_perfect_forecast_and_clipping_holds(tmp
     build_case([source], tmp_path / "case", template=PAPER, options=BuildOptions(errors_scale=0.0))
     frame = load_case(tmp_path / "case").history.frame
     assert np.allclose(frame["WF1_fc"], frame["WF1"])
+    assert np.allclose(frame["CSP1_fc"], frame["CSP1"])
     build_case([source], tmp_path / "big", template=PAPER, options=BuildOptions(errors_scale=60.0))
     frame = load_case(tmp_path / "big").history.frame
     assert frame["WF1_fc"].min() >= 0.0 and frame["WF1_fc"].max() <= 50.0
+    assert frame["CSP1_fc"].min() >= 0.0 and frame["CSP1_fc"].max() <= 300.0
+
+
+def _clear_sky_ghi(index: pd.DatetimeIndex) -> np.ndarray:
+    """The site's clear-sky GHI [W/m2] at mid-hour, straight from pvlib (the oracle's own call)."""
+    import pvlib
+
+    site = pvlib.location.Location(37.23, -3.07, TZ, 1100.0)
+    middle = index.tz_convert(TZ) + pd.Timedelta(minutes=30)
+    turbidity = pvlib.clearsky.lookup_linke_turbidity(middle, site.latitude, site.longitude)
+    return site.get_clearsky(middle, model="ineichen", linke_turbidity=turbidity)["ghi"].to_numpy()
+
+
+def test_the_clear_sky_index_reads_clear_days_as_one_and_a_half_fleet_as_one_half():
+    from rvpp.data import synth
+    from rvpp.data.build_case import clear_sky_index
+
+    assert (synth.SITE.latitude, synth.SITE.longitude) == pytest.approx((37.23, -3.07), abs=0.01)
+    index = pd.date_range("2021-04-30 22:00", periods=24 * 20, freq="h", tz="UTC")
+    ghi = _clear_sky_ghi(index)
+    growing = 0.7 + 0.01 * np.arange(len(index)) / 24  # the fleet grows by 1 % of its output a day
+    cf = growing * ghi / 1000.0
+    cloudy = index.tz_convert(TZ).date == dt.date(2021, 5, 15)
+    cf[cloudy] *= 0.5
+    k = clear_sky_index(cf, index)
+    elevated = ghi > 200.0
+    later = index.tz_convert(TZ).date >= dt.date(2021, 5, 8)  # a week of envelope behind it
+    clear = later & ~cloudy & elevated
+    # The envelope is the 0.9 quantile of 7..30 days before: growth of 1 %/day reads as at most a few per cent.
+    assert np.all(k[clear] > 0.95) and np.all(k <= 1.0)
+    assert np.allclose(k[cloudy & elevated], 0.5, atol=0.03)
+
+
+def test_the_fields_heat_rises_with_the_clear_sky_index_and_stays_within_the_field():
+    from rvpp.data import synth
+
+    times = synth.hourly_index("2018-04-05", "2018-04-06")
+    heats = [synth.field_heat_from_clear_sky_index(times, np.full(24, k)) for k in (0.2, 0.5, 0.8, 1.0)]
+    for lower, higher in zip(heats, heats[1:]):
+        assert np.all(higher >= lower - 1e-9)
+    assert heats[0].max() == 0.0 and heats[-1].max() == pytest.approx(300.0)  # no beam under overcast; defocused
+    assert heats[-1][:6].max() == 0.0 and heats[-1][21:].max() == 0.0  # night
+
+
+def test_the_field_follows_the_fleet_real_derived_from_its_clear_sky_index(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    frame = pd.read_csv(source)
+    utc = pd.DatetimeIndex(pd.to_datetime(frame["time_utc"], utc=True))
+    cf = 0.8 * _clear_sky_ghi(utc) / 1000.0
+    dull = (utc.tz_convert(TZ).date == dt.date(2021, 6, 12))
+    frame["actual_solar"] = 5000.0 * cf * np.where(dull, 0.3, 1.0)
+    frame["forecast_solar"] = 5000.0 * cf  # the forecast missed the dull day
+    frame.to_csv(source, index=False)
+    build_case([source], tmp_path / "case", template=PAPER)
+    heat = load_case(tmp_path / "case").history.frame
+    local = heat.index.tz_convert(TZ).date
+    daily = heat.groupby(local)[["CSP1", "CSP1_fc"]].sum()
+    assert daily.loc[dt.date(2021, 6, 12), "CSP1"] < 0.1 * daily.loc[dt.date(2021, 6, 11), "CSP1"]
+    assert daily.loc[dt.date(2021, 6, 12), "CSP1_fc"] > 0.8 * daily.loc[dt.date(2021, 6, 11), "CSP1_fc"]
+    assert daily.loc[dt.date(2021, 6, 11), "CSP1"] > 2000.0  # a clear June day fills much of the field's hours
+
+
+def test_electrical_demands_follow_the_system_load_on_their_energy_and_range(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    frame = pd.read_csv(source)
+    local = pd.DatetimeIndex(pd.to_datetime(frame["time_utc"], utc=True)).tz_convert(TZ)
+    hour = np.asarray(local.hour, float)
+    frame["load_actual"] = 30000.0 + 6000.0 * np.sin(np.pi * (hour - 6.0) / 12.0)  # 24,000 to 36,000 MW
+    frame["load_forecast"] = frame["load_actual"] + 600.0
+    frame.to_csv(source, index=False)
+    build_case([source], tmp_path / "case", template=PAPER, options=BuildOptions(errors_scale=2.0))
+    case = load_case(tmp_path / "case")
+    history = case.history.frame
+    # ED_industry: e_min 600 MWh, p in [2, 70] MW: level 1.05·600/24 = 26.25 MW, the load's own swings ±20 %.
+    industry = history["ED_industry"].to_numpy()
+    assert industry.max() == pytest.approx(26.25 * 1.2, rel=1e-6) and industry.min() == pytest.approx(26.25 * 0.8,
+                                                                                                     rel=1e-6)
+    # ED_service: level 35 MW in [12, 72] MW: ±20 % fits, so the same relative shape.
+    assert np.allclose(history["ED_service"] / 35.0, industry / 26.25, rtol=1e-5)  # 6 digits in the file
+    # The forecast is 600 MW (2 % of 30,000) high, its error doubled: 4 % of the level above.
+    assert np.allclose(history["ED_industry_fc"] - industry, 2.0 * 0.02 * 26.25, atol=1e-4)
+    origins = case.provenance_map
+    assert origins["ED_industry"].origin == origins["ED_industry_fc"].origin == "real-derived"
+    assert case.ed[0].forecast_series == "ED_industry_fc"
+    assert case.uncertainty.band_method("ED_industry", "ed") == "forecast"
+    heat = history["TD_industry"].to_numpy()
+    error = history["TD_industry_fc"].to_numpy() / heat - 1.0
+    assert 0.05 < error.std() < 0.15  # 5 % error, doubled by K = 2: a stated, modelled forecast error
+    assert origins["TD_industry_fc"].origin == "modelled"
+    assert case.uncertainty.band_method("TD_industry", "td") == "forecast"
+
+
+def test_a_gap_in_the_system_load_leaves_the_demands_modelled_unless_filled(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    frame = pd.read_csv(source)
+    frame["load_actual"] = 30000.0
+    frame.loc[100, "load_actual"] = np.nan
+    frame.to_csv(source, index=False)
+    built = build_case([source], tmp_path / "case", template=PAPER)
+    assert load_case(tmp_path / "case").provenance_map["ED_industry"].origin == "modelled"
+    assert any(n.startswith("electrical demands stay modelled: the data has gaps: load_actual") for n in built.notes)
+    build_case([source], tmp_path / "filled", template=PAPER, options=BuildOptions(fill_gaps_h=1))
+    case = load_case(tmp_path / "filled")
+    assert case.provenance_map["ED_industry"].origin == "real-derived"
+    assert "interpolated" in case.provenance_map["ED_industry"].note
+    assert np.allclose(case.history.frame["ED_industry"], 1.05 * 600 / 24)  # a flat load: the level itself
 
 
 def test_gaps_are_refused_or_interpolated_on_request(tmp_path):
@@ -131,6 +242,7 @@ def test_prices_alone_make_a_case_with_every_unit_synthetic(tmp_path):
     built = build_case([prices_only], tmp_path / "case", template=PAPER)
     case = load_case(tmp_path / "case")
     assert {c: p.origin for c, p in case.provenance_map.items() if p.origin == "real"} == {"price_da": "real"}
+    assert case.provenance_map["CSP1"].origin == "modelled" and "CSP1_fc" not in case.history.columns
     assert case.wind[0].forecast_series is None and case.uncertainty.band_method("WF1", "wind") == "climatology"
     assert case.uncertainty.band_method("price_da") == "forecast"
     assert any("wind units are synthetic" in n for n in built.notes)
@@ -143,7 +255,7 @@ def test_command_line_builds_a_case(tmp_path, capsys):
                  "--start", "2021-05-02", "--date", "2021-06-10"])
     printed = capsys.readouterr()
     assert code == 0, printed.err
-    assert "WF1: real" in printed.out and "price_sr_up: synthetic" in printed.out
+    assert "WF1: real-derived" in printed.out and "price_sr_up: modelled" in printed.out
     case = load_case(tmp_path / "case")
     assert case.delivery_date == dt.date(2021, 6, 10)
     assert case.history.local_days(TZ)[0] == dt.date(2021, 5, 2)

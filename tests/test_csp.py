@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from rvpp import solve, with_options
+from rvpp import audit_result, solve, with_options
 from rvpp.model.csp import reserve_share_limits
 from tests.factories import with_storage
 from tests.reference_model import reference_optimum
@@ -92,3 +92,22 @@ def test_ordering_identical_csps_keeps_the_reference_optimum(paper_case, strateg
     assert abs(result.objective_eur - reference) <= 1e-6 * max(1.0, abs(reference)), (result.objective_eur, reference)
     hours = result.csp.groupby("unit")["online"].sum()
     assert hours[case.csp[0].name] >= hours[case.csp[1].name]
+
+
+def test_heat_kept_past_midnight_is_worth_its_end_value(paper_case):
+    """A value for the heat left in the tank (``end_value_eur_per_mwh_th``) makes the plan carry heat
+    past midnight; the objective gains exactly that value, and no more cash than the plan without it."""
+    day = dict(strategy="deterministic", date="2025-05-05")
+    plain = solve(with_options(with_storage(paper_case, e_init_mwh_th=110.0), **day))
+    valued = solve(with_options(with_storage(paper_case, e_init_mwh_th=110.0, end_value_eur_per_mwh_th=66.5), **day))
+    assert plain.status == valued.status == "optimal"
+    end = {name: r.csp["ts_energy_mwh"].to_numpy()[-1] for name, r in (("plain", plain), ("valued", valued))}
+    assert end["plain"] == pytest.approx(110.0, abs=1e-6)  # without a value, every MWh_th is used or sold today
+    assert end["valued"] > 110.0 + 100.0
+    kept = 66.5 * (end["valued"] - 110.0)
+    assert valued.parts["value_heat_kept_eur"] == pytest.approx(kept, rel=1e-9)
+    cash = valued.objective_eur - kept
+    gap = 1e-4 * abs(plain.objective_eur) + 1.0
+    assert cash <= plain.objective_eur + gap  # the plain plan is the best for today's cash alone
+    assert valued.objective_eur >= plain.objective_eur - gap  # and it stays feasible with its kept value >= 0
+    assert audit_result(valued) == [] and audit_result(plain) == []

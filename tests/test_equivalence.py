@@ -7,7 +7,10 @@ speed-ups (``benchmarks/reference_objectives.py``; the commit is recorded in the
 Both runs stop within the gap of the same optimum, so their incumbents differ by at most
 the gap, and each incumbent lies below the other run's bound. Every plan must also pass
 the independent audit of MODEL_SPEC's balances and limits. The references were solved
-with the cyclic thermal storage the paper case had then, so the cases here keep it.
+with the cyclic thermal storage the paper case had then, so the cases here keep it. The
+quarter-hour references were solved again with that same formulation once hourly data
+came to quarter-hours by the mean-keeping interpolation of MODEL_SPEC §6 instead of
+repeated hours (``quarter_hour_cases`` in the file): the inputs changed, not the formulation.
 """
 
 from __future__ import annotations

@@ -57,12 +57,16 @@ def test_bands_are_hourly_percentiles_of_the_window():
     assert np.allclose(bands[("y2", "mid")], bands[("x", "mid")])  # y = 2x scaled by 0.5
 
 
-def test_quarter_hours_take_their_hour_band_and_the_short_day_skips_two_oclock():
+def test_quarter_hours_keep_their_hour_band_mean_without_steps_and_the_short_day_skips_two_oclock():
     history = _ramp_history()
     quarters = delivery_periods("2025-03-18", TZ, 0.25)
     bands = forecast_bands(history, dt.date(2025, 3, 18), quarters, {"x": ("x", 1.0)},
                            n_days=30, q_lo=0.2, q_hi=0.8, timezone=TZ)
-    assert np.allclose(bands[("x", "mid")].to_numpy().reshape(24, 4), (29.5 + 100 * np.arange(24))[:, None])
+    mid = bands[("x", "mid")].to_numpy().reshape(24, 4)
+    assert np.allclose(mid.mean(axis=1), 29.5 + 100 * np.arange(24), atol=1e-9)
+    assert (np.diff(mid[1:-1], axis=1) > 0).all()  # the ramp rises inside each inner hour, no step
+    lo, hi = bands[("x", "lo")].to_numpy(), bands[("x", "hi")].to_numpy()
+    assert (lo <= mid.ravel() + 1e-12).all() and (mid.ravel() <= hi + 1e-12).all()
     short = delivery_periods("2025-03-30", TZ, 1.0)
     band = forecast_bands(history, dt.date(2025, 3, 30), short, {"x": ("x", 1.0)},
                           n_days=30, q_lo=0.2, q_hi=0.8, timezone=TZ)

@@ -1,4 +1,4 @@
-"""A case built from downloaded data: real prices, wind and PV; synthetic where nothing is public.
+"""A case built from downloaded data: real prices, units and demands derived from the fleets and load, modelled the rest.
 
 :func:`build_case` reads the files with the importers, puts them on one hour grid and writes
 a case folder (``case.yaml`` and ``history.csv``) whose units and settings come from a
@@ -19,10 +19,24 @@ PV unit ``P``, ``P_fc``   the same from the solar fleet, set to 0 while the sun 
                           plants, which produce after sunset)
 ``price_sr_up``/``_dn``   synthetic aFRR band prices (:mod:`rvpp.data.synth`) driven by the real
                           day-ahead price (and the real solar capacity factor for the down band)
-CSP, ED, TD units         synthetic series of :mod:`rvpp.data.synth` on the same hours
+CSP unit ``C``, ``C_fc``  real-derived when the files give the solar fleet: the fleet's clear-sky
+                          index (:func:`clear_sky_index`) turned into beam irradiance and the
+                          field's heat by the modelled optics
+                          (:func:`rvpp.data.synth.field_heat_from_clear_sky_index`), scaled to the
+                          field; ``C_fc`` the same from the fleet's day-ahead forecast, its error
+                          scaled by ``K`` as for wind
+ED unit ``E``, ``E_fc``    real-derived when the files give the system load: the load (and its
+                          day-ahead forecast, its error scaled by ``K``) mapped onto the unit's
+                          energy and range by :func:`scaled_to_demand`
+TD unit ``H``, ``H_fc``    the synthetic heat demand; ``H_fc`` a modelled day-ahead forecast with a
+                          stated error (:data:`HEAT_FORECAST_ERROR`, scaled by ``K``)
+ED (without a system      synthetic series of :mod:`rvpp.data.synth` on the same hours
+load), CSP (without a
+solar fleet)
 ========================  =====================================================================
 
-The case's ``provenance`` section records, per column, whether it is real or synthetic,
+The case's ``provenance`` section records, per column, whether it is real (as published),
+real-derived (made from a public record by a stated model) or modelled (generated),
 from which files (with their fingerprints) and how it was made. The data files themselves
 are the user's: nothing here downloads or ships them.
 """
@@ -52,6 +66,15 @@ from .importers import ImportReport, fill_gaps, hourly_table, import_files
 FLEETS = {"wind": ("actual_wind_onshore", "forecast_wind_onshore"), "pv": ("actual_solar", "forecast_solar")}
 FORECAST_SUFFIX = "_fc"
 SYNTHETIC_CSP_FIELD_MW_TH = 300.0  # the solar field synth.py models (MODEL_SPEC §12)
+# The fleet's clear-sky envelope: per UTC hour of the day, this quantile of the ratio of its
+# capacity factor to the site's clear-sky GHI over the days before (MODEL_SPEC §12's site).
+ENVELOPE_DAYS, ENVELOPE_MIN_DAYS, ENVELOPE_QUANTILE = 30, 7, 0.9
+INDEX_MIN_ELEVATION = 5.0  # [deg] below it the ratio is noise (and the field gives no heat)
+LOAD = ("load_actual", "load_forecast")  # the system load and its day-ahead forecast [MW]
+# The modelled heat demand's day-ahead forecast: a relative error of this standard deviation,
+# persistent over HEAT_FORECAST_PERSISTENCE_H hours (a district-heating load forecast from a
+# temperature forecast errs by a few per cent).
+HEAT_FORECAST_ERROR, HEAT_FORECAST_PERSISTENCE_H = 0.05, 6.0
 PRICE_LAG_DAYS = 7  # naive price forecasts look back up to a week before the window
 HISTORY_FILE = "history.csv"
 WRITTEN = (HISTORY_FILE, CASE_FILE)  # the files a build writes into its folder, in this order
@@ -127,6 +150,7 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
              if u.name + FORECAST_SUFFIX in base.unit_names()]
     if taken:
         raise RvppError(f"the template has a unit named {taken[0]!r}, the name of a forecast column; rename it")
+    load = tuple(c for c in LOAD if c in table.frame.columns) if base.ed and LOAD[0] in table.frame.columns else ()
     needed = ["price_da"] + [c for pair in fleets.values() for c in pair if c]
     frame, first, last = _span(table.frame[needed], base.timezone, options)
     notes = list(table.notes)
@@ -136,6 +160,9 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
             raise DataImportError(_gap_message(frame, base.timezone))
         frame, filled = fill_gaps(frame, options.fill_gaps_h)
         notes += filled
+
+    if load:
+        frame, load = _with_load(frame, table.frame[list(load)], load, options, base.timezone, notes, filled)
 
     def made(how: str, *used: str) -> str:
         gaps = [f.split(": ", 1)[1] for f in filled if f.split(":", 1)[0] in used]
@@ -168,7 +195,7 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
             actual = actual_cf * unit.p_max_mw
             columns[unit.name] = actual
             provenance[unit.name] = _real(actual_col, table.origins[actual_col], made(
-                f"{actual_col} / {capacity:,.0f} MW × {unit.p_max_mw:g} MW{night}", actual_col))
+                f"{actual_col} / {capacity:,.0f} MW × {unit.p_max_mw:g} MW{night}", actual_col), "real-derived")
             if forecast_col is None:
                 continue
             columns[unit.name + FORECAST_SUFFIX] = np.clip(
@@ -176,7 +203,8 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
             provenance[unit.name + FORECAST_SUFFIX] = _real(
                 forecast_col, table.origins[actual_col] + table.origins[forecast_col], made(
                     f"{unit.name} − {options.errors_scale:g}·({unit.name} − {forecast_col} / {capacity:,.0f} MW "
-                    f"× {unit.p_max_mw:g} MW), clipped to [0, {unit.p_max_mw:g}] MW{night}", actual_col, forecast_col))
+                    f"× {unit.p_max_mw:g} MW), clipped to [0, {unit.p_max_mw:g}] MW{night}", actual_col, forecast_col),
+                "real-derived")
     for kind in ("wind", "pv"):
         if getattr(base, kind) and kind not in fleets:
             notes.append(f"{kind}: the files give no {FLEETS[kind][0]}; {kind} units are synthetic")
@@ -184,12 +212,175 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed)
     columns.update(synthetic)
     provenance.update(sources_text)
+    if "pv" in fleets:
+        field, field_text = _field_heat(base, frame, fleets["pv"], capacities["pv"], options, table, made)
+        columns.update(field)
+        provenance.update(field_text)
+    if load:
+        demands, demand_text = _demands_from_load(base, frame, load, options, table, made)
+        columns.update(demands)
+        provenance.update(demand_text)
+    heat_fc, heat_text = _heat_forecasts(base, columns, options, seed)
+    columns.update(heat_fc)
+    provenance.update(heat_text)
     history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source=HISTORY_FILE)
-    case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last)
+    case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last, bool(load))
     _write(case, out, overwrite)
     say(f"wrote {out}")
     return BuiltCase(folder=out, case=case, reports=tuple(i.report for i in imports), capacities_mw=capacities,
                      notes=tuple(notes))
+
+
+def clear_sky_index(capacity_factor: np.ndarray, index: pd.DatetimeIndex,
+                    envelope_from: np.ndarray | None = None) -> np.ndarray:
+    """The solar fleet's clear-sky index per hour [-, 0..1] at the case's site.
+
+    ``capacity_factor`` over the site's clear-sky GHI (pvlib, :func:`rvpp.data.synth.clear_sky_ghi`)
+    [per kW/m2] is divided by its clear-sky envelope: per UTC hour of the day, the
+    :data:`ENVELOPE_QUANTILE` quantile of the same ratio over the :data:`ENVELOPE_DAYS` days
+    before (at least :data:`ENVELOPE_MIN_DAYS`; the first days of the data take the first
+    envelope found). So the fleet's growth, its trackers' flatter day and the solar-thermal
+    plants' evening output do not read as clouds. ``envelope_from``: another capacity factor
+    whose envelope to use (a forecast is measured against the actual fleet's clear days).
+    Hours with the sun below :data:`INDEX_MIN_ELEVATION` take the mean index of their day's
+    other hours (1 if it has none).
+    """
+    times = index.tz_convert(synth.SITE.timezone)
+    ghi, elevation = synth.clear_sky_ghi(times)
+    up = elevation > INDEX_MIN_ELEVATION
+    utc = index.tz_convert("UTC")
+
+    def ratio(cf: np.ndarray) -> pd.Series:
+        values = np.where(up, np.asarray(cf, dtype=float) / np.maximum(ghi / 1000.0, 1e-6), np.nan)
+        return pd.Series(values, index=pd.MultiIndex.from_arrays([utc.normalize(), utc.hour]))
+
+    reference = ratio(capacity_factor if envelope_from is None else envelope_from)
+    table = reference.groupby(level=[0, 1]).first().unstack()
+    envelope = (table.rolling(ENVELOPE_DAYS, min_periods=ENVELOPE_MIN_DAYS).quantile(ENVELOPE_QUANTILE)
+                .shift(1).bfill())
+    at = envelope.stack().reindex(reference.index).to_numpy()
+    measured = ratio(capacity_factor).to_numpy()
+    known = ~np.isnan(measured) & (at > 0.0)  # nan where the sun is low or no envelope exists
+    k = pd.Series(np.clip(np.divide(measured, at, out=np.full(len(at), np.nan), where=known), 0.0, 1.0),
+                  index=index)
+    day_mean = k.groupby(times.date).transform("mean").fillna(1.0)
+    return np.where(np.isnan(k.to_numpy()), day_mean.to_numpy(), k.to_numpy())
+
+
+def _field_heat(case: Case, frame: pd.DataFrame, fleet: tuple[str, str | None], capacity: float,
+                options: BuildOptions, table, made: Callable[..., str]):
+    """Solar-field heat of each CSP unit (and its day-ahead forecast) from the solar fleet."""
+    actual_col, forecast_col = fleet
+    times = frame.index.tz_convert(synth.SITE.timezone)
+    actual_cf = frame[actual_col].to_numpy(float) / capacity
+    heat = synth.field_heat_from_clear_sky_index(times, clear_sky_index(actual_cf, frame.index))
+    guess = None
+    if forecast_col is not None:
+        forecast_cf = frame[forecast_col].to_numpy(float) / capacity
+        guess = synth.field_heat_from_clear_sky_index(
+            times, clear_sky_index(forecast_cf, frame.index, envelope_from=actual_cf))
+    columns, provenance = {}, {}
+    how = (f"{actual_col}'s clear-sky index at the site (pvlib clear sky, {ENVELOPE_QUANTILE:g} quantile of the "
+           f"{ENVELOPE_DAYS} days before per hour as the clear-day envelope) → beam irradiance and heat of the "
+           f"modelled trough field")
+    origins = table.origins[actual_col] + (table.origins[forecast_col] if forecast_col else ())
+    for unit in case.csp:
+        p_max = unit.solar_field.p_max_mw_th
+        actual = heat * p_max / SYNTHETIC_CSP_FIELD_MW_TH
+        columns[unit.name] = actual
+        provenance[unit.name] = _real(actual_col, table.origins[actual_col],
+                                      made(f"{how}, scaled to {p_max:g} MW_th", actual_col), "real-derived")
+        if guess is None:
+            continue
+        forecast = guess * p_max / SYNTHETIC_CSP_FIELD_MW_TH
+        columns[unit.name + FORECAST_SUFFIX] = np.clip(actual - options.errors_scale * (actual - forecast), 0.0, p_max)
+        provenance[unit.name + FORECAST_SUFFIX] = _real(forecast_col, origins, made(
+            f"{unit.name} − {options.errors_scale:g}·({unit.name} − the same from {forecast_col}), clipped to "
+            f"[0, {p_max:g}] MW_th", actual_col, forecast_col), "real-derived")
+    return columns, provenance
+
+
+def scaled_to_demand(load: np.ndarray, dates: np.ndarray, e_min_mwh: float, p_min_mw: float, p_max_mw: float,
+                     reference: np.ndarray | None = None) -> np.ndarray:
+    """The system load's shape on one flexible demand [MW]: ``level + spread·(L/L̃ − 1)``.
+
+    ``L̃`` is the median over the days of the daily mean load, ``level`` the mean power of a
+    median day of the synthetic demands (:data:`rvpp.data.synth.MEDIAN_DAY_ENERGY_RATIO`
+    times ``e_min`` over 24 h), and ``spread = level`` (the load's own relative swings) unless
+    that would leave ``[1.2·p_min, 0.9·p_max]`` (the synthetic demands' range), when it is
+    narrowed to fit. ``reference``: the series whose ``L̃`` and extremes set the map (a
+    forecast takes the actual load's map).
+    """
+    base = np.asarray(load if reference is None else reference, dtype=float)
+    typical = float(np.median(pd.Series(base).groupby(dates).mean()))
+    x_low, x_high = base.min() / typical, base.max() / typical
+    level = synth.MEDIAN_DAY_ENERGY_RATIO * e_min_mwh / synth.HOURS_PER_DAY
+    floor, ceiling = synth.DEMAND_FLOOR_FACTOR * p_min_mw, synth.DEMAND_CEILING_FACTOR * p_max_mw
+    spread = level
+    if x_low < 1.0:
+        spread = min(spread, (level - floor) / (1.0 - x_low))
+    if x_high > 1.0:
+        spread = min(spread, (ceiling - level) / (x_high - 1.0))
+    return level + max(spread, 0.0) * (np.asarray(load, dtype=float) / typical - 1.0)
+
+
+def _with_load(frame: pd.DataFrame, load_table: pd.DataFrame, load: tuple[str, ...], options: BuildOptions,
+               timezone: str, notes: list[str], filled: list[str]) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """``frame`` with the system load's columns on its hours, or unchanged when the load has gaps
+    there that ``--fill-gaps`` does not cover (the electrical demands then stay modelled, and a
+    note says why): the load is optional, so its gaps never stop a build."""
+    series = load_table.reindex(frame.index)
+    if series.isna().any().any():
+        if options.fill_gaps_h == 0:
+            notes.append(f"electrical demands stay modelled: {_gap_message(series, timezone)}")
+            return frame, ()
+        try:
+            series, runs = fill_gaps(series, options.fill_gaps_h)
+        except DataImportError as err:
+            notes.append(f"electrical demands stay modelled: {err}")
+            return frame, ()
+        notes += runs
+        filled += runs
+    return pd.concat([frame, series], axis=1), load
+
+
+def _demands_from_load(case: Case, frame: pd.DataFrame, load: tuple[str, ...], options: BuildOptions, table,
+                       made: Callable[..., str]):
+    """Each electrical demand (and its day-ahead forecast) from the system load."""
+    dates = np.asarray(frame.index.tz_convert(case.timezone).date)
+    actual_load = frame[load[0]].to_numpy(float)
+    columns, provenance = {}, {}
+    for unit in case.ed:
+        shape = (unit.e_min_mwh, unit.p_min_mw, unit.p_max_mw)
+        actual = scaled_to_demand(actual_load, dates, *shape)
+        columns[unit.column] = actual
+        how = (f"{load[0]} mapped onto {unit.name}'s median-day energy "
+               f"{synth.MEDIAN_DAY_ENERGY_RATIO:g} × {unit.e_min_mwh:g} MWh and range")
+        provenance[unit.column] = _real(load[0], table.origins[load[0]], made(how, load[0]), "real-derived")
+        if len(load) < 2:
+            continue
+        guess = scaled_to_demand(frame[load[1]].to_numpy(float), dates, *shape, reference=actual_load)
+        columns[unit.name + FORECAST_SUFFIX] = np.maximum(actual - options.errors_scale * (actual - guess), 0.0)
+        provenance[unit.name + FORECAST_SUFFIX] = _real(load[1], table.origins[load[0]] + table.origins[load[1]], made(
+            f"{unit.column} − {options.errors_scale:g}·({unit.column} − {load[1]} on the same map), at least 0",
+            load[0], load[1]), "real-derived")
+    return columns, provenance
+
+
+def _heat_forecasts(case: Case, columns: dict[str, np.ndarray], options: BuildOptions, seed: int):
+    """A modelled day-ahead forecast of each thermal demand: its series times ``1 − K·ε``, ``ε`` a
+    persistent error of :data:`HEAT_FORECAST_ERROR` standard deviation."""
+    out, provenance = {}, {}
+    for unit in case.td:
+        actual = columns[unit.column]
+        error = HEAT_FORECAST_ERROR * synth.ar1(synth.component_rng(seed, f"forecast/{unit.name}"), len(actual),
+                                                HEAT_FORECAST_PERSISTENCE_H)
+        out[unit.name + FORECAST_SUFFIX] = np.maximum(actual * (1.0 - options.errors_scale * error), 0.0)
+        provenance[unit.name + FORECAST_SUFFIX] = {
+            "origin": "modelled", "source": f"rvpp.data.synth (seed {seed})",
+            "note": f"{unit.column} × (1 − {options.errors_scale:g}·ε), ε a relative error of standard deviation "
+                    f"{HEAT_FORECAST_ERROR:g} persisting {HEAT_FORECAST_PERSISTENCE_H:g} h"}
+    return out, provenance
 
 
 def _fleets(case: Case, available) -> dict[str, tuple[str, str | None]]:
@@ -284,19 +475,19 @@ def _sun_down(index: pd.DatetimeIndex) -> np.ndarray:
     return position["apparent_elevation"].to_numpy() <= 0.0
 
 
-def _real(column: str, reports: tuple[ImportReport, ...], how: str) -> dict[str, str]:
+def _real(column: str, reports: tuple[ImportReport, ...], how: str, origin: str = "real") -> dict[str, str]:
     names = sorted({f.name for r in reports for f in r.files})
     digest = hashlib.sha256("".join(sorted(f.sha256 for r in reports for f in r.files)).encode()).hexdigest()[:16]
     files = names[0] if len(names) == 1 else f"{len(names)} files, {names[0]} to {names[-1]}"
     zone = next((r.zone for r in reports if r.zone), None)
     source = f"{reports[0].source}: {column}{f', zone {zone}' if zone else ''}; {files}, sha256 {digest}"
-    return {"origin": "real", "source": source, "note": how}
+    return {"origin": origin, "source": source, "note": how}
 
 
 def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.date, real: dict[str, np.ndarray],
                fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int):
-    """Reserve prices, CSP solar-field heat, demands (and wind or PV the data does not give) from
-    :mod:`rvpp.data.synth` on the same hours."""
+    """Reserve prices, demands (and wind, PV or, without a solar fleet, CSP solar-field heat the
+    data does not give) from :mod:`rvpp.data.synth` on the same hours."""
     made = synth.build_history(seed, start=first.isoformat(), end=(last + dt.timedelta(days=1)).isoformat())
     stamps = pd.DatetimeIndex(made["timestamp"]).tz_convert("UTC")
     if not stamps.equals(index):
@@ -317,34 +508,34 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
                                                     synth.component_rng(seed, "price/sr_up"))
     columns["price_sr_dn"] = synth.reserve_down_price(calendar, real["price_da"], solar_index,
                                                       synth.component_rng(seed, "price/sr_dn"))
-    provenance["price_sr_up"] = {"origin": "synthetic", "source": label,
+    provenance["price_sr_up"] = {"origin": "modelled", "source": label,
                                  "note": "aFRR up band price model driven by the real day-ahead price"}
-    provenance["price_sr_dn"] = {"origin": "synthetic", "source": label,
+    provenance["price_sr_dn"] = {"origin": "modelled", "source": label,
                                  "note": f"aFRR down band price model driven by the real day-ahead price and "
                                          f"{solar_text}"}
-    for unit in case.csp:
+    for unit in case.csp if "pv" not in fleets else ():
         scale = unit.solar_field.p_max_mw_th / SYNTHETIC_CSP_FIELD_MW_TH
         columns[unit.name] = made["CSP1"].to_numpy(float) * scale
-        provenance[unit.name] = {"origin": "synthetic", "source": label,
+        provenance[unit.name] = {"origin": "modelled", "source": label,
                                  "note": "solar-field heat from modelled DNI, scaled to "
                                          f"{unit.solar_field.p_max_mw_th:g} MW_th"}
     profiles = {"wind": synth.WIND_COLUMNS, "pv": synth.PV_COLUMNS, "ed": synth.ED_COLUMNS, "td": synth.TD_COLUMNS}
     notes = {"wind": "modelled wind farm output", "pv": "modelled PV output", "ed": "modelled consumption",
              "td": "modelled heat consumption"}
     for kind in ("wind", "pv", "ed", "td"):
-        if kind in fleets:
+        if kind in fleets or (kind == "ed" and "load_actual" in frame.columns):
             continue
         for unit in getattr(case, kind):
             if unit.column not in profiles[kind]:
                 raise RvppError(f'{kind} "{unit.name}": no synthetic profile {unit.column!r}; name the unit (or '
                                 f"its series) after one of {', '.join(profiles[kind])}")
             columns[unit.column] = made[unit.column].to_numpy(float)
-            provenance[unit.column] = {"origin": "synthetic", "source": label, "note": notes[kind]}
+            provenance[unit.column] = {"origin": "modelled", "source": label, "note": notes[kind]}
     return columns, provenance
 
 
 def _case(base: Case, name: str, history: History, delivery: dt.date, provenance: dict, options: BuildOptions,
-          fleets: dict, first: dt.date, last: dt.date) -> Case:
+          fleets: dict, first: dt.date, last: dt.date, load: bool = False) -> Case:
     data = base.to_data()
     data["name"] = name
     real = " and ".join({"wind": "wind", "pv": "PV"}[k] for k in fleets)
@@ -352,21 +543,37 @@ def _case(base: Case, name: str, history: History, delivery: dt.date, provenance
         f"Built from downloaded data ({first} to {last}): real day-ahead prices"
         + (f", {real} from the fleet's capacity factor (forecast errors scaled by {options.errors_scale:g})"
            if fleets else "")
+        + (", solar-field heat from the solar fleet's clear-sky index" if "pv" in fleets and data["units"]["csp"]
+           else "")
+        + (", electrical demands from the system load" if load and data["units"]["ed"] else "")
         + "; everything else synthetic. See provenance.")
     data["delivery_date"] = delivery.isoformat()
     for kind, (_, forecast) in fleets.items():
         for unit in data["units"][kind]:
             unit.update(series=None, series_scale=1.0,
                         forecast_series=unit["name"] + FORECAST_SUFFIX if forecast else None)
+    field_forecast = "pv" in fleets and fleets["pv"][1] is not None
     for unit in data["units"]["csp"]:
-        unit["solar_field"].update(series=None, series_scale=1.0)
+        unit["solar_field"].update(series=None, series_scale=1.0,
+                                   forecast_series=unit["name"] + FORECAST_SUFFIX if field_forecast else None)
     for kind in ("wind", "pv", "ed", "td"):
         if kind not in fleets:
             for unit in data["units"][kind]:
                 unit.update(series_scale=1.0, forecast_series=None)
+    for unit in data["units"]["td"]:
+        unit.update(forecast_series=unit["name"] + FORECAST_SUFFIX)
+    demand_forecast = load and all(u.name + FORECAST_SUFFIX in history.columns for u in base.ed)
+    for unit in data["units"]["ed"] if demand_forecast else ():
+        unit.update(forecast_series=unit["name"] + FORECAST_SUFFIX)
     bands = {"default": "climatology"}
     if options.bands == "forecast":
         bands.update({kind: "forecast" for kind, (_, forecast) in fleets.items() if forecast})
+        if field_forecast and data["units"]["csp"]:
+            bands["csp"] = "forecast"
+        if data["units"]["td"]:
+            bands["td"] = "forecast"
+        if demand_forecast and data["units"]["ed"]:
+            bands["ed"] = "forecast"
         bands["price_da"] = "forecast"
     data["uncertainty"]["bands"] = bands
     data["provenance"] = provenance

@@ -209,6 +209,10 @@ class ThermalStorage(_Frozen):
     eta_dis: Annotated[Number, Field(gt=0.0, le=1.0)]
     e_init_mwh_th: NonNegative | None = None
     e_end_min_mwh_th: NonNegative | None = None
+    # What a MWh_th left in the tank at the day's end, above the day's start, is worth to the
+    # next day [EUR/MWh_th] (MODEL_SPEC §8 beyond the paper; 0: the paper's day, heat has no value
+    # after midnight). Only a day from a fixed ``e_init`` has it; a cyclic day ends where it starts.
+    end_value_eur_per_mwh_th: NonNegative = 0.0
 
     @property
     def cyclic(self) -> bool:
@@ -595,9 +599,11 @@ class SolverSettings(_Frozen):
 
 class ColumnSource(_Frozen):
     """Where a history column comes from: ``real`` (a public record, named with its
-    fingerprint) or ``synthetic`` (generated), and how it was made from its source."""
+    fingerprint), ``real-derived`` (made from a public record by a stated model, e.g. a
+    solar field's heat from the solar fleet's clear-sky index), ``modelled`` or
+    ``synthetic`` (generated; the two words mean the same), and how it was made from its source."""
 
-    origin: Literal["real", "synthetic"]
+    origin: Literal["real", "real-derived", "modelled", "synthetic"]
     source: Annotated[str, Field(min_length=1), ONE_LINE]
     note: Prose = ""
 
@@ -638,10 +644,12 @@ class Case(_Frozen):
         return dict(self.provenance)
 
     def provenance_summary(self) -> str | None:
-        """One line naming the real and the synthetic history columns (``None`` if unlabelled)."""
+        """One line naming the history columns of each origin (``None`` if unlabelled)."""
         if not self.provenance:
             return None
-        by_origin = {origin: [c for c, p in self.provenance if p.origin == origin] for origin in ("real", "synthetic")}
+        word = {"synthetic": "modelled"}  # the older cases' word for the same origin
+        by_origin = {origin: [c for c, p in self.provenance if word.get(p.origin, p.origin) == origin]
+                     for origin in ("real", "real-derived", "modelled")}
         parts = [f"{origin}: {', '.join(columns)}" for origin, columns in by_origin.items() if columns]
         return "History columns — " + "; ".join(parts) + " (sources and fingerprints in the case's provenance)."
 

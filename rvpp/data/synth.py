@@ -512,6 +512,40 @@ def csp_field_thermal_power(solpos, irradiance, temp_air, daylight):
     return np.where(daylight, thermal, 0.0)
 
 
+def field_heat_from_clear_sky_index(times, kc, site=SITE):
+    """Heat of the modelled trough field [MW_th, up to CSP_MAX_THERMAL] under the GHI clear-sky
+    index ``kc`` of each hour-beginning local timestamp in ``times``.
+
+    The sky is pvlib's Ineichen clear sky with its monthly Linke turbidity climatology;
+    ``GHI = kc·GHI_clear`` is split into beam and diffuse by the Erbs et al. (1982)
+    correlation (``pvlib.irradiance.erbs``; the beam never above the clear sky's), and the
+    field's optics and heat loss are :func:`csp_field_thermal_power` at the climatological
+    air temperature. The modelled weather's own link of GHI to beam
+    (:func:`all_sky_irradiance`) is not inverted: it lets a few per cent less GHI remove
+    most of the beam, which read backwards turns every hazy hour into an overcast one.
+    """
+    cal = make_calendar(times)
+    solpos = solar_position(times, site)
+    daylight = solpos["apparent_elevation"].to_numpy() > 0.0
+    turbidity = pvlib.clearsky.lookup_linke_turbidity(times + HALF_HOUR, site.latitude, site.longitude)
+    sky = clear_sky(times, solpos, turbidity.to_numpy(), site)
+    ghi = np.clip(np.asarray(kc, dtype=float), 0.0, 1.0) * sky["ghi"].to_numpy()
+    split = pvlib.irradiance.erbs(ghi, solpos["zenith"].to_numpy(), times + HALF_HOUR)
+    dni = np.minimum(np.nan_to_num(np.asarray(split["dni"], dtype=float)), sky["dni"].to_numpy())
+    irradiance = pd.DataFrame({"dni": dni}, index=times)
+    seasonal, diurnal = climatological_temperature(cal)
+    return csp_field_thermal_power(solpos, irradiance, seasonal + diurnal, daylight)
+
+
+def clear_sky_ghi(times, site=SITE):
+    """pvlib's Ineichen clear-sky GHI at the site with its monthly Linke turbidity climatology
+    [W/m2], and the sun's apparent elevation [deg], at the middle of each hour of ``times``."""
+    solpos = solar_position(times, site)
+    turbidity = pvlib.clearsky.lookup_linke_turbidity(times + HALF_HOUR, site.latitude, site.longitude)
+    sky = clear_sky(times, solpos, turbidity.to_numpy(), site)
+    return sky["ghi"].to_numpy(), solpos["apparent_elevation"].to_numpy()
+
+
 # === wind ===================================================================
 
 def turbine_power_curve(speed):

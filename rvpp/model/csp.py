@@ -42,7 +42,9 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     ``e_init`` with ``e[NT] ≥ min(e_end_min, e_init)`` (``e[NT] ≥ e_init`` without an end
     target ``e_end_min``). Reserve energy shares (TS9-TS10)
     ``Σ r_ts↑·dt/η_dis ≤ σ↑·ΔE``, ``Σ r_ts↓·η_ch·dt ≤ σ↓·ΔE`` and margins (TS11, corrected)
-    ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``.
+    ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``. From a fixed ``e_init`` the
+    heat kept past midnight is worth ``heat_kept_value = v_end·(e[NT] − e_init)`` [EUR], with
+    ``v_end`` = ``end_value_eur_per_mwh_th`` (0 by default, the paper's day).
 
     Valid tightening: the storage charges only from the solar field (while charging
     it does not discharge and the power block takes no negative input), so
@@ -106,6 +108,9 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
         b.e_ts[t] == previous_energy(b, t) + ts.eta_ch * b.p_ch[t] * dt - b.p_dis[t] * dt / ts.eta_dis))
     if not ts.cyclic:
         b.energy_end = pyo.Constraint(expr=b.e_ts[m.T.last()] >= ts.end_floor_mwh_th)
+    kept = not ts.cyclic and ts.end_value_eur_per_mwh_th > 0.0
+    b.heat_kept_value = pyo.Expression(
+        expr=ts.end_value_eur_per_mwh_th * (b.e_ts[m.T.last()] - ts.e_init_mwh_th) if kept else 0.0)
     b.reserve_energy_up = pyo.Constraint(expr=sum(b.r_ts_up[t] * dt / ts.eta_dis for t in m.T)
                                          <= b.sigma_up * span)
     b.reserve_energy_dn = pyo.Constraint(expr=sum(b.r_ts_dn[t] * ts.eta_ch * dt for t in m.T)

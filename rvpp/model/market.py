@@ -94,7 +94,9 @@ def add_objective(m: pyo.ConcreteModel, problem: Problem) -> None:
     """Maximise robust profit [EUR] (MILP-Obj; MODEL_SPEC §3).
 
     ``Σt [λda~·p_da + λup^·r_sr_up + λdn^·r_sr_dn]·dt − Σt λhpa·h_hpa·dt
-    − Σt Σr C_r·p_r·dt − Σt Σθ C_θ·(p_θ + h_θ)·dt − protection_DA − protection_SRup − protection_SRdn``
+    − Σt Σr C_r·p_r·dt − Σt Σθ C_θ·(p_θ + h_θ)·dt − protection_DA − protection_SRup − protection_SRdn
+    + Σθ v_end,θ·(e_θ[NT] − e_init,θ)``; the last term, the value of the heat kept past
+    midnight, is 0 unless the case gives its storage an ``end_value_eur_per_mwh_th``.
     """
     case, dt = problem.case, problem.dt_h
     da, up, dn = (problem.sources[n].nominal for n in PRICE_COLUMNS)
@@ -104,6 +106,8 @@ def add_objective(m: pyo.ConcreteModel, problem: Problem) -> None:
         (float(up[t - 1]) * m.r_sr_up[t] + float(dn[t - 1]) * m.r_sr_dn[t]) * dt for t in m.T))
     m.cost_hpa = pyo.Expression(expr=sum(float(hpa[t - 1]) * m.h_hpa[t] * dt for t in m.T))
     m.cost_opex = pyo.Expression(expr=operating_cost(m, case, dt))
+    m.value_heat_kept = pyo.Expression(expr=sum(m.csp[c.name].heat_kept_value for c in case.csp))
     m.profit = pyo.Objective(
-        expr=m.revenue_dam + m.revenue_sr - m.cost_hpa - m.cost_opex - sum(m.protection[n] for n in PRICE_COLUMNS),
+        expr=m.revenue_dam + m.revenue_sr - m.cost_hpa - m.cost_opex - sum(m.protection[n] for n in PRICE_COLUMNS)
+        + m.value_heat_kept,
         sense=pyo.maximize)

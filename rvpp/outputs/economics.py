@@ -43,12 +43,13 @@ class DayEconomics:
     sold_mwh: float          # DAM energy sold [MWh]
     bought_mwh: float        # DAM energy bought [MWh]
     heat_bought_mwh_th: float  # heat bought through the HPA [MWh_th]
+    heat_kept_eur: float = 0.0  # value of the heat kept in the tank past midnight (case's end value)
 
     @property
     def net_eur(self) -> float:
-        """The objective: revenues minus costs minus the price protection [EUR]."""
+        """The objective: revenues minus costs minus the price protection, plus the heat kept [EUR]."""
         return (self.revenue_dam_eur + self.revenue_sr_eur - self.cost_hpa_eur - self.cost_opex_eur
-                - self.protection_eur)
+                - self.protection_eur + self.heat_kept_eur)
 
     @property
     def served_mwh(self) -> float:
@@ -64,7 +65,8 @@ class DayEconomics:
         """Signed contributions to the objective [EUR], in the order of the waterfall, then the net."""
         return {"DAM revenue": self.revenue_dam_eur, "SR revenue": self.revenue_sr_eur,
                 "HPA cost": -self.cost_hpa_eur, "Operating cost": -self.cost_opex_eur,
-                "Robust protection": -self.protection_eur, "Net": self.net_eur}
+                "Robust protection": -self.protection_eur,
+                **({"Heat kept": self.heat_kept_eur} if self.heat_kept_eur else {}), "Net": self.net_eur}
 
 
 def economics(result: Result) -> DayEconomics:
@@ -82,7 +84,8 @@ def economics(result: Result) -> DayEconomics:
         demand_mwh=float(units.loc[units["kind"] == UnitKind.ED, "p_mw"].sum() * dt_h),
         heat_mwh_th=float(units.loc[units["kind"] == UnitKind.TD, "p_mw"].sum() * dt_h),
         sold_mwh=float(p_da.clip(min=0).sum() * dt_h), bought_mwh=float(-p_da.clip(max=0).sum() * dt_h),
-        heat_bought_mwh_th=float(market["h_hpa_mw"].sum() * dt_h))
+        heat_bought_mwh_th=float(market["h_hpa_mw"].sum() * dt_h),
+        heat_kept_eur=parts.get("value_heat_kept_eur", 0.0))
 
 
 def explanation(day: DayEconomics) -> str:

@@ -267,7 +267,7 @@ def band_overlays(problem: Problem, source: str) -> dict:
             pass
     try:
         observed = realized_values(case.history, problem.day, problem.periods, {source: (spec.column, spec.scale)},
-                                   case.timezone)
+                                   case.timezone, {source: (spec.low, spec.high)})
         out["realized"] = observed[source].to_numpy(float)
     except CaseError:
         pass

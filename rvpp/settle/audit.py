@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.interpolate import PchipInterpolator
 
 from ..data.case import STRATEGY_BUDGETS_H, Case
 from ..data.kinds import KINDS, NDRES_KINDS, Role, UnitKind
@@ -175,6 +176,48 @@ def forecast_band(case: Case, column: str, scale: float, forecast: str | None,
     return lo, mid, hi
 
 
+def finer_series(hourly: np.ndarray, steps: int, low: float | None, high) -> np.ndarray:
+    """Hourly means at ``steps`` periods per hour (MODEL_SPEC §6, finer periods): each period is
+    the mean slope over its span of a monotone cubic (PCHIP) through the cumulative energy at
+    the hour boundaries (above ``low``), then held within ``[low, high]`` (``high`` a number or
+    one per period) hour by hour, the hour's mean restored by moving the difference onto its
+    periods in proportion to their room to the limit on that side."""
+    n = len(hourly)
+    top = np.full(n * steps, np.inf) if high is None else np.broadcast_to(np.asarray(high, float), (n * steps,))
+    bottom = -np.inf if low is None else low
+    hourly = np.array([min(max(v, bottom), top[h * steps:(h + 1) * steps].mean()) for h, v in enumerate(hourly)])
+    shift = 0.0 if low is None else low
+    energy = np.concatenate([[0.0], np.cumsum(hourly - shift)])
+    if n > 1:
+        curve = PchipInterpolator(np.arange(n + 1), energy)(np.linspace(0.0, n, n * steps + 1))
+    else:
+        curve = np.linspace(0.0, energy[-1], steps + 1)
+    out = np.empty(n * steps)
+    for h in range(n):
+        edges = curve[h * steps:(h + 1) * steps + 1].copy()
+        edges[0], edges[-1] = energy[h], energy[h + 1]
+        part = np.diff(edges) * steps + shift
+        cap = top[h * steps:(h + 1) * steps]
+        part = np.minimum(np.maximum(part, bottom), cap)
+        gap = hourly[h] * steps - part.sum()
+        room = (cap - part) if gap > 0 else (part - bottom)
+        room = np.where(np.isinf(room), 1.0, room)
+        if room.sum() > 0:
+            part = part + gap * room / room.sum()
+        out[h * steps:(h + 1) * steps] = np.minimum(np.maximum(part, bottom), cap)
+    return out
+
+
+def finer_band(lo: np.ndarray, mid: np.ndarray, hi: np.ndarray, steps: int, low: float | None,
+               high: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An hourly band at ``steps`` periods per hour, ordered in every period: ``lo`` by
+    :func:`finer_series`, then ``mid - lo`` and ``hi - mid`` as series >= 0 within the room below ``high``."""
+    fine_lo = finer_series(lo, steps, low, high)
+    fine_mid = fine_lo + finer_series(np.maximum(mid - lo, 0.0), steps, 0.0, None if high is None else high - fine_lo)
+    fine_hi = fine_mid + finer_series(np.maximum(hi - mid, 0.0), steps, 0.0, None if high is None else high - fine_mid)
+    return fine_lo, fine_mid, fine_hi
+
+
 def budgets(case: Case, nt: int) -> dict[str, int]:
     """Γ [periods] per source: the strategy's Table 7 hours scaled by ``1/dt`` (at most ``nt``), or
     ``budgets.fraction`` of the ``nt`` periods rounded half up for every source; then the case's edits."""
@@ -198,19 +241,27 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
     """
     periods = delivery_periods(case.delivery_date, case.timezone, case.dt_h)
     hours, nt = np.asarray(periods.hour), len(periods)
+    whole = delivery_periods(case.delivery_date, case.timezone, 1.0)  # the history's hours of the day
+    steps = nt // len(whole)
     gammas = budgets(case, nt)
 
     window = None
 
-    def lo_mid_hi(name: str, column: str, scale: float, kind: str | None = None, forecast: str | None = None):
+    def lo_mid_hi(name: str, column: str, scale: float, kind: str | None = None, forecast: str | None = None,
+                  low: float | None = None, high: float | None = None):
         nonlocal window
         if bands is not None:
             return tuple(bands[(name, stat)].to_numpy(float) for stat in ("lo", "mid", "hi"))
         if case.uncertainty.band_method(name, kind) == "forecast":
-            return forecast_band(case, column, scale, forecast, periods)
-        if window is None:
-            window = climatology_window(case)
-        return band(case, column, scale, hours, window)
+            hourly = forecast_band(case, column, scale, forecast, whole)
+        else:
+            if window is None:
+                window = climatology_window(case)
+            hourly = band(case, column, scale, np.asarray(whole.hour), window)
+        if steps == 1:
+            return hourly
+        held = (np.clip(x, -np.inf if low is None else low, np.inf if high is None else high) for x in hourly)
+        return finer_band(*held, steps, low, high)
 
     sources = {}
     lo, mid, hi = lo_mid_hi("price_da", "price_da", 1.0)
@@ -221,10 +272,12 @@ def audit_day(case: Case, bands: pd.DataFrame | None = None) -> AuditDay:
     for kind, unit in case.uncertain_units():
         if kind == UnitKind.CSP:
             field = unit.solar_field
-            lo, _, hi = lo_mid_hi(unit.name, field.series or unit.name, field.series_scale, kind, field.forecast_series)
+            lo, _, hi = lo_mid_hi(unit.name, field.series or unit.name, field.series_scale, kind, field.forecast_series,
+                                  0.0, field.p_max_mw_th)
             top, bottom = np.clip(hi, 0.0, field.p_max_mw_th), np.clip(lo, 0.0, field.p_max_mw_th)
         else:
-            lo, _, hi = lo_mid_hi(unit.name, unit.series or unit.name, unit.series_scale, kind, unit.forecast_series)
+            lo, _, hi = lo_mid_hi(unit.name, unit.series or unit.name, unit.series_scale, kind, unit.forecast_series,
+                                  0.0, unit.p_max_mw if kind in NDRES_KINDS else None)
         if kind in NDRES_KINDS:
             top, bottom = np.clip(hi, 0.0, unit.p_max_mw), np.clip(lo, 0.0, unit.p_max_mw)
         if KINDS[kind].role is Role.PRODUCTION:
@@ -612,5 +665,12 @@ def _audit_objective(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: 
     for field, value in (("revenue_dam_eur", revenue_dam), ("revenue_sr_eur", revenue_sr),
                          ("cost_hpa_eur", cost_hpa), ("cost_opex_eur", opex)):
         a.eq(f"objective.{field}", summary[field], value, scale=scale)
-    total = revenue_dam + revenue_sr - cost_hpa - opex - sum(protection.values())
+    kept = 0.0
+    for c in case.csp:
+        ts = c.storage
+        if ts.e_init_mwh_th is not None and ts.end_value_eur_per_mwh_th > 0.0:
+            kept += ts.end_value_eur_per_mwh_th * (float(by_csp[c.name]["ts_energy_mwh"].to_numpy(float)[-1])
+                                                    - ts.e_init_mwh_th)
+    a.eq("objective.value_heat_kept_eur", summary.get("value_heat_kept_eur", 0.0), kept, scale=scale)
+    total = revenue_dam + revenue_sr - cost_hpa - opex - sum(protection.values()) + kept
     a.eq("objective.total", summary["objective_eur"], total, scale=scale)

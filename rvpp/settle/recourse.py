@@ -47,6 +47,7 @@ from ..data.periods import delivery_periods, period_labels
 from ..uncertainty.problem import Problem, Source, SourceKind, source_columns
 from ..solving.highs import model_lifetime, run_highs
 from ..uncertainty.bands import realized_values
+from ..uncertainty.forecast import band_specs
 
 FIRST_STAGE = ("p_da", "r_sr_up", "r_sr_dn", "h_hpa")
 # Settling a day: the feasibility-jump heuristic costs more than it finds (51 settlements, four
@@ -192,7 +193,8 @@ def realization(case: Case, day: dt.date) -> Realization:
     if case.markets.imbalance_prices is not None:
         columns.update({name: (getattr(case.markets.imbalance_prices, side), 1.0)
                         for name, side in zip(IMBALANCE_COLUMNS, ("short", "long"))})
-    values = realized_values(case.history, day, periods, columns, case.timezone)
+    limits = {name: (spec.low, spec.high) for name, spec in band_specs(case).items()}
+    values = realized_values(case.history, day, periods, columns, case.timezone, limits)
     return Realization(day=day, values=values)
 
 
@@ -273,8 +275,13 @@ def build_recourse_model(problems: Sequence[Problem], penalties: Penalties,
     for k, problem in enumerate(problems):
         add_scenario(m, m.scenario[k], problem, penalties, bids)
     weight = 1.0 / len(problems)
+    # The heat kept past midnight is valued as the plan valued it (0 unless the case sets
+    # end_value_eur_per_mwh_th), so the settlement does not spend it for less; it is not cash
+    # and stays out of net_cost.
     m.expected_net_cost = pyo.Objective(
-        expr=weight * sum(m.scenario[k].net_cost for k in m.scenario), sense=pyo.minimize)
+        expr=weight * sum(m.scenario[k].net_cost - sum(m.scenario[k].csp[c.name].heat_kept_value
+                                                        for c in problems[k].case.csp)
+                          for k in m.scenario), sense=pyo.minimize)
     return m
 
 

@@ -51,6 +51,7 @@ def extract(m: pyo.ConcreteModel, problem: Problem) -> dict:
         "revenue_sr_eur": _v(m.revenue_sr),
         "cost_hpa_eur": _v(m.cost_hpa),
         "cost_opex_eur": _v(m.cost_opex),
+        "value_heat_kept_eur": _v(m.value_heat_kept),
     }
     protection = {name: _v(m.protection[name]) for name in PRICE_COLUMNS}
     market = _market_table(m, problem, T)

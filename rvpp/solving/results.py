@@ -95,6 +95,7 @@ class Result:
             "revenue_sr_eur": self.parts.get("revenue_sr_eur"),
             "cost_hpa_eur": self.parts.get("cost_hpa_eur"),
             "cost_opex_eur": self.parts.get("cost_opex_eur"),
+            "value_heat_kept_eur": self.parts.get("value_heat_kept_eur", 0.0),
             "protection_eur": {PROTECTION_KEYS[k]: v for k, v in self.protection_eur.items()},
             "settings": {
                 "markets": case.markets.model_dump(mode="json"),

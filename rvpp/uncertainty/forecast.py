@@ -44,7 +44,7 @@ from ..data.case import PRICE_MODELS, Case
 from ..data.history import PRICE_COLUMNS, History
 from ..data.periods import delivery_periods
 from ..errors import CaseError
-from .bands import STATS, forecast_bands, window_days
+from .bands import STATS, bands_in_periods, forecast_bands, hour_starts, window_days
 
 PRICE_LAGS_DAYS = {"same_hour_yesterday": (1,), "same_hour_last_week": (7,), "blend": (1, 7)}
 assert tuple(PRICE_LAGS_DAYS) == PRICE_MODELS
@@ -131,7 +131,8 @@ def _draw_bands(case: Case, periods: pd.DatetimeIndex, specs: dict[str, BandSpec
     parts = []
     climatology = {name: (s.column, s.scale) for name, s in specs.items() if s.method == "climatology"}
     if climatology:
-        parts.append(forecast_bands(case.history, case.delivery_date, periods, climatology, **common))
+        limits = {name: (specs[name].low, specs[name].high) for name in climatology}
+        parts.append(forecast_bands(case.history, case.delivery_date, periods, climatology, limits=limits, **common))
     forecast = {name: s for name, s in specs.items() if s.method == "forecast"}
     if forecast:
         parts.append(forecast_error_bands(case.history, case.delivery_date, periods, forecast, **common))
@@ -143,9 +144,12 @@ def forecast_error_bands(history: History, day: dt.date, periods: pd.DatetimeInd
                          *, n_days: int, q_lo: float, q_hi: float, timezone: str) -> pd.DataFrame:
     """Forecast-error bands per period for the sources in ``specs`` (all of method ``forecast``).
 
+    The bands are drawn per hour of the day (the forecasts are hourly), then brought to
+    shorter periods keeping each hour's means (:func:`rvpp.uncertainty.bands.bands_in_periods`).
     Returns a frame indexed by ``t = 1..NT`` with columns ``(source, lo|mid|hi)``.
     """
     first, last = window_days(day, n_days)
+    hours = hour_starts(periods)
     pieces = {}
     for source, spec in specs.items():
         point, errors = forecast_and_errors(history, day, spec, n_days=n_days, timezone=timezone)
@@ -153,16 +157,16 @@ def forecast_error_bands(history: History, day: dt.date, periods: pd.DatetimeInd
         if errors.empty:
             raise CaseError(f"{history.source}: no forecast error of {source} can be computed in the window "
                             f"{first} to {last}")
-        f = point.reindex(periods.tz_convert("UTC").floor("h")).to_numpy(float)
+        f = point.reindex(hours.tz_convert("UTC")).to_numpy(float)
         if np.isnan(f).any():
             t = int(np.flatnonzero(np.isnan(f))[0])
-            raise CaseError(f"{history.source}: no point forecast of {source} for {periods[t]:%Y-%m-%d %H:%M}")
+            raise CaseError(f"{history.source}: no point forecast of {source} for {hours[t]:%Y-%m-%d %H:%M}")
         offsets = level_quantiles(errors["forecast"].to_numpy(), errors["error"].to_numpy(), f, (q_lo, 0.5, q_hi))
         for i, stat in enumerate(STATS):
             pieces[(source, stat)] = _clip(f + offsets[:, i], spec)
-    bands = pd.DataFrame(pieces, index=pd.RangeIndex(1, len(periods) + 1, name="t"))
+    bands = pd.DataFrame(pieces, index=pd.RangeIndex(1, len(hours) + 1, name="t"))
     bands.columns = pd.MultiIndex.from_tuples(bands.columns, names=["source", "stat"])
-    return bands
+    return bands_in_periods(bands, periods, {name: (spec.low, spec.high) for name, spec in specs.items()})
 
 
 def forecast_and_errors(history: History, day: dt.date, spec: BandSpec, *, n_days: int,

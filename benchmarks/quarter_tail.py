@@ -1,0 +1,85 @@
+"""The 15-minute tail: which days of 2025 tie at the Γ boundary, and how long they take.
+
+With hourly data brought to quarter-hours by a mean-keeping interpolation (MODEL_SPEC §6)
+instead of repeating each hour, four quarter-hours no longer share one deviation, so
+fewer budgets fall among tied deviations. This scans every (day, strategy) pair of 2025
+at 15 minutes for such ties (from the bands, no model built), then times ``rvpp.solve``
+(default, exact tie semantics) on every tie pair and on ``--sample`` further days of the
+year spread evenly (every strategy), against the 5 s worst-day target, by wall time and by
+the process's CPU time (on a shared machine the closer measure of a quiet one). With ``--all`` it
+times every pair of the year (long). Prints the JSON it writes to
+``benchmarks/results/quarter_tail.json``.
+
+Usage: ``python benchmarks/quarter_tail.py [--sample 12] [--all]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks.common import CASE, STRATEGIES, header, load_average, summary, write_result  # noqa: E402
+from benchmarks.solve_times import TARGETS, say, tie_days, timed_solve, year_pairs  # noqa: E402
+from rvpp import load_case, solve, with_options  # noqa: E402
+from rvpp.uncertainty.problem import prepare, tied_budgets  # noqa: E402
+
+DT_H = 0.25
+
+
+def spread_days(year: int, count: int) -> list[str]:
+    """``count`` days of ``year`` at equal steps, starting on 3 January."""
+    first = dt.date(year, 1, 3)
+    step = 365 // max(count, 1)
+    return [(first + dt.timedelta(days=i * step)).isoformat() for i in range(count)]
+
+
+def run(sample: int, every: bool) -> dict:
+    base = load_case(CASE)
+    solve(with_options(base, dt_h=DT_H))  # imports and first-call costs are not part of any measurement
+    document = header("quarter_tail", "all" if every else f"ties+{sample}")
+    target = TARGETS[DT_H]["max"]
+    scanned = year_pairs()
+    ties = tie_days(base, DT_H, scanned)
+    print(f"{len(ties)} tie pairs of {len(scanned)}", file=sys.stderr, flush=True)
+    if every:
+        timed = scanned
+    else:
+        extra = [(day, strategy) for day in spread_days(2025, sample) for strategy in STRATEGIES]
+        timed = list(dict.fromkeys([*ties, *extra]))
+    rows = {}
+    for day, strategy in timed:
+        case = with_options(base, strategy=strategy, dt_h=DT_H, date=day)
+        row = timed_solve(case)
+        row["tied"] = tied_budgets(prepare(case))
+        rows[f"{day} {strategy}"] = row
+        say(f"15 min {day} {strategy:13s}", row)
+    over = {key: row for key, row in rows.items() if max(row["total_s"], row["cpu_s"]) > target}
+    document.update(case=base.name, dt_h=DT_H, target_max_s=target, pairs_scanned=len(scanned),
+                    tie_pairs=[f"{d} {s}" for d, s in ties], timed_pairs=len(rows),
+                    over_timed_s=summary([row["total_s"] for row in rows.values()]),
+                    over_timed_cpu_s=summary([row["cpu_s"] for row in rows.values()]),
+                    over_tie_pairs_s=summary([rows[f"{d} {s}"]["total_s"] for d, s in ties]) if ties else None,
+                    over_tie_pairs_cpu_s=summary([rows[f"{d} {s}"]["cpu_s"] for d, s in ties]) if ties else None,
+                    over_target={key: {"total_s": row["total_s"], "cpu_s": row["cpu_s"], "nodes": row["nodes"],
+                                       "tied": row["tied"]} for key, row in over.items()},
+                    load_average_after=load_average(), days=rows)
+    return document
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sample", type=int, default=12, help="days of 2025 timed besides the tie pairs")
+    parser.add_argument("--all", action="store_true", help="time every (day, strategy) pair of 2025")
+    args = parser.parse_args()
+    document = run(args.sample, args.all)
+    write_result(document)
+    print(json.dumps({key: value for key, value in document.items() if key != "days"}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
