@@ -5,7 +5,7 @@ import streamlit as st
 from dashboard import fields, solving, state, widgets
 from rvpp import CaseError
 from rvpp.data.edits import follow_capacity, table_message
-from rvpp.data.kinds import UNIT_KINDS, UnitKind
+from rvpp.data.kinds import KINDS, UNIT_KINDS, UnitKind
 from rvpp.outputs import workbook
 from rvpp.outputs.plots import bands_figure, curve_figure, thin_clock_ticks
 
@@ -28,6 +28,8 @@ def fixed() -> set[str]:
 
 def unit_table(kind: str):
     table = workbook.unit_table(state.case(), kind)
+    if KINDS[kind].role is None:  # no forecast band to scale
+        return table
     scale_at = table.columns.get_loc(workbook.SERIES_FIELDS[kind].replace("series", "series_scale"))
     table.insert(scale_at + 1, SCALE, [name not in fixed() for name in table["name"]])
     return table
