@@ -452,6 +452,11 @@ class Battery(_Unit):
         return self.e_init_mwh is None
 
     @property
+    def p_max_mw(self) -> float:
+        """Discharge nameplate [MW]: the capacity of the flexibility table (MODEL_SPEC §11)."""
+        return self.p_dis_max_mw
+
+    @property
     def supply_mw(self) -> float:
         return self.p_dis_max_mw
 
