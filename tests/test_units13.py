@@ -7,6 +7,7 @@ parameters, not from a solve.
 import numpy as np
 import pytest
 
+from rvpp.settle.audit import audit_result
 from rvpp.solving.plan import solve_problem
 from tests.factories import tiny_case, tiny_problem
 
@@ -24,8 +25,10 @@ def dispatchable(name, **extra):
 
 
 def solved(case, prices):
-    result = solve_problem(tiny_problem(case, price_da=(prices, prices, prices)))
+    problem = tiny_problem(case, price_da=(prices, prices, prices))
+    result = solve_problem(problem)
     assert result.status == "optimal", result.message
+    assert audit_result(result, bands=problem.bands) == []
     return result
 
 
@@ -137,3 +140,58 @@ def test_a_disabled_unit_stays_in_the_case_and_out_of_the_plan():
     assert [u.name for _, u in case.all_units()] == ["B", "HY"]
     result = solved(case, np.full(NT, 50.0))
     assert set(result.dispatch["unit"]) == {"B"} and set(result.units["unit"]) == {"B"}
+
+
+def test_the_installed_reserve_base_counts_supply_alone():
+    # Hydro 0-30 MW and a demand of 10-20 MW, κ = 0.3, energy worth 0 and reserve 10 EUR/MW: "net" caps each band
+    # at 0.3 x (30 - 20) = 3 MW, "installed" at 0.3 x 30 = 9 MW.
+    from tests.factories import demand
+    unit = dispatchable("HY", ramp_mw_per_min=10.0, reserve_share=1.0)
+    for base, cap in (("net", 3.0), ("installed", 9.0)):
+        case = tiny_case(hydro_units=[unit], ed_units=[demand(p_min=10.0, p_max=20.0)], srm=True)
+        case = case.replace(markets={"reserve_base": base})
+        problem = tiny_problem(case, D=(10.0, 10.0, 10.0), price_da=(0.0, 0.0, 0.0),
+                               price_sr_up=(10.0, 10.0, 10.0), price_sr_dn=(10.0, 10.0, 10.0))
+        result = solve_problem(problem)
+        assert result.status == "optimal"
+        assert audit_result(result, bands=problem.bands) == []
+        assert np.allclose(result.market["r_sr_up_mw"], cap) and np.allclose(result.market["r_sr_dn_mw"], cap)
+
+
+def test_the_audit_finds_a_battery_that_breaks_its_energy_balance_or_its_mode():
+    prices = np.where(HOURS == 1, 10.0, np.where(HOURS == 2, 100.0, 45.0))
+    result = solved(tiny_case(battery_units=[battery(degradation_eur_per_mwh=50.0)]), prices)
+    from rvpp.settle.audit import audit_day, audit_tables
+    day = audit_day(result.case, result.problem.bands)
+    tampered = result.dispatch.copy()
+    tampered.loc[tampered["t"] == 2, "energy_mwh"] += 1.0
+    checks = {v.check for v in audit_tables(day, result.market, result.units, result.csp, result.summary(),
+                                            dispatch=tampered)}
+    assert "battery.energy_balance" in checks
+    tampered = result.dispatch.copy()
+    tampered.loc[tampered["t"] == 1, "discharge_mw"] = 1.0  # discharging while charging
+    checks = {v.check for v in audit_tables(day, result.market, result.units, result.csp, result.summary(),
+                                            dispatch=tampered)}
+    assert "battery.discharge_ceiling" in checks
+
+
+def test_the_audit_finds_a_restart_within_the_minimum_down_time():
+    prices = np.select([HOURS == 1, HOURS == 4], [50.0, 200.0], 0.0)
+    result = solved(tiny_case(biomass_units=[biomass(initial_online=True)]), prices)  # stops and restarts
+    held = tiny_case(biomass_units=[biomass(initial_online=True, min_down_h=4.0)])
+    from rvpp.settle.audit import audit_day, audit_tables
+    checks = {v.check for v in audit_tables(audit_day(held, result.problem.bands), result.market, result.units,
+                                            result.csp, dispatch=result.dispatch)}
+    assert "dispatchable.min_down" in checks
+
+
+def test_state_carries_a_battery_energy_and_a_unit_status_to_the_next_day():
+    from rvpp.backtest.state import initial_state, with_state
+    case = tiny_case(battery_units=[battery(e_init_mwh=3.0)],
+                     biomass_units=[biomass(min_up_h=4.0, initial_online=False)])
+    assert initial_state(case) == {"B": {"e_mwh": 3.0}, "BIO": {"online": False, "status_h": None, "p_mw": None}}
+    nxt = with_state(case, {"B": {"e_mwh": 7.5}, "BIO": {"online": True, "status_h": 2.0, "p_mw": 8.0}})
+    assert nxt.battery[0].e_init_mwh == 7.5
+    unit = nxt.biomass[0]
+    assert (unit.initial_online, unit.initial_hours_in_status, unit.p_init_mw) == (True, 2.0, 8.0)
+    assert unit.initial_periods(1.0) == (2, 0)  # 4 h minimum up, 2 h done: 2 more periods online
