@@ -195,3 +195,14 @@ def test_state_carries_a_battery_energy_and_a_unit_status_to_the_next_day():
     unit = nxt.biomass[0]
     assert (unit.initial_online, unit.initial_hours_in_status, unit.p_init_mw) == (True, 2.0, 8.0)
     assert unit.initial_periods(1.0) == (2, 0)  # 4 h minimum up, 2 h done: 2 more periods online
+
+
+def test_the_state_of_charge_chart_draws_the_battery_plan():
+    from rvpp.outputs.plots import battery_figure
+    prices = np.where(HOURS == 1, 10.0, np.where(HOURS == 2, 100.0, 45.0))
+    result = solved(tiny_case(battery_units=[battery(degradation_eur_per_mwh=50.0)]), prices)
+    figure = battery_figure(result, "B")
+    charge = next(trace for trace in figure.data if trace.name == "State of charge (end of period)")
+    assert list(charge.y[:3]) == pytest.approx([9.0, 0.0, 0.0])  # charged in hour 1, emptied in hour 2
+    with pytest.raises(ValueError, match="unknown battery 'X'"):
+        battery_figure(result, "X")

@@ -59,3 +59,11 @@ def test_a_refused_case_writes_nothing(tmp_path):
     with pytest.raises(CaseError, match="e_min_mwh=99 must be < e_max_mwh=40"):
         load_case(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_the_fuzz_base_with_the_new_units_loads(paper_case):
+    # the unmutated base of the fuzzed case model must itself be valid, or every mutation is refused
+    from tests.test_fuzz_case import RAW_NEW_UNITS
+    case = parse_case(RAW_NEW_UNITS, paper_case.history)
+    assert [u.name for _, u in case.units()][-2:] == ["BAT1", "HY1"]  # BIO1 is disabled
+    assert [u.name for _, u in case.all_units()][-3:] == ["BAT1", "HY1", "BIO1"]
