@@ -119,7 +119,7 @@ if run.provenance_summary():
     st.caption(run.provenance_summary())
 problem = solving.prepare(run)
 if problem is not None:
-    kinds = [k for k in UNIT_KINDS if getattr(run, k)]
+    kinds = [k for k in UNIT_KINDS if getattr(run, k) and KINDS[k].role is not None]  # a band: an uncertain series
     for tab, kind in zip(st.tabs([widgets.KIND_TITLES[k] for k in kinds]), kinds):
         with tab:
             columns = st.columns(BAND_COLUMNS)
