@@ -6,10 +6,10 @@ from __future__ import annotations
 import streamlit as st
 
 from rvpp import Case
-from rvpp.service import FIELDS, PRICE_COLUMNS, SERIES_FIELDS, label, new_unit_row, unit_columns
+from rvpp.service import PRICE_COLUMNS, SERIES_FIELDS, field_words, label, new_unit_row, unit_columns
 
 TEXT_FIELDS = {"name"}
-BOOL_FIELDS = {"initially_on"}
+BOOL_FIELDS = {"initially_on", "initial_online", "enabled"}
 
 
 def column_config(case: Case, kind: str) -> dict:
@@ -21,9 +21,9 @@ def column_config(case: Case, kind: str) -> dict:
     config = {}
     for column in unit_columns(kind):
         field = column.split(".")[-1]
-        name, help_text = label(field), FIELDS[field][2]
+        name, help_text = label(column), field_words(column)[2]
         default = defaults.get(column)
-        if column == SERIES_FIELDS[kind]:
+        if column == SERIES_FIELDS[kind] and column in defaults:  # a kind with a series
             config[column] = st.column_config.SelectboxColumn(name, help=help_text, options=series_options,
                                                               default=default, required=True)
         elif field == "forecast_series":

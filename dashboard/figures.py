@@ -33,7 +33,8 @@ def result_key(result: Result) -> str:
 @st.cache_resource(show_spinner=False, max_entries=KEPT, hash_funcs={Result: result_key})
 def plan_figures(result: Result) -> dict[str, go.Figure | None]:
     """Every figure of the Results page: economics, trades, heat (``None`` without thermal
-    demand), dispatch, storage of each CSP (``"storage NAME"``) and reserve."""
+    demand), dispatch, storage of each CSP (``"storage NAME"``), state of charge of each battery
+    (``"battery NAME"``) and reserve."""
     figures = {
         "economics": waterfall_figure({result.case.budgets.strategy: result}),
         "trades": plots.trades_figure(result),
@@ -43,6 +44,9 @@ def plan_figures(result: Result) -> dict[str, go.Figure | None]:
     }
     for csp in result.case.csp:
         figures[f"storage {csp.name}"] = plots.storage_figure(result, csp.name)
+    for battery in result.case.battery:
+        if battery.enabled:
+            figures[f"battery {battery.name}"] = plots.battery_figure(result, battery.name)
     return figures
 
 

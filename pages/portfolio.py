@@ -4,7 +4,7 @@ import streamlit as st
 
 from dashboard import fields, solving, state, widgets
 from rvpp import CaseError
-from rvpp.service import (UNIT_KINDS, UnitKind, bands_figure, curve_figure, follow_capacity, table_message,
+from rvpp.service import (KINDS, UNIT_KINDS, UnitKind, bands_figure, curve_figure, follow_capacity, table_message,
                           thin_clock_ticks, workbook)
 
 state.through_app("pages/portfolio.py")
@@ -26,6 +26,8 @@ def fixed() -> set[str]:
 
 def unit_table(kind: str):
     table = workbook.unit_table(state.case(), kind)
+    if KINDS[kind].role is None:  # no forecast band to scale
+        return table
     scale_at = table.columns.get_loc(workbook.SERIES_FIELDS[kind].replace("series", "series_scale"))
     table.insert(scale_at + 1, SCALE, [name not in fixed() for name in table["name"]])
     return table
@@ -115,7 +117,7 @@ if run.provenance_summary():
     st.caption(run.provenance_summary())
 problem = solving.prepare(run)
 if problem is not None:
-    kinds = [k for k in UNIT_KINDS if getattr(run, k)]
+    kinds = [k for k in UNIT_KINDS if getattr(run, k) and KINDS[k].role is not None]  # a band: an uncertain series
     for tab, kind in zip(st.tabs([widgets.KIND_TITLES[k] for k in kinds]), kinds):
         with tab:
             columns = st.columns(BAND_COLUMNS)

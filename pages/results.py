@@ -134,6 +134,12 @@ if result.case.csp:
                "the up and down reserve it offers (paper constraints TS9-TS11).")
     for csp in result.case.csp:
         st.plotly_chart(figures[f"storage {csp.name}"], key=f"results_storage_{csp.name}")
+batteries = [name.removeprefix("battery ") for name in figures if name.startswith("battery ")]
+if batteries:
+    st.subheader("Batteries")
+    st.caption("State of charge; the margins (σ) are kept free so the battery can deliver the reserve it offers.")
+    for name in batteries:
+        st.plotly_chart(figures[f"battery {name}"], key=f"results_battery_{name}")
 st.subheader("Reserve by unit kind")
 st.plotly_chart(figures["reserve"], key="results_reserve")
 

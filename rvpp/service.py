@@ -26,8 +26,8 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
                                      recommendation_from, shortfalls)
     from .backtest.settings import CARRY, FRACTION, PERFECT, PRESET, BacktestSettings, BacktestVariant, variants_of
     from .data.case import PRICE_MODELS, STRATEGIES, parse_case
-    from .data.edits import (FIELDS, PERIOD_NAMES, describe_edits, follow_capacity, label, plain_message, run_label,
-                             table_message, with_period_length)
+    from .data.edits import (FIELDS, PERIOD_NAMES, describe_edits, field_words, follow_capacity, label, plain_message,
+                             run_label, table_message, with_period_length)
     from .data.files import EXCERPT_CHARS, excerpt
     from .data.history import PRICE_COLUMNS
     from .data.kinds import KINDS, UNIT_KINDS, UnitKind, power_unit
@@ -91,6 +91,7 @@ _WHERE = {
     "parse_case": ".data.case",
     "FIELDS": ".data.edits",
     "describe_edits": ".data.edits",
+    "field_words": ".data.edits",
     "PERIOD_NAMES": ".data.edits",
     "follow_capacity": ".data.edits",
     "label": ".data.edits",
@@ -190,14 +191,14 @@ __all__ = [
     "Verdict", "band_overlays", "band_specs", "bands_figure", "beats_presets_on_training", "case_data",
     "case_workbook_bytes", "case_zip_bytes", "compare_trades_figure", "cost_table", "cumulative_figure", "curve_figure",
     "default_url", "delivery_periods", "describe_edits", "deviating_periods", "distribution_figure", "economics",
-    "evaluation_days", "excerpt", "explanation", "export_zip", "exposure_figure", "figures", "flexibility_table",
-    "follow_capacity", "has_forecast", "idle_trades", "kpi_table", "label", "launch", "markets", "metrics",
-    "new_unit_row", "parse_case", "parse_numbers", "plain_message", "plan_workbook_bytes", "plots", "power_unit",
-    "prepare", "price_exposures", "protection_exact", "read_case_files", "realizations_used", "recommendation_from",
-    "reopen_case", "robustness_figure", "run_label", "sensitivity", "shortfalls", "solve", "solve_problem",
-    "strategy_budgets", "sweep_gamma", "table_csv", "table_message", "tables_workbook_bytes", "tariff_figure",
-    "thin_clock_ticks", "tied_budgets", "top_gamma_deviation", "trades_figure", "training_days", "unit_columns",
-    "variants_of", "waterfall_figure", "with_period_length", "workbook",
+    "evaluation_days", "excerpt", "explanation", "export_zip", "exposure_figure", "field_words", "figures",
+    "flexibility_table", "follow_capacity", "has_forecast", "idle_trades", "kpi_table", "label", "launch", "markets",
+    "metrics", "new_unit_row", "parse_case", "parse_numbers", "plain_message", "plan_workbook_bytes", "plots",
+    "power_unit", "prepare", "price_exposures", "protection_exact", "read_case_files", "realizations_used",
+    "recommendation_from", "reopen_case", "robustness_figure", "run_label", "sensitivity", "shortfalls", "solve",
+    "solve_problem", "strategy_budgets", "sweep_gamma", "table_csv", "table_message", "tables_workbook_bytes",
+    "tariff_figure", "thin_clock_ticks", "tied_budgets", "top_gamma_deviation", "trades_figure", "training_days",
+    "unit_columns", "variants_of", "waterfall_figure", "with_period_length", "workbook",
 ]
 
 

@@ -47,10 +47,12 @@ def heat(name="H", h_min=0.0, h_max=100.0, q_min=0.0):
 
 def tiny_case(wind_units=(), pv_units=(), ed_units=(), td_units=(), csp_units=(), srm=False, hpa=False,
               tariff=80.0, kappa=0.3, strategy="deterministic", overrides=None, mode="paper",
-              encoding="top_gamma", dt_h=1.0, day=DAY):
+              encoding="top_gamma", dt_h=1.0, day=DAY, battery_units=(), hydro_units=(), biomass_units=()):
     units = {"wind": list(wind_units), "pv": list(pv_units), "ed": list(ed_units), "td": list(td_units),
              "csp": list(csp_units)}
+    certain = {"battery": list(battery_units), "hydro": list(hydro_units), "biomass": list(biomass_units)}
     names = [u["name"] for group in units.values() for u in group]
+    units.update({kind: group for kind, group in certain.items() if group})
     data = {
         "name": "tiny", "delivery_date": day.isoformat(), "dt_h": dt_h,
         "markets": {"srm": srm, "hpa": hpa, "kappa": kappa,

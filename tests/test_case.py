@@ -109,8 +109,8 @@ BAD_INPUTS = {
         lambda d: unit(d, "wind", "WF1").update(p_max_mw=1e308),
         'wind "WF1": p_max_mw=1e+308 must be <= 1e+06'),
     "unknown unit kind": (
-        lambda d: d["units"].update(battery=[{"name": "B1"}]),
-        'units: unknown unit kind "battery"'),
+        lambda d: d["units"].update(boiler=[{"name": "B1"}]),
+        'units: unknown unit kind "boiler"'),
     "the DAM switched off": (
         lambda d: d["markets"].update(dam=False),
         "markets: dam=False must be True"),
@@ -141,13 +141,13 @@ EXACT = {
         ["budgets: overrides must be a mapping of source: Γ [periods], e.g. {price_da: 6, WF1: 3}; got a list"]),
     "no units section": (
         lambda d: d.pop("units"),
-        ["units: section is required; list the units of the case under wind, pv, csp, ed, td"]),
+        ["units: section is required; list the units of the case under wind, pv, csp, ed, td, battery, hydro, biomass"]),
     "an empty units section": (
         lambda d: d.update(units={}),
-        ["units: no unit is listed; a case needs at least one unit under wind, pv, csp, ed, td"]),
+        ["units: no unit is listed; a case needs at least one unit under wind, pv, csp, ed, td, battery, hydro, biomass"]),
     "every unit list empty": (
         lambda d: d.update(units={"wind": [], "pv": None, "csp": []}),
-        ["units: no unit is listed; a case needs at least one unit under wind, pv, csp, ed, td"]),
+        ["units: no unit is listed; a case needs at least one unit under wind, pv, csp, ed, td, battery, hydro, biomass"]),
     "a blank markets section": (
         lambda d: d.update(markets=None),
         ["markets: section is empty; it needs at least hpa_tariff_eur_per_mwh"]),

@@ -273,8 +273,8 @@ def test_a_section_given_as_one_value_in_the_case_sheet_is_refused(small_case, s
                                    f"not a value (row {row})"]
 
 
-@pytest.mark.parametrize("field, sheets", [("units", "the sheets wind, pv, csp, ed and td"),
-                                           ("units.wind", "the sheets wind, pv, csp, ed and td"),
+@pytest.mark.parametrize("field, sheets", [("units", "the sheets wind, pv, csp, ed, td, battery, hydro and biomass"),
+                                           ("units.wind", "the sheets wind, pv, csp, ed, td, battery, hydro and biomass"),
                                            ("markets.hpa_tariff_eur_per_mwh", "the sheet 'hpa_tariff'")])
 def test_a_row_for_what_another_sheet_holds_is_refused_not_overwritten(small_case, field, sheets):
     data, row = edited_workbook(small_case, [(field, 5)], drop_prefix=None)

@@ -33,6 +33,18 @@ from rvpp.settle.audit import audit_result
 from tests.factories import PAPER
 
 RAW = yaml.safe_load((PAPER / "case.yaml").read_text(encoding="utf-8"))
+# The paper case with a battery, a hydro and a biomass unit (MODEL_SPEC §13), every field written.
+RAW_NEW_UNITS = {**RAW, "units": {**RAW["units"], "battery": [
+    {"name": "BAT1", "enabled": True, "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 20.0, "p_dis_max_mw": 20.0,
+     "eta_ch": 0.95, "eta_dis": 0.9, "self_discharge_per_h": 0.001, "degradation_eur_per_mwh": 5.0,
+     "e_init_mwh": 10.0, "ramp_mw_per_min": 20.0, "reserve_share": 1.0}],
+    "hydro": [{"name": "HY1", "enabled": True, "p_min_mw": 5.0, "p_max_mw": 30.0, "marginal_cost_eur_per_mwh": 5.0,
+               "startup_cost_eur": 100.0, "shutdown_cost_eur": 10.0, "ramp_up_mw_per_h": 30.0, "ramp_dn_mw_per_h": 30.0,
+               "startup_ramp_mw_per_h": 10.0, "shutdown_ramp_mw_per_h": 10.0, "min_up_h": 2.0, "min_down_h": 2.0,
+               "initial_online": True, "initial_hours_in_status": 1.0, "p_init_mw": 10.0, "energy_max_mwh": 300.0,
+               "ramp_mw_per_min": 10.0, "reserve_share": 0.5}],
+    "biomass": [{"name": "BIO1", "enabled": False, "p_min_mw": 5.0, "p_max_mw": 15.0, "min_up_h": 4.0,
+                 "min_down_h": 4.0, "ramp_mw_per_min": 1.0}]}}
 FAST = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 EXTREMES = [0, -1, 1, 0.5, 1e308, -1e308, 5e-324, math.nan, math.inf, -math.inf, 10 ** 30, -10 ** 30, 2 ** 63,
@@ -75,7 +87,7 @@ def _parent(data: Any, path: tuple) -> Any:
 
 @st.composite
 def mutated_cases(draw) -> dict:
-    data = copy.deepcopy(RAW)
+    data = copy.deepcopy(draw(st.sampled_from([RAW, RAW_NEW_UNITS])))
     for _ in range(draw(st.integers(1, 4))):
         where = paths(data)
         if not where:

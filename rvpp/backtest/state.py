@@ -1,4 +1,5 @@
-"""What one day hands to the next: storage energy, turbine status and time in that status.
+"""What one day hands to the next: storage energy, turbine status and time in that status
+(CSPs), a battery's state of charge, a hydro or biomass unit's status, time in it and output.
 
 As in operation, the state at the end of day ``D``'s *settled* dispatch (not its plan)
 is day ``D + 1``'s initial condition, for the plan and for the settlement. A state is
@@ -28,6 +29,11 @@ def initial_state(case: Case) -> State:
         ts, pb = csp.storage, csp.power_block
         energy = ts.e_init_mwh_th if ts.e_init_mwh_th is not None else ts.e_min_mwh_th
         state[csp.name] = {"e_mwh_th": float(energy), "online": pb.initially_on, "status_h": pb.initial_status_h}
+    for bat in case.battery:  # MODEL_SPEC §13: at e_init, or at E min on a cyclic case
+        state[bat.name] = {"e_mwh": float(bat.e_min_mwh if bat.e_init_mwh is None else bat.e_init_mwh)}
+    for unit in (*case.hydro, *case.biomass):
+        state[unit.name] = {"online": unit.initial_online, "status_h": unit.initial_hours_in_status,
+                            "p_mw": unit.p_init_mw}
     return state
 
 
@@ -46,4 +52,23 @@ def with_state(case: Case, state: State, storage_end: str | float = CARRY) -> Ca
         pb["initially_on"] = bool(start["online"])
         pb["initial_status_h"] = start["status_h"]
         units.append(data)
-    return case.replace(csp=units) if units else case
+    changes = {"csp": units} if units else {}
+    changes.update(_carried(case, state))
+    return case.replace(**changes) if changes else case
+
+
+def _carried(case: Case, state: State) -> dict[str, list]:
+    """Batteries, hydro and biomass units starting from ``state`` (a unit it does not name, as in a
+    backtest recorded before these kinds, keeps the case's initial conditions)."""
+    changes = {}
+    if any(bat.name in state for bat in case.battery):
+        changes["battery"] = [bat.model_copy(update={"e_init_mwh": state[bat.name]["e_mwh"]})
+                              if bat.name in state else bat for bat in case.battery]
+    for kind in ("hydro", "biomass"):
+        units = getattr(case, kind)
+        if any(unit.name in state for unit in units):
+            changes[kind] = [unit.model_copy(update={
+                "initial_online": bool(state[unit.name]["online"]),
+                "initial_hours_in_status": state[unit.name]["status_h"],
+                "p_init_mw": state[unit.name]["p_mw"]}) if unit.name in state else unit for unit in units]
+    return changes

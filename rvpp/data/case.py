@@ -26,7 +26,7 @@ from ..errors import CaseError
 from .case_messages import as_number, kind_of, show_value, validate_into
 from .files import CONTROL_CHARACTERS, excerpt, excerpt_names, refused_character
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
-from .kinds import KINDS, NDRES_KINDS, UNIT_KINDS, UnitKind
+from .kinds import DISPATCHABLE_KINDS, KINDS, PAPER_KINDS, SHARED_CLASS_KINDS, UNIT_KINDS, UnitKind
 from .periods import ALLOWED_DT_H
 
 
@@ -82,6 +82,9 @@ Strategy = Literal["deterministic", "optimistic", "balanced", "pessimistic"]
 BudgetMode = Literal["paper", "planner_chosen"]  # MODEL_SPEC §5: the published method, or the teaching variant
 Ties = Literal["choose", "earliest"]  # deviations tied at the Γ boundary: the model chooses, or the earliest
 BudgetEncoding = Literal["top_gamma", "binary"]
+# The VPP's reserve cap κ·base (MODEL_SPEC §7, §13): "net" (the paper) is supply nameplate less every unit's
+# draw, "installed" (the authors' tool) the supply nameplate alone, storage discharge and dispatchable units included.
+ReserveBase = Literal["net", "installed"]
 PwlEncoding = Literal["incremental", "convex_combination"]
 MARKET_NAMES = ("DAM", "SRM", "HPA")
 RESERVED_NAMES = set(PRICE_COLUMNS) | {"timestamp"}
@@ -421,6 +424,123 @@ class ThermalDemand(_FollowsSeries):
         return self
 
 
+class Battery(_Unit):
+    """Electrical storage (MODEL_SPEC §13): energy and power limits, charge and discharge
+    efficiencies, self-discharge, a throughput (degradation) cost per MWh discharged, and
+    reserve from both modes with the energy behind it held back.
+
+    ``e_init_mwh`` is the energy at the start of the day (the day then ends at or above it);
+    unset, the day is cyclic. A unit with ``enabled: false`` stays in the case but is left
+    out of the model.
+    """
+
+    KIND: ClassVar[UnitKind] = UnitKind.BATTERY
+
+    name: UnitName
+    enabled: bool = True
+    e_min_mwh: NonNegative = 0.0
+    e_max_mwh: Positive
+    p_ch_max_mw: Positive
+    p_dis_max_mw: Positive
+    eta_ch: Annotated[Number, Field(gt=0.0, le=1.0)] = 0.95
+    eta_dis: Annotated[Number, Field(gt=0.0, le=1.0)] = 0.95
+    self_discharge_per_h: Annotated[Number, Field(ge=0.0, lt=1.0)] = 0.0
+    degradation_eur_per_mwh: NonNegative = 0.0
+    e_init_mwh: NonNegative | None = None
+    ramp_mw_per_min: NonNegative
+    reserve_share: Fraction = 1.0
+
+    @property
+    def cyclic(self) -> bool:
+        """True when the day is cyclic (no initial energy)."""
+        return self.e_init_mwh is None
+
+    @property
+    def p_max_mw(self) -> float:
+        """Discharge nameplate [MW]: the capacity of the flexibility table (MODEL_SPEC §11)."""
+        return self.p_dis_max_mw
+
+    @property
+    def supply_mw(self) -> float:
+        return self.p_dis_max_mw
+
+    @property
+    def demand_mw(self) -> float:
+        return self.p_ch_max_mw
+
+    @model_validator(mode="after")
+    def _limits(self) -> "Battery":
+        _require(self.e_min_mwh < self.e_max_mwh, "e_min_mwh", self.e_min_mwh, "<", "e_max_mwh", self.e_max_mwh)
+        _require_within("e_init_mwh", self.e_init_mwh, "e_min_mwh", self.e_min_mwh, "e_max_mwh", self.e_max_mwh)
+        return self
+
+
+class DispatchableUnit(_Unit):
+    """Hydro or biomass plant: a dispatchable renewable unit with commitment (MODEL_SPEC §13).
+
+    Minimum up and down times carry over from the day before through ``initial_online`` and
+    ``initial_hours_in_status`` (unset: nothing carries over); ``p_init_mw`` is the output in
+    the last period before the day, from which the first period ramps (unset: the first
+    period is free of ramp limits). Ramp limits left unset are no limit. ``energy_max_mwh``
+    is the day's water or fuel [MWh], unset for none; it holds even if all up reserve is
+    called. A unit with ``enabled: false`` stays in the case but is left out of the model.
+    """
+
+    name: UnitName
+    kind: Literal["hydro", "biomass"]
+    enabled: bool = True
+    p_min_mw: NonNegative = 0.0
+    p_max_mw: Positive
+    marginal_cost_eur_per_mwh: NonNegative = 0.0
+    startup_cost_eur: NonNegative = 0.0
+    shutdown_cost_eur: NonNegative = 0.0
+    ramp_up_mw_per_h: NonNegative | None = None
+    ramp_dn_mw_per_h: NonNegative | None = None
+    startup_ramp_mw_per_h: NonNegative | None = None
+    shutdown_ramp_mw_per_h: NonNegative | None = None
+    min_up_h: Annotated[Number, Field(ge=0.0, le=HOURS_PER_DAY)] = 0.0
+    min_down_h: Annotated[Number, Field(ge=0.0, le=HOURS_PER_DAY)] = 0.0
+    initial_online: bool = False
+    initial_hours_in_status: NonNegative | None = None
+    p_init_mw: NonNegative | None = None
+    energy_max_mwh: NonNegative | None = None
+    ramp_mw_per_min: NonNegative
+    reserve_share: Fraction = 1.0
+
+    @property
+    def unit_kind(self) -> UnitKind:
+        return UnitKind(self.kind)
+
+    @property
+    def supply_mw(self) -> float:
+        return self.p_max_mw
+
+    def initial_periods(self, dt_h: float) -> tuple[int, int]:
+        """Periods ``(N_on, N_off)`` at the start of the day during which the unit must stay online /
+        offline to complete the minimum up / down time begun before the day (0 when
+        ``initial_hours_in_status`` is unset), as the CSP turbine's (:meth:`PowerBlock.initial_periods`)."""
+        if self.initial_hours_in_status is None:
+            return 0, 0
+        needed = self.min_up_h if self.initial_online else self.min_down_h
+        left = int(round(max(0.0, needed - self.initial_hours_in_status) / dt_h))
+        return (left, 0) if self.initial_online else (0, left)
+
+    @model_validator(mode="after")
+    def _limits(self) -> "DispatchableUnit":
+        _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
+        if self.p_init_mw is not None:
+            if not self.initial_online and self.p_init_mw > 0.0:
+                raise ValueError(f"p_init_mw={self.p_init_mw:g} must be 0 when initial_online is false: an offline "
+                                 "unit produces nothing")
+            if self.initial_online:
+                _require_within("p_init_mw", self.p_init_mw, "p_min_mw", self.p_min_mw, "p_max_mw", self.p_max_mw)
+        if self.energy_max_mwh is not None and self.energy_max_mwh < self.p_min_mw * self.min_up_h:
+            raise ValueError(f"energy_max_mwh={self.energy_max_mwh:g} is below p_min_mw x min_up_h = "
+                             f"{self.p_min_mw:g} MW x {self.min_up_h:g} h = {self.p_min_mw * self.min_up_h:g} MWh: "
+                             "once started, the unit could not run its minimum up time at its minimum output")
+        return self
+
+
 class ImbalancePrices(_Frozen):
     """History columns of real imbalance prices [EUR/MWh] that replace the settlement's
     ``π_def`` (``short``: paid for energy delivered short of the DAM bid) and ``π_sur``
@@ -437,6 +557,7 @@ class Markets(_Frozen):
     srm: bool = True
     hpa: bool = True
     kappa: Fraction = 0.3
+    reserve_base: ReserveBase = "net"
     reserve_duration_min: Positive = 15.0
     hpa_tariff_eur_per_mwh: Annotated[tuple[NonNegative, ...], Field(min_length=24, max_length=24)]
     imbalance_prices: ImbalancePrices | None = None
@@ -628,6 +749,9 @@ class Case(_Frozen):
     csp: tuple[CSP, ...] = ()
     ed: tuple[ElectricalDemand, ...] = ()
     td: tuple[ThermalDemand, ...] = ()
+    battery: tuple[Battery, ...] = ()
+    hydro: tuple[DispatchableUnit, ...] = ()
+    biomass: tuple[DispatchableUnit, ...] = ()
     provenance: tuple[tuple[Text, ColumnSource], ...] = ()
     history: History
 
@@ -658,13 +782,18 @@ class Case(_Frozen):
         return self.wind + self.pv
 
     def units(self) -> Iterator[tuple[UnitKind, Any]]:
-        """``(kind, unit)`` for every unit, in the order of :data:`~rvpp.data.kinds.UNIT_KINDS`."""
+        """``(kind, unit)`` for every unit the model holds, in the order of
+        :data:`~rvpp.data.kinds.UNIT_KINDS`: a unit with ``enabled: false`` is left out."""
+        return ((kind, unit) for kind, unit in self.all_units() if getattr(unit, "enabled", True))
+
+    def all_units(self) -> Iterator[tuple[UnitKind, Any]]:
+        """``(kind, unit)`` for every unit of the case, disabled ones included."""
         for kind in UNIT_KINDS:
             for unit in getattr(self, kind):
                 yield kind, unit
 
     def unit_names(self) -> list[str]:
-        return [unit.name for _, unit in self.units()]
+        return [unit.name for _, unit in self.all_units()]
 
     def uncertain_units(self) -> Iterator[tuple[UnitKind, Any]]:
         """``(kind, unit)`` for every unit whose kind has an uncertain series."""
@@ -698,6 +827,10 @@ class Case(_Frozen):
         """Plain data in the layout of ``case.yaml`` (without the history)."""
         dump = self.model_dump(mode="python", exclude={"history"})
         units = {kind.value: [_unit_data(kind, u) for u in dump.pop(kind)] for kind in UNIT_KINDS}
+        # a kind beyond the paper's is written only when it has units: cases and their digests stay as they were
+        units = {kind: entries for kind, entries in units.items() if entries or kind in PAPER_KINDS}
+        if dump["markets"]["reserve_base"] == "net":
+            del dump["markets"]["reserve_base"]
         dump["budgets"]["overrides"] = dict(dump["budgets"]["overrides"])
         if dump["budgets"]["ties"] == "choose":
             del dump["budgets"]["ties"]  # written only when set: cases and their digests stay as they were
@@ -744,12 +877,12 @@ class Case(_Frozen):
     @model_validator(mode="after")
     def _cross_checks(self) -> "Case":
         problems = []
-        for kind in NDRES_KINDS:
+        for kind in SHARED_CLASS_KINDS:
             for unit in getattr(self, kind):
                 if unit.kind != kind:
                     problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind!r} in the {kind} list')
         seen: set[str] = set()
-        for kind, unit in self.units():
+        for kind, unit in self.all_units():
             if unit.name in seen:
                 problems.append(f'{kind} "{unit.name}": name is used by more than one unit; names must be unique')
             if unit.name in RESERVED_NAMES:
@@ -790,9 +923,27 @@ class Case(_Frozen):
                 # rounds to no period at all: a start would draw no heat
                 problems.append(f'csp "{csp.name}": power_block.startup_duration_h={duration:g} must be at least '
                                 f"one period, dt_h={self.dt_h:g}")
+        problems += self._dispatchable_problems()
         if problems:
             raise ValueError("\n".join(problems))
         return self
+
+    def _dispatchable_problems(self) -> list[str]:
+        """Hours of hydro and biomass units in whole periods, and a day's energy that allows one period."""
+        problems = []
+        for kind in DISPATCHABLE_KINDS:
+            for unit in getattr(self, kind):
+                for field in ("min_up_h", "min_down_h", "initial_hours_in_status"):
+                    hours = getattr(unit, field)
+                    if hours is not None and not _is_multiple(hours, self.dt_h):
+                        problems.append(f'{kind} "{unit.name}": {field}={hours:g} must be a multiple of '
+                                        f"dt_h={self.dt_h:g}")
+                least = unit.p_min_mw * self.dt_h
+                if unit.energy_max_mwh is not None and unit.energy_max_mwh < least:
+                    problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below one '
+                                    f"period at p_min_mw: {unit.p_min_mw:g} MW x dt_h={self.dt_h:g} h = {least:g} "
+                                    "MWh; the unit could never run")
+        return problems
 
     def _band_problems(self, sources: set[str], columns: set[str]) -> list[str]:
         """Band methods, forecast columns, imbalance prices and provenance name what exists."""
@@ -826,7 +977,9 @@ class Case(_Frozen):
 
 # The class of each unit kind (rvpp.data.kinds.KINDS holds the kind's other facts).
 UNIT_MODELS: dict[UnitKind, type[_Frozen]] = {UnitKind.WIND: NdresUnit, UnitKind.PV: NdresUnit, UnitKind.CSP: CSP,
-                                               UnitKind.ED: ElectricalDemand, UnitKind.TD: ThermalDemand}
+                                               UnitKind.ED: ElectricalDemand, UnitKind.TD: ThermalDemand,
+                                               UnitKind.BATTERY: Battery, UnitKind.HYDRO: DispatchableUnit,
+                                               UnitKind.BIOMASS: DispatchableUnit}
 _SECTIONS = {"markets": Markets, "uncertainty": UncertaintySettings, "budgets": Budgets, "solver": SolverSettings}
 _TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "history", "units", "provenance",
                *_SECTIONS}
@@ -839,7 +992,7 @@ def _plain(kind: str, unit: Any) -> dict[str, Any]:
 
 
 def _unit_data(kind: str, unit: dict[str, Any]) -> dict[str, Any]:
-    if kind in NDRES_KINDS:
+    if kind in SHARED_CLASS_KINDS:
         unit = {k: v for k, v in unit.items() if k != "kind"}
     return UNIT_MODELS[kind].plain_data(unit)
 
@@ -942,7 +1095,7 @@ def _parse_units(raw_units: Any, problems: list[str]) -> dict[str, tuple]:
             name = entry.get("name")
             label = f'{kind} "{excerpt(name)}"' if isinstance(name, str) and name else f"units.{kind} item {i}"
             payload = dict(entry)
-            if kind in NDRES_KINDS:
+            if kind in SHARED_CLASS_KINDS:
                 payload.setdefault("kind", kind.value)
             unit = validate_into(UNIT_MODELS[kind], payload, label, problems)
             if unit is not None:

@@ -52,8 +52,10 @@ FIELDS: dict[str, tuple[str, str, str]] = {
     "p_ch_min_mw_th": ("TS charge min", "MW_th", "Smallest charging power while charging"),
     "p_dis_max_mw_th": ("TS discharge max", "MW_th", "Largest discharging power"),
     "p_dis_min_mw_th": ("TS discharge min", "MW_th", "Smallest discharging power while discharging"),
-    "eta_ch": ("TS η charge", "-", "Charging efficiency (0-1]"),
-    "eta_dis": ("TS η discharge", "-", "Discharging efficiency (0-1]"),
+    "storage.eta_ch": ("TS η charge", "-", "Charging efficiency (0-1]"),
+    "storage.eta_dis": ("TS η discharge", "-", "Discharging efficiency (0-1]"),
+    "eta_ch": ("η charge", "-", "Charging efficiency (0-1]"),
+    "eta_dis": ("η discharge", "-", "Discharging efficiency (0-1]"),
     "e_init_mwh_th": ("TS E start", "MWh_th", "Energy at the start of the day; empty: cyclic day"),
     "p_in_max_mw_th": ("PB input max", "MW_th", "Largest power-block thermal input"),
     "p_in_min_mw_th": ("PB input min", "MW_th", "Smallest thermal input while the turbine runs"),
@@ -64,14 +66,34 @@ FIELDS: dict[str, tuple[str, str, str]] = {
     "startup_duration_h": ("Start-up time", "h", "Duration of the start-up heat use"),
     "initially_on": ("On at midnight", "", "Turbine online at the start of the day"),
     "breakpoints": ("Power-block curve", "", "Thermal input and efficiency at each breakpoint"),
-    "e_min_mwh": ("E min", "MWh", "Minimum energy over the day"),
-    "p_init_mw": ("P start", "MW", "Consumption before the day starts (informative)"),
+    "e_min_mwh": ("E min", "MWh", "A demand's least energy over the day; a battery's least stored energy"),
+    "p_init_mw": ("P start", "MW", "Power before the day starts: a demand's consumption (informative); a hydro or "
+                                   "biomass unit's output, from which its first period ramps (empty: no ramp limit)"),
     "flex_up": ("Flex up", "-", "Up reserve (consumption decrease) as a fraction of consumption"),
     "flex_dn": ("Flex down", "-", "Down reserve (consumption increase) as a fraction of consumption"),
     "h_min_mw_th": ("H min", "MW_th", "Minimum heat"),
     "h_max_mw_th": ("H max", "MW_th", "Maximum heat"),
     "q_min_mwh_th": ("Q min", "MWh_th", "Minimum heat over the day"),
     "h_init_mw_th": ("H start", "MW_th", "Heat before the day starts (informative)"),
+    "enabled": ("In the plan", "", "Unticked: the unit is kept in the case but left out of the plan"),
+    "e_max_mwh": ("E max", "MWh", "Largest stored energy"),
+    "p_ch_max_mw": ("Charge max", "MW", "Largest charging power"),
+    "p_dis_max_mw": ("Discharge max", "MW", "Largest discharging power"),
+    "self_discharge_per_h": ("Self-discharge", "1/h", "Fraction of the stored energy lost per hour [0-1)"),
+    "degradation_eur_per_mwh": ("Degradation", "EUR/MWh", "Wear cost per MWh discharged"),
+    "e_init_mwh": ("E start", "MWh", "Stored energy at the start of the day; empty: cyclic day"),
+    "marginal_cost_eur_per_mwh": ("Marginal cost", "EUR/MWh", "Cost per MWh produced (fuel, water value, O&M)"),
+    "startup_cost_eur": ("Start-up cost", "EUR", "Cost of one start"),
+    "shutdown_cost_eur": ("Shut-down cost", "EUR", "Cost of one stop"),
+    "ramp_up_mw_per_h": ("Ramp up", "MW/h", "Largest rise of output from one hour to the next; empty: no limit"),
+    "ramp_dn_mw_per_h": ("Ramp down", "MW/h", "Largest fall of output from one hour to the next; empty: no limit"),
+    "startup_ramp_mw_per_h": ("Start-up ramp", "MW/h", "Largest output in the period of a start; empty: P max"),
+    "shutdown_ramp_mw_per_h": ("Shut-down ramp", "MW/h", "Largest output in the period before a stop; empty: "
+                                                         "P max"),
+    "initial_online": ("On at midnight", "", "Online at the start of the day"),
+    "initial_hours_in_status": ("Hours in status", "h", "Hours the unit has been on (or off) at the start of "
+                                                        "the day; empty: no minimum time carries over"),
+    "energy_max_mwh": ("Energy max", "MWh", "Water or fuel for the day, up reserve included; empty: no limit"),
 }
 
 # Settings as the Markets, Uncertainty and Home pages name them: dotted path -> (name, unit).
@@ -129,13 +151,19 @@ REQUIRED_CELL = re.compile(rf'^(?:(?:{_KIND_WORDS}) "(?P<unit>[^"]+)"|units\.(?P
 CELL_ENTRIES = {"name": "a name", "series": "a history column"}  # what an empty cell asks for; others a number
 
 
+def field_words(field: str) -> tuple[str, str, str] | None:
+    """``(name, unit, help)`` of a unit field, dotted (``storage.eta_ch``) or not; ``None`` if unknown.
+    A dotted entry of :data:`FIELDS` wins over its last part (the CSP storage's η is labelled TS η)."""
+    return FIELDS.get(field) or FIELDS.get(field.split(".")[-1])
+
+
 def label(field: str) -> str:
     """``"p_max_mw"`` or ``"storage.e_max_mwh_th"`` → ``"P max [MW]"`` / ``"TS E max [MWh_th]"``."""
-    leaf = field.split(".")[-1]
+    words = field_words(field)
     if field in SETTINGS:
         name, unit = SETTINGS[field]
-    elif leaf in FIELDS:
-        name, unit, _ = FIELDS[leaf]
+    elif words is not None:
+        name, unit, _ = words
     else:
         return field
     return f"{name} [{unit}]" if unit else name
@@ -257,7 +285,7 @@ def plain_message(message: str) -> str:
     ``markets: hpa_tariff_eur_per_mwh hour 03:00 = -5 must be >= 0`` becomes
     ``HPA tariff at 03:00 [EUR/MWh_th] = −5 must be ≥ 0``.
     """
-    text = re.sub(r'^(?:wind|pv|csp|ed|td) "([^"]+)": ', r"\1: ", message)
+    text = re.sub(rf'^(?:{_KIND_WORDS}) "([^"]+)": ', r"\1: ", message)
     if text.startswith("study settings: "):
         text = re.sub(r"(?:(?<=^study settings: )|(?<=; ))([a-z_]+)(?=[=: ])",
                       lambda m: STUDY_FIELDS.get(m.group(1), m.group(1)), text)

@@ -21,6 +21,9 @@ class UnitKind(StrEnum):
     CSP = "csp"
     ED = "ed"
     TD = "td"
+    BATTERY = "battery"
+    HYDRO = "hydro"
+    BIOMASS = "biomass"
 
 
 class Role(StrEnum):
@@ -92,11 +95,21 @@ KINDS: dict[UnitKind, KindInfo] = {
                           Role.CONSUMPTION, "ed", "p_max_mw", electric_sign=-1),
     UnitKind.TD: KindInfo("thermal demand", "Thermal demand", "Thermal demands", "TD", Carrier.HEAT,
                           Role.CONSUMPTION, "td", "h_max_mw_th", electric_sign=0, flexible=False),
+    # Certain units (MODEL_SPEC §13): no uncertain series, so no role and no budget column.
+    UnitKind.BATTERY: KindInfo("battery", "Battery", "Batteries", "BAT", Carrier.ELECTRICITY, None, "",
+                               "p_dis_max_mw", electric_sign=+1),
+    UnitKind.HYDRO: KindInfo("hydro plant", "Hydro", "Hydro plants", "HY", Carrier.ELECTRICITY, None, "",
+                             "p_max_mw", electric_sign=+1),
+    UnitKind.BIOMASS: KindInfo("biomass plant", "Biomass", "Biomass plants", "BIO", Carrier.ELECTRICITY, None, "",
+                               "p_max_mw", electric_sign=+1),
 }
-UNIT_KINDS: tuple[UnitKind, ...] = tuple(KINDS)  # the order in which a case lists its units
+UNIT_KINDS: tuple[UnitKind, ...] = tuple(KINDS)
+PAPER_KINDS = (UnitKind.WIND, UnitKind.PV, UnitKind.CSP, UnitKind.ED, UnitKind.TD)  # the seed paper's kinds  # the order in which a case lists its units
 FLEX_KINDS: tuple[UnitKind, ...] = tuple(kind for kind, info in KINDS.items() if info.flexible)
 ELECTRIC_KINDS: tuple[UnitKind, ...] = tuple(kind for kind, info in KINDS.items() if info.electric_sign)
 NDRES_KINDS = (UnitKind.WIND, UnitKind.PV)  # non-dispatchable renewables: one class, a kind field
+DISPATCHABLE_KINDS = (UnitKind.HYDRO, UnitKind.BIOMASS)  # dispatchable renewables: one class, a kind field
+SHARED_CLASS_KINDS = NDRES_KINDS + DISPATCHABLE_KINDS  # kinds whose class holds a ``kind`` field
 
 
 def power_unit(kind: str) -> str:

@@ -20,6 +20,8 @@ from ..data.scenarios import SCENARIOS, Scenario, activation
 from .market import (add_electric_balance, add_heat_balance, add_market_bids,
                      add_market_limits, add_objective, add_time)
 from .units import add_electrical_demand, add_ndres, add_thermal_demand
+from .storage import add_battery
+from .dispatchable import add_dispatchable
 from ..data.case import CSP
 from ..data.kinds import UnitKind
 from .blocks import UNIT_BLOCKS, unit_block
@@ -60,6 +62,9 @@ UNIT_BUILDERS: dict[UnitKind, Callable[[pyo.Block, Any, Problem], None]] = {
     UnitKind.CSP: add_csp,
     UnitKind.ED: add_electrical_demand,
     UnitKind.TD: add_thermal_demand,
+    UnitKind.BATTERY: add_battery,
+    UnitKind.HYDRO: add_dispatchable,
+    UnitKind.BIOMASS: add_dispatchable,
 }
 
 

@@ -1,5 +1,5 @@
 """Where each unit kind's blocks sit on a model: one indexed Block per group of kinds, indexed
-by unit name (wind and PV share ``ndres``). Builders live in :data:`rvpp.model.UNIT_BUILDERS`."""
+by unit name (wind and PV share ``ndres``, hydro and biomass ``dispatchable``). Builders live in :data:`rvpp.model.UNIT_BUILDERS`."""
 
 from __future__ import annotations
 
@@ -13,6 +13,9 @@ UNIT_BLOCKS: dict[UnitKind, str] = {
     UnitKind.CSP: "csp",
     UnitKind.ED: "ed",
     UnitKind.TD: "td",
+    UnitKind.BATTERY: "battery",
+    UnitKind.HYDRO: "dispatchable",
+    UnitKind.BIOMASS: "dispatchable",
 }
 
 

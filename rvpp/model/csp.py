@@ -140,20 +140,26 @@ def reserve_share_limits(ts, field_first_mw_th: float, dt_h: float) -> tuple[flo
 
 
 def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
-    """Turbine commitment with minimum up and down times (Appendix A, STU10-STU17).
+    """Turbine commitment with minimum up and down times (Appendix A, STU10-STU17): :func:`add_commitment`."""
+    pb = csp.power_block
+    add_commitment(m, m.csp[csp.name], pb.min_up_h, pb.min_down_h, pb.initially_on,
+                   pb.initial_periods(problem.dt_h), problem)
+
+
+def add_commitment(m: pyo.ConcreteModel, b: pyo.Block, min_up_h: float, min_down_h: float, initially_on: bool,
+                   initial_periods: tuple[int, int], problem: Problem) -> None:
+    """Binaries ``online``, ``startup``, ``shutdown`` on block ``b`` with minimum up and down times
+    (Appendix A, STU10-STU17; also the hydro and biomass units of MODEL_SPEC §13).
 
     ``u[t] − u[t−1] = v_su[t] − v_sd[t]``, ``v_su + v_sd ≤ 1``, and in the equivalent
     tight form of Rajan and Takriti (2005): ``Σ_{τ=t−UT+1..t} v_su[τ] ≤ u[t]``,
     ``Σ_{τ=t−DT+1..t} v_sd[τ] ≤ 1 − u[t]``. ``u[0]`` is the initial status. A minimum
-    time begun before the day carries over (STU12, STU15): with ``initial_status_h`` hours
-    already in the initial status, ``u[t] = u[0]`` for the first ``N_on`` (or ``N_off``)
-    periods that complete it; unset, nothing carries over.
+    time begun before the day carries over (STU12, STU15): ``u[t] = u[0]`` for the first
+    ``initial_periods = (N_on, N_off)`` periods that complete it.
     """
-    b = m.csp[csp.name]
-    pb = csp.power_block
-    up_periods = problem.periods_for_hours(pb.min_up_h)
-    down_periods = problem.periods_for_hours(pb.min_down_h)
-    initial = 1.0 if pb.initially_on else 0.0
+    up_periods = problem.periods_for_hours(min_up_h)
+    down_periods = problem.periods_for_hours(min_down_h)
+    initial = 1.0 if initially_on else 0.0
     b.online = pyo.Var(m.T, domain=pyo.Binary)
     b.startup = pyo.Var(m.T, domain=pyo.Binary)
     b.shutdown = pyo.Var(m.T, domain=pyo.Binary)
@@ -168,7 +174,7 @@ def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None
         sum(b.startup[k] for k in _window(m, t, up_periods)) <= b.online[t]))
     b.min_down = pyo.Constraint(m.T, rule=lambda b, t: (
         sum(b.shutdown[k] for k in _window(m, t, down_periods)) <= 1 - b.online[t]))
-    n_on, n_off = pb.initial_periods(problem.dt_h)
+    n_on, n_off = initial_periods
     held = list(m.T)[:n_on + n_off]
     b.initial_status_held = pyo.Constraint(held, rule=lambda b, t: b.online[t] == initial)
 

@@ -17,12 +17,15 @@ def add_time(m: pyo.ConcreteModel, problem: Problem) -> None:
 
 
 def capacities(problem: Problem) -> tuple[float, float, float]:
-    """Generation nameplate ``ΣPmax_r + ΣPmax_θ``, demand nameplate ``ΣPmax_d`` and the
-    reserve cap ``κ·max(0, generation − demand)`` [MW] (Power-Traded1..4)."""
+    """Generation nameplate ``ΣPmax_r + ΣPmax_θ`` (batteries' discharge and dispatchable units
+    included), demand nameplate ``ΣPmax_d`` (batteries' charge included) and the reserve cap
+    ``κ·max(0, generation − demand)`` (``markets.reserve_base`` net, the paper) or ``κ·generation``
+    (installed, the authors' tool) [MW] (Power-Traded1..4; MODEL_SPEC §7, §13)."""
     case = problem.case
     generation = sum(unit.supply_mw for _, unit in case.units())
     demand = sum(unit.demand_mw for _, unit in case.units())
-    return generation, demand, case.markets.kappa * max(0.0, generation - demand)
+    base = generation if case.markets.reserve_base == "installed" else max(0.0, generation - demand)
+    return generation, demand, case.markets.kappa * base
 
 
 def add_market_bids(m: pyo.ConcreteModel, problem: Problem) -> None:

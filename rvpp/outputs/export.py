@@ -20,7 +20,7 @@ from ..data.files import sibling
 from ..errors import require
 from ..solving.results import Result
 
-TABLES = ("market", "units", "csp", "flexibility")
+TABLES = ("market", "units", "csp", "dispatch", "flexibility")
 SUMMARY = "summary.json"
 PLAN_FILES = (*(f"{name}.csv" for name in TABLES), "plan.xlsx", SUMMARY)  # what rvpp owns in a plan folder
 

@@ -137,6 +137,39 @@ def storage_figure(result: Result, csp: str | None = None) -> go.Figure:
     return go.Figure(data=traces, layout={**layout, "barmode": "relative"})
 
 
+def battery_figure(result: Result, battery: str) -> go.Figure:
+    """State of charge of one battery: stored energy [MWh] between its limits, the σ margins kept
+    for reserve (MODEL_SPEC §13, as TS11), and charge/discharge power [MW] below."""
+    result = _plan(result)
+    units = {u.name: u for k, u in result.case.units() if k == UnitKind.BATTERY}
+    if battery not in units:
+        raise ValueError(f"unknown battery {battery!r}; the plan has {', '.join(units) or 'none'}")
+    bat = units[battery]
+    rows = result.dispatch[result.dispatch["unit"] == battery].sort_values("t")
+    x = _labels(result)
+    n = len(x)
+    energy = dict(type="scatter", x=x, mode="lines", hovertemplate="%{y:.2f} MWh", **cell_axes(1, 1))
+    limit = {**energy, "line": dict(color=GREY, dash="dash")}
+    power = cell_axes(2, 1)
+    traces = [
+        {**limit, "y": np.full(n, bat.e_min_mwh), "name": "Minimum energy"},
+        {**energy, "y": rows["energy_floor_mwh"].to_numpy(float), "name": "Margin kept for up reserve (σ↑)",
+         "fill": "tonexty", "fillcolor": rgba(PURPLE, 0.25), "line": dict(color=PURPLE, dash="dot")},
+        {**limit, "y": np.full(n, bat.e_max_mwh), "name": "Maximum energy"},
+        {**energy, "y": rows["energy_ceiling_mwh"].to_numpy(float), "name": "Margin kept for down reserve (σ↓)",
+         "fill": "tonexty", "fillcolor": rgba(SKY, 0.25), "line": dict(color=SKY, dash="dot")},
+        {**energy, "y": rows["energy_mwh"].to_numpy(float), "name": "State of charge (end of period)",
+         "mode": "lines+markers", "line": dict(color=VERMILION, width=3)},
+        {**_bar(x, rows["charge_mw"].to_numpy(float), "Charge", GREEN, "%{y:.2f} MW"), **power},
+        {**_bar(x, -rows["discharge_mw"].to_numpy(float), "Discharge (negative)", ORANGE, "%{y:.2f} MW"), **power},
+    ]
+    grid = subplots_layout(2, 1, shared_xaxes=True, row_heights=(0.68, 0.32), vertical_spacing=0.05)
+    layout = _plan_layout(result, f"{battery}: state of charge", None, height=FIGURE_HEIGHT + 120, grid=grid,
+                          x_title=False)
+    _titled(layout, yaxis="Stored energy [MWh]", yaxis2="Power [MW]", xaxis2=CLOCK_TITLE)
+    return go.Figure(data=traces, layout={**layout, "barmode": "relative"})
+
+
 def reserve_share_figure(result: Result) -> go.Figure:
     """Up and down reserve by unit kind per period [MW] and in total over the day [MWh]."""
     result = _plan(result)

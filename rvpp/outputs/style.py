@@ -29,7 +29,8 @@ FIGURE_HEIGHT = 420
 FIGURE_MARGIN = {"t": 100, "b": 84, "l": 80, "r": 30}
 
 # A kind without a colour here is drawn grey (KIND_COLORS.get).
-KIND_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "hpa": GREY}
+KIND_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "hpa": GREY,
+               "battery": YELLOW, "hydro": BLUE}  # biomass: grey
 KIND_LABELS = {kind: info.label for kind, info in KINDS.items()}
 KIND_GROUP_LABELS = {kind: info.group for kind, info in KINDS.items()}
 

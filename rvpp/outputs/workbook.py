@@ -17,7 +17,8 @@ sheet          content
                (not ``solver.mip_start``, a start from an earlier plan)
 ``hpa_tariff`` ``hour`` 0..23, ``tariff_eur_per_mwh``
 ``budgets``    ``source``, ``gamma`` [periods]: per-source overrides of the strategy
-``wind`` ...   one sheet per unit kind (``wind``, ``pv``, ``csp``, ``ed``, ``td``)
+``wind`` ...   one sheet per unit kind (``wind``, ``pv``, ``csp``, ``ed``, ``td``, ``battery``,
+               ``hydro``, ``biomass``)
 ``breakpoints`` ``unit``, ``input_mw_th``, ``efficiency`` of every CSP power block
 ``history``    ``timestamp`` (ISO 8601 with UTC offset) and one column per series
 =============  ==================================================================
@@ -40,7 +41,7 @@ import pandas as pd
 import openpyxl
 
 from ..data.case import Case, parse_case
-from ..data.kinds import KINDS, UNIT_KINDS, UnitKind
+from ..data.kinds import KINDS, PAPER_KINDS, UNIT_KINDS, UnitKind
 from ..data.edits import flatten
 from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, read_file, unzip
 from ..data.history import History
@@ -58,7 +59,7 @@ SECTION_EXAMPLES = {"markets": "markets.kappa", "uncertainty": "uncertainty.wind
                     "provenance": "provenance.price_da.origin"}
 # Parts of a case read from sheets of their own: a row of the ``case`` sheet would be overwritten.
 # (Not budgets.overrides: the writer puts them in both places, and the budgets sheet wins.)
-OWN_SHEETS = {"units": "the sheets wind, pv, csp, ed and td",
+OWN_SHEETS = {"units": f"the sheets {', '.join(UNIT_KINDS[:-1])} and {UNIT_KINDS[-1]}",
               "markets.hpa_tariff_eur_per_mwh": "the sheet 'hpa_tariff'"}
 HOURS_PER_DAY = 24
 SHEET_WIDTH = (10, 40)  # [characters] narrowest and widest column of a written sheet
@@ -83,7 +84,20 @@ UNIT_TEMPLATES: dict[str, dict[str, Any]] = {
     "ed": {"p_min_mw": 5.0, "p_max_mw": 60.0, "e_min_mwh": 600.0, "ramp_up_mw_per_min": 10.0,
            "ramp_dn_mw_per_min": 10.0, "flex_up": 0.1, "flex_dn": 0.1, "series_scale": 1.0},
     "td": {"h_min_mw_th": 5.0, "h_max_mw_th": 70.0, "q_min_mwh_th": 700.0, "series_scale": 1.0},
+    # Beyond the paper (MODEL_SPEC §13): a two-hour battery, a small hydro and a biomass plant.
+    "battery": {"enabled": True, "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 20.0, "p_dis_max_mw": 20.0,
+                "eta_ch": 0.95, "eta_dis": 0.95, "self_discharge_per_h": 0.0, "degradation_eur_per_mwh": 5.0,
+                "ramp_mw_per_min": 20.0, "reserve_share": 1.0},
+    "hydro": {"enabled": True, "p_min_mw": 5.0, "p_max_mw": 30.0, "marginal_cost_eur_per_mwh": 5.0,
+              "startup_cost_eur": 100.0, "shutdown_cost_eur": 0.0, "ramp_up_mw_per_h": 30.0, "ramp_dn_mw_per_h": 30.0,
+              "min_up_h": 2.0, "min_down_h": 2.0, "initial_online": False, "energy_max_mwh": 300.0,
+              "ramp_mw_per_min": 10.0, "reserve_share": 0.5},
+    "biomass": {"enabled": True, "p_min_mw": 5.0, "p_max_mw": 15.0, "marginal_cost_eur_per_mwh": 60.0,
+                "startup_cost_eur": 500.0, "shutdown_cost_eur": 0.0, "ramp_up_mw_per_h": 5.0, "ramp_dn_mw_per_h": 5.0,
+                "min_up_h": 4.0, "min_down_h": 4.0, "initial_online": False, "ramp_mw_per_min": 1.0,
+                "reserve_share": 0.2},
 }
+_DISPATCHABLE_OPTIONAL = ["startup_ramp_mw_per_h", "shutdown_ramp_mw_per_h", "initial_hours_in_status", "p_init_mw"]
 
 
 # ----------------------------------------------------------------------------- unit tables
@@ -97,14 +111,16 @@ def unit_table(case: Case, kind: str) -> pd.DataFrame:
     """
     _check_kind(kind)
     rows = []
-    for unit, data in zip(getattr(case, kind), case.to_data()["units"][kind]):
+    for unit, data in zip(getattr(case, kind), case.to_data()["units"].get(kind, [])):
         row = flatten(data)
         row.pop(BREAKPOINTS, None)
-        row[SERIES_FIELDS[kind]] = unit.column
+        if KINDS[UnitKind(kind)].role is not None:
+            row[SERIES_FIELDS[kind]] = unit.column
         rows.append(row)
     table = pd.DataFrame(rows, columns=unit_columns(kind))
+    template = flatten(UNIT_TEMPLATES[kind])
     empty = [c for c in table.columns if c != "name" and table[c].isna().all()]
-    return table.astype({c: float for c in empty})
+    return table.astype({c: bool if isinstance(template.get(c), bool) else float for c in empty})
 
 
 def unit_columns(kind: str) -> list[str]:
@@ -113,7 +129,11 @@ def unit_columns(kind: str) -> list[str]:
     columns = ["name", *(c for c in flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
     optional = {"wind": ["forecast_series"], "pv": ["forecast_series"],
                 "csp": ["storage.e_init_mwh_th", "solar_field.forecast_series"],
-                "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"]}
+                "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"],
+                "battery": ["e_init_mwh"], "hydro": _DISPATCHABLE_OPTIONAL,
+                "biomass": _DISPATCHABLE_OPTIONAL + ["energy_max_mwh"]}
+    if KINDS[UnitKind(kind)].role is None:  # no series to follow
+        return columns + optional[kind]
     series = SERIES_FIELDS[kind]
     scale_at = columns.index(series.replace("series", "series_scale"))
     columns.insert(scale_at, series)
@@ -127,7 +147,8 @@ def new_unit_row(case: Case, kind: str) -> dict[str, Any]:
     row.pop(BREAKPOINTS, None)
     existing = [u for k, u in case.units() if k == kind]
     row["name"] = next_unit_name(case, kind)
-    row[SERIES_FIELDS[kind]] = existing[0].column if existing else row["name"]
+    if KINDS[UnitKind(kind)].role is not None:
+        row[SERIES_FIELDS[kind]] = existing[0].column if existing else row["name"]
     return row
 
 
@@ -233,7 +254,8 @@ def write_case_workbook(case: Case, target: str | Path | io.BytesIO) -> str | Pa
         tariff.to_excel(writer, sheet_name="hpa_tariff", index=False)
         budgets.to_excel(writer, sheet_name="budgets", index=False)
         for kind in UNIT_KINDS:
-            unit_table(case, kind).to_excel(writer, sheet_name=kind, index=False)
+            if kind in PAPER_KINDS or getattr(case, kind):  # a kind beyond the paper's only when it has units
+                unit_table(case, kind).to_excel(writer, sheet_name=kind, index=False)
         curves.to_excel(writer, sheet_name="breakpoints", index=False)
         history.to_excel(writer, sheet_name="history", index=False)
         for sheet in writer.sheets.values():
@@ -445,6 +467,9 @@ def _units_from_table(kind: str, table: pd.DataFrame) -> list[dict[str, Any]]:
     for row in table.to_dict(orient="records"):
         unit = _unflatten({key: _plain(value) for key, value in row.items() if not _is_empty(value)})
         if not unit:
+            continue
+        if KINDS[UnitKind(kind)].role is None:  # no series to follow
+            units.append(unit)
             continue
         node = unit
         for part in SERIES_FIELDS[kind].split(".")[:-1]:

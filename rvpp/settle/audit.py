@@ -341,7 +341,7 @@ def audit_result(result, tol: float = TOLERANCE, bands: pd.DataFrame | None = No
     if not result.has_plan:
         return [Violation("plan", None, None, float("nan"), f"no plan to audit ({result.status})")]
     return audit_tables(audit_day(result.case, bands), result.market, result.units, result.csp, result.summary(),
-                        tol)
+                        tol, dispatch=result.dispatch)
 
 
 def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list[Violation]:
@@ -359,12 +359,16 @@ def audit_export(case: Case, folder: str | Path, tol: float = TOLERANCE) -> list
         uncertainty=settings["uncertainty"], csp=[c for c in case.csp if c.name in kept],
         budgets={"strategy": summary["strategy"], "mode": summary["budget_mode"],
                  "ties": summary.get("budget_ties", "choose"), "overrides": summary["budgets"]})
-    tables = {name: _read_table(folder / f"{name}.csv") for name in ("market", "units", "csp")}
-    return audit_tables(audit_day(run), tables["market"], tables["units"], tables["csp"], summary, tol)
+    tables = {name: _read_table(folder / f"{name}.csv") for name in ("market", "units", "csp", "dispatch")}
+    return audit_tables(audit_day(run), tables["market"], tables["units"], tables["csp"], summary, tol,
+                        dispatch=tables["dispatch"])
 
 
 def _read_table(path: Path) -> pd.DataFrame:
-    """An exported table; an empty file (e.g. no CSP) reads as an empty frame."""
+    """An exported table; an empty file (e.g. no CSP) or none (a plan written before the table
+    existed) reads as an empty frame."""
+    if not path.exists():
+        return pd.DataFrame()
     try:
         return pd.read_csv(path)
     except pd.errors.EmptyDataError:
@@ -372,9 +376,11 @@ def _read_table(path: Path) -> pd.DataFrame:
 
 
 def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: pd.DataFrame,
-                 summary: dict | None = None, tol: float = TOLERANCE) -> list[Violation]:
+                 summary: dict | None = None, tol: float = TOLERANCE,
+                 dispatch: pd.DataFrame | None = None) -> list[Violation]:
     """Audit plan tables against the day of :func:`audit_day`; with ``summary`` also the
-    budgets it states and the objective."""
+    budgets it states and the objective. ``dispatch`` holds the batteries', hydro and biomass
+    units' rows (MODEL_SPEC §13)."""
     a = _Auditor(tol)
     case, nt = day.case, day.nt
     if len(market) != nt:
@@ -389,6 +395,12 @@ def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: 
             a.fail("units.rows", f"missing or incomplete rows for {kind} {unit.name}", unit.name)
         if kind == UnitKind.CSP and (unit.name not in by_csp or len(by_csp[unit.name]) != nt):
             a.fail("csp.rows", "missing or incomplete csp rows", unit.name)
+    dispatch = pd.DataFrame() if dispatch is None else dispatch
+    by_dispatch = {name: part.sort_values("t").reset_index(drop=True) for name, part in dispatch.groupby("unit")} \
+        if len(dispatch) else {}
+    for kind, unit in _certain_units(case):
+        if unit.name not in by_dispatch or len(by_dispatch[unit.name]) != nt:
+            a.fail("dispatch.rows", f"missing or incomplete dispatch rows for {kind} {unit.name}", unit.name)
     if a.violations:
         return a.violations
 
@@ -398,21 +410,38 @@ def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: 
     _audit_demands(a, day, by_unit)
     for unit in case.csp:
         _audit_csp(a, day, unit, by_unit[unit.name], by_csp[unit.name])
+    for kind, unit in _certain_units(case):
+        a.eq("dispatch.units_p", by_unit[unit.name]["p_mw"].to_numpy(float),
+             by_dispatch[unit.name]["p_mw"].to_numpy(float), unit.name)
+        if kind == UnitKind.BATTERY:
+            _audit_battery(a, day, unit, by_dispatch[unit.name])
+        else:
+            _audit_dispatchable(a, day, unit, by_dispatch[unit.name])
     _audit_budgets(a, day, by_unit, by_csp)
     if summary is not None:
         for name, gamma in summary["budgets"].items():
             if name not in day.sources or gamma != day.sources[name].gamma:
                 expected = day.sources[name].gamma if name in day.sources else "no such source"
                 a.fail("budget.gamma", f"summary states Γ={gamma}, the case gives {expected}", name)
-        _audit_objective(a, day, market, by_unit, by_csp, summary)
+        _audit_objective(a, day, market, by_unit, by_csp, summary, by_dispatch)
     return a.violations
+
+
+def _certain_units(case: Case) -> list:
+    """``(kind, unit)`` of the batteries, hydro and biomass units in the plan (enabled ones)."""
+    return [(kind, unit) for kind, unit in case.units()
+            if kind in (UnitKind.BATTERY, UnitKind.HYDRO, UnitKind.BIOMASS)]
 
 
 def _audit_market(a: _Auditor, day: AuditDay, market: pd.DataFrame) -> None:
     case = day.case
-    generation = sum(u.p_max_mw for u in case.ndres) + sum(c.p_max_mw for c in case.csp)
-    demand = sum(d.p_max_mw for d in case.ed)
-    cap = case.markets.kappa * max(0.0, generation - demand) if case.markets.srm else 0.0
+    batteries = [u for k, u in _certain_units(case) if k == UnitKind.BATTERY]
+    plants = [u for k, u in _certain_units(case) if k != UnitKind.BATTERY]
+    generation = (sum(u.p_max_mw for u in case.ndres) + sum(c.p_max_mw for c in case.csp)
+                  + sum(b.p_dis_max_mw for b in batteries) + sum(g.p_max_mw for g in plants))
+    demand = sum(d.p_max_mw for d in case.ed) + sum(b.p_ch_max_mw for b in batteries)
+    base = generation if case.markets.reserve_base == "installed" else max(0.0, generation - demand)
+    cap = case.markets.kappa * base if case.markets.srm else 0.0
     p, up, dn, hpa = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw", "h_hpa_mw"))
     a.leq("market.trade_upper", p + up, generation)
     a.leq("market.trade_lower", -demand, p - dn)
@@ -443,6 +472,9 @@ def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: d
         for unit in case.ed:
             u = by_unit[unit.name]
             supply -= u["p_mw"].to_numpy() - _activation(s, u["r_up_mw"].to_numpy(), u["r_dn_mw"].to_numpy())
+        for _, unit in _certain_units(case):  # a battery's p is its discharge less its charge
+            u = by_unit[unit.name]
+            supply += u["p_mw"].to_numpy() + _activation(s, u["r_up_mw"].to_numpy(), u["r_dn_mw"].to_numpy())
         a.eq(f"electric_balance[{s}]", supply, p_da + _activation(s, sr_up, sr_dn))
     heat = market["h_hpa_mw"].to_numpy(float).copy()
     for unit in case.csp:
@@ -454,6 +486,98 @@ def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: d
 def _reserve_cap(day: AuditDay, ramp: float, share_cap: float = float("inf")) -> float:
     markets = day.case.markets
     return min(markets.reserve_duration_min * ramp, share_cap) if markets.srm else 0.0
+
+
+def _audit_battery(a: _Auditor, day: AuditDay, bat, d: pd.DataFrame) -> None:
+    """A battery's limits re-derived from MODEL_SPEC §13: modes, reserves by mode, the energy
+    recursion with self-discharge, the day's boundary and the σ-margins behind the reserve."""
+    n, dt = bat.name, day.dt_h
+    ch, dis, e = (d[c].to_numpy(float) for c in ("charge_mw", "discharge_mw", "energy_mwh"))
+    mode = d["charging"].to_numpy(float)
+    ch_up, ch_dn, dis_up, dis_dn = (d[c].to_numpy(float) for c in ("r_ch_up_mw", "r_ch_dn_mw", "r_dis_up_mw",
+                                                                    "r_dis_dn_mw"))
+    up, dn = ch_up + dis_up, ch_dn + dis_dn
+    a.leq("battery.nonnegative", -np.minimum.reduce([ch, dis, ch_up, ch_dn, dis_up, dis_dn]), 0.0, n)
+    a.leq("battery.mode_binary", np.abs(mode * (1 - mode)), 0.0, n)
+    a.leq("battery.charge_ceiling", ch + ch_dn, bat.p_ch_max_mw * mode, n)
+    a.leq("battery.charge_up", ch_up, ch, n)
+    a.leq("battery.discharge_ceiling", dis + dis_up, bat.p_dis_max_mw * (1 - mode), n)
+    a.leq("battery.discharge_dn", dis_dn, dis, n)
+    a.eq("battery.reserve_up_sum", d["r_up_mw"].to_numpy(float), up, n)
+    a.eq("battery.reserve_dn_sum", d["r_dn_mw"].to_numpy(float), dn, n)
+    cap = _reserve_cap(day, bat.ramp_mw_per_min, bat.reserve_share * max(bat.p_ch_max_mw, bat.p_dis_max_mw))
+    a.leq("battery.reserve_up_cap", up, cap, n)
+    a.leq("battery.reserve_dn_cap", dn, cap, n)
+    a.eq("battery.net_output", d["p_mw"].to_numpy(float), dis - ch, n)
+    start = e[-1] if bat.e_init_mwh is None else bat.e_init_mwh
+    before = np.concatenate([[start], e[:-1]])
+    expected = (1 - bat.self_discharge_per_h * dt) * before + bat.eta_ch * ch * dt - dis * dt / bat.eta_dis
+    a.eq("battery.energy_balance", e, expected, n, scale=bat.e_max_mwh)
+    if bat.e_init_mwh is not None:
+        a.leq("battery.energy_end", bat.e_init_mwh, e[-1], n)
+    span = bat.e_max_mwh - bat.e_min_mwh
+    sigma_up, sigma_dn = float(d["sigma_up"].iloc[0]), float(d["sigma_dn"].iloc[0])
+    a.leq("battery.sigma_range", -min(sigma_up, sigma_dn), 0.0, n)
+    a.leq("battery.sigma_range", max(sigma_up, sigma_dn), 1.0, n)
+    a.leq("battery.reserve_energy_up", float(np.sum(up * dt / bat.eta_dis)), sigma_up * span, n, scale=span)
+    a.leq("battery.reserve_energy_dn", float(np.sum(dn * bat.eta_ch * dt)), sigma_dn * span, n, scale=span)
+    a.leq("battery.margin_low", bat.e_min_mwh + sigma_up * span, e, n, scale=bat.e_max_mwh)
+    a.leq("battery.margin_high", e, bat.e_max_mwh - sigma_dn * span, n, scale=bat.e_max_mwh)
+
+
+def _audit_dispatchable(a: _Auditor, day: AuditDay, unit, d: pd.DataFrame) -> None:
+    """A hydro or biomass unit's limits re-derived from MODEL_SPEC §13: output and reserve within
+    commitment, reserve caps, ramps in every activation scenario, minimum up and down times with
+    what carries over, and the day's energy with all up reserve called."""
+    n, dt, nt = unit.name, day.dt_h, day.nt
+    p, up, dn = (d[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw"))
+    on, start, stop = (d[c].to_numpy(float) for c in ("online", "startup", "shutdown"))
+    a.leq("dispatchable.nonnegative", -np.minimum.reduce([p, up, dn]), 0.0, n)
+    a.leq("dispatchable.floor", unit.p_min_mw * on, p - dn, n)
+    a.leq("dispatchable.ceiling", p + up, unit.p_max_mw * on, n)
+    cap = _reserve_cap(day, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
+    a.leq("dispatchable.reserve_up_cap", up, cap, n)
+    a.leq("dispatchable.reserve_dn_cap", dn, cap, n)
+    initial = 1.0 if unit.initial_online else 0.0
+    was_on = np.concatenate([[initial], on[:-1]])
+    a.eq("dispatchable.transition", on - was_on, start - stop, n)
+    a.leq("dispatchable.one_transition", start + stop, 1.0, n)
+
+    def limit(ramp):
+        return unit.p_max_mw if ramp is None else min(ramp * dt, unit.p_max_mw)
+
+    low_before = np.concatenate([[np.nan], (p - dn)[:-1]])
+    high_before = np.concatenate([[np.nan], (p + up)[:-1]])
+    if unit.p_init_mw is not None:
+        low_before[0] = high_before[0] = unit.p_init_mw
+    rows = ~np.isnan(low_before)
+    a.leq("dispatchable.ramp_up", ((p + up) - low_before)[rows],
+          (limit(unit.ramp_up_mw_per_h) * was_on + limit(unit.startup_ramp_mw_per_h) * start)[rows], n)
+    a.leq("dispatchable.ramp_dn", (high_before - (p - dn))[rows],
+          (limit(unit.ramp_dn_mw_per_h) * on + limit(unit.shutdown_ramp_mw_per_h) * stop)[rows], n)
+    up_periods = max(1, int(round(unit.min_up_h / dt)))  # a start is online in its own period
+    down_periods = max(1, int(round(unit.min_down_h / dt)))
+    for t in range(nt):  # every run and every rest lasts its minimum, or reaches the day's end
+        if start[t] > 0.5:
+            a.leq("dispatchable.min_up", 1.0 - on[t:t + up_periods].min(), 0.0, n)
+        if stop[t] > 0.5:
+            a.leq("dispatchable.min_down", on[t:t + down_periods].max(), 0.0, n)
+    if unit.initial_hours_in_status is not None:
+        needed = unit.min_up_h if unit.initial_online else unit.min_down_h
+        held = int(round(max(0.0, needed - unit.initial_hours_in_status) / dt))
+        a.eq("dispatchable.initial_status", on[:held], initial, n)
+    if unit.energy_max_mwh is not None:
+        a.leq("dispatchable.energy", float(np.sum((p + up) * dt)), unit.energy_max_mwh, n,
+              scale=unit.energy_max_mwh)
+
+
+def _certain_cost(kind, unit, d: pd.DataFrame, dt: float) -> float:
+    """A battery's wear, or a hydro or biomass unit's marginal, start-up and shut-down costs [EUR]."""
+    if kind == UnitKind.BATTERY:
+        return float(np.sum(unit.degradation_eur_per_mwh * d["discharge_mw"].to_numpy(float) * dt))
+    return float(np.sum(unit.marginal_cost_eur_per_mwh * d["p_mw"].to_numpy(float) * dt)
+                 + unit.startup_cost_eur * d["startup"].to_numpy(float).sum()
+                 + unit.shutdown_cost_eur * d["shutdown"].to_numpy(float).sum())
 
 
 def _audit_ndres(a: _Auditor, day: AuditDay, by_unit: dict) -> None:
@@ -645,7 +769,7 @@ def price_exposures(day, market: pd.DataFrame) -> dict[str, np.ndarray]:
 
 
 def _audit_objective(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: dict, by_csp: dict,
-                     summary: dict) -> None:
+                     summary: dict, by_dispatch: dict) -> None:
     case, dt = day.case, day.dt_h
     da, up, dn = (day.sources[n].nominal for n in ("price_da", "price_sr_up", "price_sr_dn"))
     revenue_dam = float(np.sum(da * market["p_da_mw"].to_numpy(float) * dt))
@@ -656,6 +780,7 @@ def _audit_objective(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: 
     opex += sum(float(np.sum(c.om_eur_per_mwh * (by_csp[c.name]["e_none_mw"].to_numpy(float)
                                                  + by_csp[c.name]["heat_to_td_mw"].to_numpy(float)) * dt))
                 for c in case.csp)
+    opex += sum(_certain_cost(kind, unit, by_dispatch[unit.name], dt) for kind, unit in _certain_units(case))
     exposures = price_exposures(day, market)
     protection = {name: protection_exact(exposures[name], day.sources[name].gamma) for name in exposures}
     keys = {"price_da": "da", "price_sr_up": "sr_up", "price_sr_dn": "sr_dn"}

@@ -430,7 +430,9 @@ def csp_dispatch(b: pyo.Block, case: Case) -> dict[str, dict[str, list]]:
 
 
 def end_state(b: pyo.Block, case: Case, dt_h: float) -> dict[str, dict]:
-    """The state a settled day hands to the next, per CSP (the next day's initial conditions).
+    """The state a settled day hands to the next, per CSP, battery, hydro and biomass unit (the
+    next day's initial conditions). A battery hands ``e_mwh`` [MWh]; a hydro or biomass unit
+    ``online``, ``status_h`` as a turbine's, and ``p_mw`` [MW], its output in the last period.
 
     ``e_mwh_th``: storage energy at the last period [MWh_th] (solver round-off clipped to
     the storage limits); ``online``: the turbine's status in the last period; ``status_h``:
@@ -450,6 +452,21 @@ def end_state(b: pyo.Block, case: Case, dt_h: float) -> dict[str, dict]:
         energy = float(pyo.value(c.e_ts[b.T.last()]))
         state[csp.name] = {"e_mwh_th": min(max(energy, ts.e_min_mwh_th), ts.e_max_mwh_th),
                            "online": bool(last), "status_h": hours}
+    for kind, unit in case.units():  # MODEL_SPEC §13: a battery's energy, a hydro or biomass unit's status
+        if kind == UnitKind.BATTERY:
+            energy = float(pyo.value(b.battery[unit.name].e[b.T.last()]))
+            state[unit.name] = {"e_mwh": min(max(energy, unit.e_min_mwh), unit.e_max_mwh)}
+        elif kind in (UnitKind.HYDRO, UnitKind.BIOMASS):
+            g = b.dispatchable[unit.name]
+            online = [round(float(pyo.value(g.online[t]))) for t in b.T]
+            last = online[-1]
+            run = next((k for k, value in enumerate(reversed(online)) if value != last), len(online))
+            hours = run * dt_h
+            if run == len(online) and bool(last) == unit.initial_online:
+                hours = None if unit.initial_hours_in_status is None else unit.initial_hours_in_status + hours
+            output = float(pyo.value(g.p[b.T.last()])) if last else 0.0
+            state[unit.name] = {"online": bool(last), "status_h": hours,
+                                "p_mw": min(max(output, unit.p_min_mw), unit.p_max_mw) if last else 0.0}
     return state
 
 

@@ -7,7 +7,7 @@ import pandas as pd
 import pyomo.environ as pyo
 
 from ..data.history import PRICE_COLUMNS
-from ..data.kinds import UnitKind
+from ..data.kinds import DISPATCHABLE_KINDS, KINDS, UnitKind
 from ..model.blocks import unit_block
 from ..data.scenarios import Scenario
 from ..uncertainty.problem import Problem
@@ -58,7 +58,7 @@ def extract(m: pyo.ConcreteModel, problem: Problem) -> dict:
     units = _units_table(m, problem, T)
     csp = _csp_table(m, problem, T)
     return {"parts": parts, "protection_eur": protection, "market": market, "units": units, "csp": csp,
-            "flexibility": flexibility_table(units, case)}
+            "dispatch": _dispatch_table(m, problem, T), "flexibility": flexibility_table(units, case)}
 
 
 def _period_columns(problem: Problem) -> dict:
@@ -102,8 +102,14 @@ def _units_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
 
     for kind, unit in problem.case.units():
         name = unit.name
-        src = problem.sources[name]
         b = unit_block(m, kind, name)
+        if KINDS[kind].role is None:  # a certain unit: no band; a battery's p is its net output
+            empty = np.full(len(T), np.nan)
+            p = _series(b.p_dis, T) - _series(b.p_ch, T) if kind == UnitKind.BATTERY else _series(b.p, T)
+            add(kind, name, p, _series(b.r_up, T), _series(b.r_dn, T), empty, empty, empty,
+                np.full(len(T), pd.NA, dtype=object))
+            continue
+        src = problem.sources[name]
         if kind == UnitKind.CSP:
             empty = np.full(len(T), np.nan)
             add(kind, name, _series(b.e, [(Scenario.NONE, t) for t in T]), _series(b.r_up, T),
@@ -122,6 +128,45 @@ def _units_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     table = pd.DataFrame({**base, **{key: np.concatenate(parts) for key, parts in columns.items()}})
     table["chi"] = table["chi"].astype("Int64")
     return table
+
+
+def _dispatch_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
+    """One row per battery, hydro or biomass unit and period (MODEL_SPEC §13): a battery's charge,
+    discharge, energy and reserve by mode with its σ-margins; a hydro or biomass unit's output,
+    reserves and commitment. Fields a kind lacks are empty."""
+    frames = []
+    base = _period_columns(problem)
+    empty, missing = np.full(len(T), np.nan), pd.array([pd.NA] * len(T), dtype="Int64")
+    for kind, unit in problem.case.units():
+        if kind == UnitKind.BATTERY:
+            b, span = m.battery[unit.name], unit.e_max_mwh - unit.e_min_mwh
+            sigma_up, sigma_dn = _v(b.sigma_up), _v(b.sigma_dn)
+            frames.append(pd.DataFrame({
+                **base, "unit": unit.name, "kind": str(kind),
+                "p_mw": _series(b.p_dis, T) - _series(b.p_ch, T),
+                "r_up_mw": _series(b.r_up, T), "r_dn_mw": _series(b.r_dn, T),
+                "charge_mw": _series(b.p_ch, T), "discharge_mw": _series(b.p_dis, T),
+                "energy_mwh": _series(b.e, T), "charging": _integers(b.charging, T),
+                "r_ch_up_mw": _series(b.r_ch_up, T), "r_ch_dn_mw": _series(b.r_ch_dn, T),
+                "r_dis_up_mw": _series(b.r_dis_up, T), "r_dis_dn_mw": _series(b.r_dis_dn, T),
+                "sigma_up": sigma_up, "sigma_dn": sigma_dn,
+                "energy_floor_mwh": unit.e_min_mwh + sigma_up * span,
+                "energy_ceiling_mwh": unit.e_max_mwh - sigma_dn * span,
+                "online": missing, "startup": missing, "shutdown": missing}))
+        elif kind in DISPATCHABLE_KINDS:
+            b = m.dispatchable[unit.name]
+            frames.append(pd.DataFrame({
+                **base, "unit": unit.name, "kind": str(kind),
+                "p_mw": _series(b.p, T), "r_up_mw": _series(b.r_up, T), "r_dn_mw": _series(b.r_dn, T),
+                "charge_mw": empty, "discharge_mw": empty, "energy_mwh": empty, "charging": missing,
+                "r_ch_up_mw": empty, "r_ch_dn_mw": empty, "r_dis_up_mw": empty, "r_dis_dn_mw": empty,
+                "sigma_up": empty, "sigma_dn": empty, "energy_floor_mwh": empty, "energy_ceiling_mwh": empty,
+                "online": _integers(b.online, T), "startup": _integers(b.startup, T),
+                "shutdown": _integers(b.shutdown, T)}))
+    if not frames:
+        return pd.DataFrame()
+    table = pd.concat(frames, ignore_index=True)
+    return table.astype({column: "Int64" for column in ("charging", "online", "startup", "shutdown")})
 
 
 def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:

@@ -6,6 +6,8 @@ Column names of the tables are a public contract (``docs/exports.md``):
 * ``units``: one row per unit and period (``kind`` wind|pv|csp|ed|td; td values are
   heat [MW_th]; csp rows carry the electrical output and reserves);
 * ``csp``: one row per CSP and period with the thermal side;
+* ``dispatch``: one row per battery, hydro or biomass unit and period: a battery's charge,
+  discharge and state of charge with its reserve margins, a unit's commitment;
 * ``flexibility``: reserve energy per unit kind (MODEL_SPEC §11, paper Table 9).
 """
 
@@ -47,6 +49,7 @@ class Result:
     market: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
     units: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
     csp: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
+    dispatch: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
     flexibility: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
 
     @property
@@ -119,7 +122,7 @@ def flexibility_table(units: pd.DataFrame, case) -> pd.DataFrame:
     else:
         kinds, r_up, r_dn = (units[c].to_numpy() for c in ("kind", "r_up_mw", "r_dn_mw"))
     for kind in FLEX_KINDS:
-        capacity = sum(u.p_max_mw for u in getattr(case, kind))
+        capacity = sum(u.p_max_mw for k, u in case.units() if k == kind)
         if capacity == 0:
             continue
         rows_of_kind = kinds == kind

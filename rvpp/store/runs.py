@@ -41,7 +41,7 @@ from .engine import (LABEL_LENGTH, StoreError, connect, decoding, drop_unused_bl
 from ..outputs.export import write_plan
 from ..uncertainty.problem import prepare
 
-TABLES = ("market", "units", "csp", "flexibility")
+TABLES = ("market", "units", "csp", "dispatch", "flexibility")
 SAVE_ATTEMPTS = 5  # a save retries when a concurrent save took the same label
 # A label is one line shown in tables, messages and exported files: control characters (as in a case's
 # names) and the bidirectional overrides and isolates (which make "abc" read "cba") are refused;
@@ -246,7 +246,9 @@ def _result_from(case: Case, data: Mapping[str, Any], tables: bytes | None) -> R
     frames = {}
     if tables:
         with zipfile.ZipFile(io.BytesIO(tables)) as archive:
-            frames = {name: pd.read_parquet(io.BytesIO(archive.read(f"{name}.parquet"))) for name in TABLES}
+            stored = set(archive.namelist())  # a run saved before a table existed has none of it
+            frames = {name: pd.read_parquet(io.BytesIO(archive.read(f"{name}.parquet"))) for name in TABLES
+                      if f"{name}.parquet" in stored}
     fields = {k: data[k] for k in ("termination", "message", "objective_eur", "bound_eur", "mip_gap", "build_s",
                                    "solve_s", "extract_s", "parts", "protection_eur")}
     return Result(problem=prepare(case), status=Outcome(data["status"]), **fields, **frames)

@@ -1,0 +1,208 @@
+"""Batteries, hydro and biomass units (MODEL_SPEC §13) on days worked out by hand.
+
+Every expected profit below is derived in the comments from the prices and the unit's
+parameters, not from a solve.
+"""
+
+import numpy as np
+import pytest
+
+from rvpp.settle.audit import audit_result
+from rvpp.solving.plan import solve_problem
+from tests.factories import tiny_case, tiny_problem
+
+NT = 24
+HOURS = np.arange(1, NT + 1)
+
+
+def battery(name="B", **extra):
+    return {"name": name, "e_min_mwh": 0.0, "e_max_mwh": 9.0, "p_ch_max_mw": 10.0, "p_dis_max_mw": 10.0,
+            "eta_ch": 0.9, "eta_dis": 0.9, "ramp_mw_per_min": 10.0, **extra}
+
+
+def dispatchable(name, **extra):
+    return {"name": name, "p_max_mw": 30.0, "ramp_mw_per_min": 10.0, **extra}
+
+
+def solved(case, prices):
+    problem = tiny_problem(case, price_da=(prices, prices, prices))
+    result = solve_problem(problem)
+    assert result.status == "optimal", result.message
+    assert audit_result(result, bands=problem.bands) == []
+    return result
+
+
+def test_a_battery_charges_at_the_low_price_and_discharges_at_the_high_one():
+    # Hour 1 at 10 EUR/MWh, hour 2 at 100, every other hour 45; wear 50 EUR per MWh discharged.
+    # A MWh bought returns 0.9 x 0.9 = 0.81 MWh. 10 -> 100: 81 - 10 - 0.81 x 50 = +30.5 per MWh bought;
+    # 10 -> 45: 36.45 - 10 - 40.5 < 0; 45 -> 100: 81 - 45 - 40.5 < 0. So only hour 1 charges: 10 MW
+    # stores 9 MWh (= E max, from an empty start on the cyclic day), hour 2 delivers 9 x 0.9 = 8.1 MW.
+    # Profit = -10 x 10 + 100 x 8.1 - 50 x 8.1 = 305 EUR.
+    prices = np.where(HOURS == 1, 10.0, np.where(HOURS == 2, 100.0, 45.0))
+    result = solved(tiny_case(battery_units=[battery(degradation_eur_per_mwh=50.0)]), prices)
+    assert result.objective_eur == pytest.approx(305.0, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state.loc[1, "charge_mw"] == pytest.approx(10.0) and state.loc[1, "energy_mwh"] == pytest.approx(9.0)
+    assert state.loc[2, "discharge_mw"] == pytest.approx(8.1) and state.loc[2, "energy_mwh"] == pytest.approx(0.0)
+    assert np.allclose(result.market["p_da_mw"].to_numpy()[:2], [-10.0, 8.1])
+
+
+def test_a_battery_cannot_burn_energy_at_a_negative_price():
+    # Price -20 all day, no wear. Energy bought in total C returns 0.81 C (cyclic day), so profit is
+    # 20 x (C - 0.81 C) = 3.8 C. Each hour either charges (mode binary) at <= 10 MW, storing <= 9 MWh,
+    # or discharges at most what is stored (<= E max = 9 MWh): 0.9 C <= 9 x (discharging hours) and
+    # C <= 10 x (charging hours), so C <= 10 x 12 = 120 and profit = 3.8 x 120 = 456 EUR. Charging and
+    # discharging at once (no binary) would earn 20 x (10 - 8.1) x 24 = 912.
+    result = solved(tiny_case(battery_units=[battery()]), np.full(NT, -20.0))
+    assert result.objective_eur == pytest.approx(456.0, abs=1e-6)
+    state = result.dispatch
+    assert ((state["charge_mw"] < 1e-6) | (state["discharge_mw"] < 1e-6)).all()
+
+
+def test_a_battery_with_self_discharge_sells_what_would_decay_and_refills_at_the_last_hour():
+    # Starts at 9 MWh, must end at >= 9 MWh, loses 10 % per hour, price 10 all day, no wear.
+    # A MWh kept from midnight is 0.9^24 = 0.08 MWh at the end (worth 0.08 x 10 / 0.9 = 0.89 EUR of
+    # charging saved); sold in hour 1 it is 0.9 (decay) x 0.9 (η_dis) = 0.81 MWh at 10 = 8.1 EUR. So hour 1
+    # sells all: e[1] = 0.9 x 9 - p_dis / 0.9 = 0 gives p_dis = 7.29 MW (72.9 EUR); the
+    # refill is as late as it can be (a MWh charged earlier decays): hour 24 charges 10 MW, storing 9 MWh
+    # (-100 EUR). Profit = 72.9 - 100 = -27.1 EUR.
+    result = solved(tiny_case(battery_units=[battery(e_init_mwh=9.0, self_discharge_per_h=0.1)]), np.full(NT, 10.0))
+    assert result.objective_eur == pytest.approx(-27.1, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state.loc[1, "discharge_mw"] == pytest.approx(7.29, abs=1e-6)
+    assert state.loc[24, "charge_mw"] == pytest.approx(10.0, abs=1e-6)
+    assert state.loc[24, "energy_mwh"] == pytest.approx(9.0, abs=1e-6)
+
+
+def test_a_hydro_day_at_its_energy_limit_runs_in_the_dearest_hours():
+    # 0-30 MW, 5 EUR/MWh, 100 MWh of water. Hours 10-12 at 80 EUR/MWh, the rest at 50: the water
+    # goes first to the three dear hours (3 x 30 = 90 MWh), the last 10 MWh to one hour at 50.
+    # Profit = 90 x (80 - 5) + 10 x (50 - 5) = 7,200 EUR; the limit binds: 100 MWh produced.
+    prices = np.where((HOURS >= 10) & (HOURS <= 12), 80.0, 50.0)
+    unit = dispatchable("HY", marginal_cost_eur_per_mwh=5.0, energy_max_mwh=100.0)
+    result = solved(tiny_case(hydro_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(7200.0, abs=1e-6)
+    output = result.dispatch.set_index("t")["p_mw"]
+    assert output.sum() == pytest.approx(100.0) and np.allclose(output.loc[[10, 11, 12]], 30.0)
+
+
+def test_a_hydro_limit_holds_with_all_up_reserve_called():
+    # As above with SRM at 0 EUR/MW: reserve earns nothing but must not break Σ(p + r↑)·dt ≤ Emax.
+    prices = np.where((HOURS >= 10) & (HOURS <= 12), 80.0, 50.0)
+    unit = dispatchable("HY", marginal_cost_eur_per_mwh=5.0, energy_max_mwh=100.0)
+    result = solve_problem(tiny_problem(tiny_case(hydro_units=[unit], srm=True), price_da=(prices, prices, prices),
+                                        price_sr_up=(1.0, 1.0, 1.0)))
+    assert result.status == "optimal"
+    state = result.dispatch
+    assert (state["p_mw"] + state["r_up_mw"]).sum() <= 100.0 + 1e-6
+
+
+def biomass(**extra):
+    return dispatchable("BIO", p_min_mw=5.0, p_max_mw=10.0, marginal_cost_eur_per_mwh=30.0, **extra)
+
+
+def test_a_biomass_unit_may_not_restart_within_its_minimum_down_time():
+    # Online at midnight, 5-10 MW at 30 EUR/MWh. Prices: hour 1 at 50, hours 2-3 at 0, hour 4 at 200,
+    # then 0. Staying on through hours 2-3 at 5 MW: 10 x 20 - 2 x 5 x 30 + 10 x 170 = 1,600 EUR, then
+    # off. Stopping in hour 2 forbids a start before hour 6 (4 h down): only 200 EUR. Without the
+    # minimum down time it would stop for hours 2-3 and restart at hour 4: 200 + 1,700 = 1,900 EUR.
+    prices = np.select([HOURS == 1, HOURS == 4], [50.0, 200.0], 0.0)
+    held = solved(tiny_case(biomass_units=[biomass(initial_online=True, min_down_h=4.0)]), prices)
+    assert held.objective_eur == pytest.approx(1600.0, abs=1e-6)
+    assert held.dispatch.set_index("t")["online"].loc[[1, 2, 3, 4]].tolist() == [1, 1, 1, 1]
+    free = solved(tiny_case(biomass_units=[biomass(initial_online=True)]), prices)
+    assert free.objective_eur == pytest.approx(1900.0, abs=1e-6)
+
+
+def test_a_down_time_begun_before_the_day_carries_over():
+    # Offline for 1 h at midnight, 4 h minimum down: hours 1-3 stay off although they pay 200 EUR/MWh;
+    # hour 4 (200) runs at 10 MW: 10 x (200 - 30) = 1,700 EUR; then prices 0: off (no minimum up time).
+    prices = np.where(HOURS <= 4, 200.0, 0.0)
+    unit = biomass(initial_online=False, initial_hours_in_status=1.0, min_down_h=4.0)
+    result = solved(tiny_case(biomass_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(1700.0, abs=1e-6)
+    assert result.dispatch.set_index("t")["online"].loc[[1, 2, 3, 4, 5]].tolist() == [0, 0, 0, 1, 0]
+
+
+def test_ramps_limit_a_start_and_the_rise_after_it():
+    # 0-30 MW, start-up ramp 10 MW/h, ramp up 10 MW/h, price 50 in hours 1-3 and 0 after, cost 5:
+    # from offline the unit reaches 10, 20, 30 MW: profit 45 x (10 + 20 + 30) = 2,700 EUR.
+    prices = np.where(HOURS <= 3, 50.0, 0.0)
+    unit = dispatchable("HY", marginal_cost_eur_per_mwh=5.0, startup_ramp_mw_per_h=10.0, ramp_up_mw_per_h=10.0,
+                        shutdown_ramp_mw_per_h=30.0, ramp_dn_mw_per_h=30.0, p_init_mw=0.0)
+    result = solved(tiny_case(hydro_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(2700.0, abs=1e-6)
+    assert np.allclose(result.dispatch.set_index("t")["p_mw"].loc[[1, 2, 3]], [10.0, 20.0, 30.0])
+
+
+def test_a_disabled_unit_stays_in_the_case_and_out_of_the_plan():
+    case = tiny_case(battery_units=[battery()], hydro_units=[dispatchable("HY", enabled=False)])
+    assert [u.name for _, u in case.all_units()] == ["B", "HY"]
+    result = solved(case, np.full(NT, 50.0))
+    assert set(result.dispatch["unit"]) == {"B"} and set(result.units["unit"]) == {"B"}
+
+
+def test_the_installed_reserve_base_counts_supply_alone():
+    # Hydro 0-30 MW and a demand of 10-20 MW, κ = 0.3, energy worth 0 and reserve 10 EUR/MW: "net" caps each band
+    # at 0.3 x (30 - 20) = 3 MW, "installed" at 0.3 x 30 = 9 MW.
+    from tests.factories import demand
+    unit = dispatchable("HY", ramp_mw_per_min=10.0, reserve_share=1.0)
+    for base, cap in (("net", 3.0), ("installed", 9.0)):
+        case = tiny_case(hydro_units=[unit], ed_units=[demand(p_min=10.0, p_max=20.0)], srm=True)
+        case = case.replace(markets={"reserve_base": base})
+        problem = tiny_problem(case, D=(10.0, 10.0, 10.0), price_da=(0.0, 0.0, 0.0),
+                               price_sr_up=(10.0, 10.0, 10.0), price_sr_dn=(10.0, 10.0, 10.0))
+        result = solve_problem(problem)
+        assert result.status == "optimal"
+        assert audit_result(result, bands=problem.bands) == []
+        assert np.allclose(result.market["r_sr_up_mw"], cap) and np.allclose(result.market["r_sr_dn_mw"], cap)
+
+
+def test_the_audit_finds_a_battery_that_breaks_its_energy_balance_or_its_mode():
+    prices = np.where(HOURS == 1, 10.0, np.where(HOURS == 2, 100.0, 45.0))
+    result = solved(tiny_case(battery_units=[battery(degradation_eur_per_mwh=50.0)]), prices)
+    from rvpp.settle.audit import audit_day, audit_tables
+    day = audit_day(result.case, result.problem.bands)
+    tampered = result.dispatch.copy()
+    tampered.loc[tampered["t"] == 2, "energy_mwh"] += 1.0
+    checks = {v.check for v in audit_tables(day, result.market, result.units, result.csp, result.summary(),
+                                            dispatch=tampered)}
+    assert "battery.energy_balance" in checks
+    tampered = result.dispatch.copy()
+    tampered.loc[tampered["t"] == 1, "discharge_mw"] = 1.0  # discharging while charging
+    checks = {v.check for v in audit_tables(day, result.market, result.units, result.csp, result.summary(),
+                                            dispatch=tampered)}
+    assert "battery.discharge_ceiling" in checks
+
+
+def test_the_audit_finds_a_restart_within_the_minimum_down_time():
+    prices = np.select([HOURS == 1, HOURS == 4], [50.0, 200.0], 0.0)
+    result = solved(tiny_case(biomass_units=[biomass(initial_online=True)]), prices)  # stops and restarts
+    held = tiny_case(biomass_units=[biomass(initial_online=True, min_down_h=4.0)])
+    from rvpp.settle.audit import audit_day, audit_tables
+    checks = {v.check for v in audit_tables(audit_day(held, result.problem.bands), result.market, result.units,
+                                            result.csp, dispatch=result.dispatch)}
+    assert "dispatchable.min_down" in checks
+
+
+def test_state_carries_a_battery_energy_and_a_unit_status_to_the_next_day():
+    from rvpp.backtest.state import initial_state, with_state
+    case = tiny_case(battery_units=[battery(e_init_mwh=3.0)],
+                     biomass_units=[biomass(min_up_h=4.0, initial_online=False)])
+    assert initial_state(case) == {"B": {"e_mwh": 3.0}, "BIO": {"online": False, "status_h": None, "p_mw": None}}
+    nxt = with_state(case, {"B": {"e_mwh": 7.5}, "BIO": {"online": True, "status_h": 2.0, "p_mw": 8.0}})
+    assert nxt.battery[0].e_init_mwh == 7.5
+    unit = nxt.biomass[0]
+    assert (unit.initial_online, unit.initial_hours_in_status, unit.p_init_mw) == (True, 2.0, 8.0)
+    assert unit.initial_periods(1.0) == (2, 0)  # 4 h minimum up, 2 h done: 2 more periods online
+
+
+def test_the_state_of_charge_chart_draws_the_battery_plan():
+    from rvpp.outputs.plots import battery_figure
+    prices = np.where(HOURS == 1, 10.0, np.where(HOURS == 2, 100.0, 45.0))
+    result = solved(tiny_case(battery_units=[battery(degradation_eur_per_mwh=50.0)]), prices)
+    figure = battery_figure(result, "B")
+    charge = next(trace for trace in figure.data if trace.name == "State of charge (end of period)")
+    assert list(charge.y[:3]) == pytest.approx([9.0, 0.0, 0.0])  # charged in hour 1, emptied in hour 2
+    with pytest.raises(ValueError, match="unknown battery 'X'"):
+        battery_figure(result, "X")

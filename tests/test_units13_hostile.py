@@ -1,0 +1,69 @@
+"""Bad batteries, hydro and biomass units are refused by name before any solve (MODEL_SPEC §13)."""
+
+import pytest
+
+from rvpp.data.case import parse_case
+from rvpp.errors import CaseError
+from tests.factories import tiny_case
+
+
+def refused(**units) -> list[str]:
+    data = tiny_case(battery_units=[{"name": "OK", "e_max_mwh": 10.0, "p_ch_max_mw": 5.0, "p_dis_max_mw": 5.0,
+                                     "ramp_mw_per_min": 1.0}]).to_data()
+    data["units"].update(units)
+    with pytest.raises(CaseError) as info:
+        parse_case(data, tiny_case(battery_units=[{"name": "OK", "e_max_mwh": 10.0, "p_ch_max_mw": 5.0,
+                                                   "p_dis_max_mw": 5.0, "ramp_mw_per_min": 1.0}]).history)
+    return info.value.problems
+
+
+BAT = {"name": "B1", "e_max_mwh": 40.0, "p_ch_max_mw": 10.0, "p_dis_max_mw": 10.0, "ramp_mw_per_min": 5.0}
+HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
+
+
+@pytest.mark.parametrize("units, message", [
+    ({"battery": [{**BAT, "e_min_mwh": 50.0}]}, 'battery "B1": e_min_mwh=50 must be < e_max_mwh=40'),
+    ({"battery": [{**BAT, "e_init_mwh": 45.0}]}, 'battery "B1": e_init_mwh=45 must lie in [e_min_mwh=0, e_max_mwh=40]'),
+    ({"battery": [{**BAT, "eta_ch": 0.0}]}, 'battery "B1": eta_ch=0 must be > 0'),
+    ({"battery": [{**BAT, "eta_dis": 1.2}]}, 'battery "B1": eta_dis=1.2 must be <= 1'),
+    ({"battery": [{**BAT, "self_discharge_per_h": 1.0}]}, 'battery "B1": self_discharge_per_h=1 must be < 1'),
+    ({"hydro": [{**HY, "energy_max_mwh": 10.0, "min_up_h": 4.0}]},
+     'hydro "H1": energy_max_mwh=10 is below p_min_mw x min_up_h = 5 MW x 4 h = 20 MWh: once started, the unit '
+     "could not run its minimum up time at its minimum output"),
+    ({"hydro": [{**HY, "energy_max_mwh": 4.0}]},
+     'hydro "H1": energy_max_mwh=4 is below one period at p_min_mw: 5 MW x dt_h=1 h = 5 MWh; the unit could '
+     "never run"),
+    ({"biomass": [{**HY, "min_up_h": 25.0}]}, 'biomass "H1": min_up_h=25 must be <= 24'),
+    ({"biomass": [{**HY, "min_down_h": 30.0}]}, 'biomass "H1": min_down_h=30 must be <= 24'),
+    ({"hydro": [{**HY, "min_up_h": 1.5}]}, 'hydro "H1": min_up_h=1.5 must be a multiple of dt_h=1'),
+    ({"hydro": [{**HY, "p_init_mw": 3.0}]}, 'hydro "H1": p_init_mw=3 must be 0 when initial_online is false'),
+    ({"hydro": [{**HY, "p_min_mw": 40.0}]}, 'hydro "H1": p_min_mw=40 must be <= p_max_mw=30'),
+    ({"hydro": [{**HY, "name": "OK"}]}, 'hydro "OK": name is used by more than one unit; names must be unique'),
+    ({"biomass": [HY, {**HY, "enabled": False}]},
+     'biomass "H1": name is used by more than one unit; names must be unique'),
+])
+def test_bad_units_are_refused_by_name(units, message):
+    problems = refused(**units)
+    assert any(p.startswith(message) for p in problems), problems
+
+
+def test_a_refused_case_writes_nothing(tmp_path):
+    from rvpp.data.case_yaml import load_case
+    import yaml
+    case = tiny_case(battery_units=[BAT])
+    data = case.to_data()
+    data["units"]["battery"][0]["e_min_mwh"] = 99.0
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump({**data, "history": "history.csv"}))
+    case.history.frame.reset_index(names="timestamp").to_csv(tmp_path / "history.csv", index=False)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(CaseError, match="e_min_mwh=99 must be < e_max_mwh=40"):
+        load_case(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_the_fuzz_base_with_the_new_units_loads(paper_case):
+    # the unmutated base of the fuzzed case model must itself be valid, or every mutation is refused
+    from tests.test_fuzz_case import RAW_NEW_UNITS
+    case = parse_case(RAW_NEW_UNITS, paper_case.history)
+    assert [u.name for _, u in case.units()][-2:] == ["BAT1", "HY1"]  # BIO1 is disabled
+    assert [u.name for _, u in case.all_units()][-3:] == ["BAT1", "HY1", "BIO1"]
