@@ -230,7 +230,7 @@ def _production_band(forecast: pd.DataFrame, where: str) -> Band:
 def _middle(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The midpoint of a one-sided band, to the digits the history keeps (rvpp does not use the
     median of these series: their nominal value is an end of the band)."""
-    return np.array([float(f"{v:.{CSV_DIGITS}g}") for v in (lo + hi) / 2])
+    return np.array([float(f"{value:.{CSV_DIGITS}g}") for value in (lo + hi) / 2])
 
 
 def _price_bands(book: Workbook) -> dict[str, Band]:
@@ -255,13 +255,14 @@ def _window(series: dict[str, Band], date: dt.date) -> History:
             raise WorkbookError(sheet, f"{where} period T{t}",
                                 f"the deviation makes the band's upper end {hi[t - 1]:g} lie below its lower end "
                                 f"{lo[t - 1]:g}; deviations must be >= 0")
-        days = np.stack([lo, lo, mid, mid, hi, hi])  # [day, hour]
-        for value in days.ravel():
-            if not math.isclose(float(f"{value:.{CSV_DIGITS}g}"), value, rel_tol=1e-9, abs_tol=1e-9):
+        days = np.stack([lo, lo, mid, mid, hi, hi]).ravel()  # [day, hour]
+        written = np.array([float(f"{value:.{CSV_DIGITS}g}") for value in days])  # as the history CSV keeps them
+        for value, kept in zip(days, written, strict=True):
+            if not math.isclose(kept, value, rel_tol=1e-9, abs_tol=1e-9):
                 raise WorkbookError(sheet, where,
                                     f"value {value!r} needs more than {CSV_DIGITS} significant digits; the case's "
-                                    "history keeps 6, so its band would not be the workbook's")
-        columns[column] = days.ravel()
+                                    f"history keeps {CSV_DIGITS}, so its band would not be the workbook's")
+        columns[column] = written
     start = pd.Timestamp(date - dt.timedelta(days=WINDOW_DAYS), tz=TIMEZONE)
     stamps = pd.date_range(start, periods=WINDOW_DAYS * 24, freq="h")
     frame = pd.DataFrame({"timestamp": stamps, **columns})

@@ -28,12 +28,14 @@ from __future__ import annotations
 
 import math
 import re
+import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
 import openpyxl
+from openpyxl.utils.exceptions import InvalidFileException
 import pandas as pd
 from openpyxl.utils import column_index_from_string, get_column_letter
 
@@ -363,7 +365,11 @@ def read_workbook(path: str | Path) -> Workbook:
     Refuses (:class:`WorkbookError`) a missing sheet or column, a unit named twice, a unit
     without its data, a period set other than T1..T24 and a cell that is not a number.
     """
-    book = openpyxl.load_workbook(Path(path), read_only=True, data_only=True)
+    path = Path(path)
+    try:
+        book = openpyxl.load_workbook(path, read_only=True, data_only=True)
+    except (zipfile.BadZipFile, InvalidFileException, KeyError) as exc:
+        raise DataImportError(f'"{path.name}" cannot be read as an Excel workbook (.xlsx): {exc}') from None
     try:
         sheets = _Sheets(book)
         units = _unit_list(sheets)
