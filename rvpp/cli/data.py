@@ -7,10 +7,10 @@ import datetime as dt
 import json
 import sys
 
-from ..data.case import ISO_DATE, PRICE_MODELS
+from ..data.case import PRICE_MODELS
 from ..data.files import check_replaceable
 from ..uncertainty.quality import SERIES
-from .options import DEFAULT_CASE, Number, path_option
+from .options import DEFAULT_CASE, Number, date_option, path_option
 
 DEFAULT_TEMPLATE = DEFAULT_CASE
 
@@ -74,7 +74,7 @@ def add_data_commands(commands) -> None:
                     "workbook's bands. docs/gams-tool.md lists every mapping and every model difference.")
     workbook.add_argument("workbook", type=path_option, metavar="XLSX")
     workbook.add_argument("--out", type=path_option, required=True, metavar="FOLDER", help="case folder to write")
-    workbook.add_argument("--date", type=_iso_date, required=True, metavar="YYYY-MM-DD",
+    workbook.add_argument("--date", type=date_option, required=True, metavar="YYYY-MM-DD",
                           help="delivery date to place the workbook's day on (the workbook has none)")
     workbook.add_argument("--omit-unsupported", action="store_true",
                           help="leave out (and list) the units whose kind rvpp's case model does not have, "
@@ -138,20 +138,11 @@ def _run_build_case(args: argparse.Namespace) -> int:
     return 0
 
 
-def _iso_date(text: str) -> dt.date:
-    if not ISO_DATE.fullmatch(text):
-        raise argparse.ArgumentTypeError(f"{text!r} must be a date such as 2025-06-01")
-    try:
-        return dt.date.fromisoformat(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a calendar date") from None
-
-
 def _run_import_workbook(args: argparse.Namespace) -> int:
     # heavy (openpyxl): loaded only when this command runs
     from ..data.importers.gams_import import import_workbook
 
-    made = import_workbook(args.workbook, args.out, args.date, overwrite=args.force,
+    made = import_workbook(args.workbook, args.out, dt.date.fromisoformat(args.date), overwrite=args.force,
                            omit_unsupported=args.omit_unsupported)
     print("\n".join(made.lines()))
     return 0

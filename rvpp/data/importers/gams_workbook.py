@@ -35,9 +35,9 @@ from pathlib import Path
 from types import MappingProxyType
 
 import openpyxl
-from openpyxl.utils.exceptions import InvalidFileException
 import pandas as pd
 from openpyxl.utils import column_index_from_string, get_column_letter
+from openpyxl.utils.exceptions import InvalidFileException
 
 from ...errors import DataImportError
 
@@ -255,7 +255,8 @@ class _Table:
         if value is None:
             return blank
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise WorkbookError(self.sheet, f'row {self.cells[key]} column "{column}"', f"{value!r} is not a finite number")
+            raise WorkbookError(self.sheet, f'row {self.cells[key]} column "{column}"',
+                                f"{value!r} is not a finite number")
         return float(value)
 
 
@@ -329,7 +330,8 @@ class _Sheets:
                 continue
             name = str(name)
             if name in out:
-                raise WorkbookError(sheet, f"cell {first}{row}", f'"{name}" is written twice (first on row {out[name][1]})')
+                raise WorkbookError(sheet, f"cell {first}{row}",
+                                    f'"{name}" is written twice (first on row {out[name][1]})')
             out[name] = (self.cell(sheet, row, col + 1), row)
         return out
 
@@ -401,9 +403,11 @@ def _unit_list(sheets: _Sheets) -> dict[str, str]:
         if name in units:
             raise WorkbookError("VPP_Units", f"cell A{row}", f'unit "{name}" is named twice')
         if not NAME.fullmatch(name):
-            raise WorkbookError("VPP_Units", f"cell A{row}", f'unit name "{name}" must be 1 to 40 letters, digits, _, . or -')
+            raise WorkbookError("VPP_Units", f"cell A{row}",
+                                f'unit name "{name}" must be 1 to 40 letters, digits, _, . or -')
         if kind not in UNIT_TYPES:
-            raise WorkbookError("VPP_Units", f"cell C{row}", f'unit type "{kind}" must be one of {", ".join(UNIT_TYPES)}')
+            raise WorkbookError("VPP_Units", f"cell C{row}",
+                                f'unit type "{kind}" must be one of {", ".join(UNIT_TYPES)}')
         units[name] = kind
     if not units:
         raise WorkbookError("VPP_Units", "column A", "lists no unit")
@@ -420,7 +424,8 @@ def _periods(sheets: _Sheets) -> tuple[str, ...]:
     expected = tuple(f"T{t}" for t in range(1, PERIODS + 1))
     if periods != expected:
         found = f"{', '.join(periods[:4])}... ({len(periods)} periods)"
-        raise WorkbookError("Price_Forecast", "column A", f"periods must be T1..T{PERIODS} in order (the tool closes its "
+        raise WorkbookError("Price_Forecast", "column A",
+                            f"periods must be T1..T{PERIODS} in order (the tool closes its "
                                                            f"storage balances at period {PERIODS}); found {found}")
     return periods
 
@@ -445,25 +450,30 @@ def _settings(sheets: _Sheets) -> Settings:
         reserve_share_dispatchable=get("sSReserve_Dres_limit"),
     )
     if settings.dt_h != 1:
-        raise WorkbookError("Global_params", "parameter sDelta", f"{settings.dt_h:g} must be 1: the tool's day is 24 hourly periods")
+        raise WorkbookError("Global_params", "parameter sDelta",
+                            f"{settings.dt_h:g} must be 1: the tool's day is 24 hourly periods")
     return settings
 
 
 def _budgets(sheets: _Sheets, units: dict[str, str]) -> Budgets:
     pairs = sheets.pairs("Global_params", "A", 2)
-    prices = {name: _whole(_value(pairs, "Global_params", "A", name), "Global_params", f'parameter "{name}"', 0, PERIODS)
+    prices = {name: _whole(_value(pairs, "Global_params", "A", name), "Global_params", f'parameter "{name}"', 0,
+                           PERIODS)
               for name in ("pGamma_Price_DAM [-]", "pGamma_Price_SRM_up [-]", "pGamma_Price_SRM_down [-]")}
     per_unit: dict[str, int] = {}
-    for first, last, column, kinds in (("F", "O", "Gamma DAM [-]", ("NDRES", "STH")), ("Q", "Z", "Gamma Dem DAM [-]", ("D",))):
+    ranges = (("F", "O", "Gamma DAM [-]", ("NDRES", "STH")), ("Q", "Z", "Gamma Dem DAM [-]", ("D",)))
+    for first, last, column, kinds in ranges:
         table = sheets.table("Global_params", first, last, 1, (column,))
         for (name,) in table.rows:
             if units.get(name) not in kinds:
-                raise WorkbookError("Global_params", f"cell {first}{table.cells[(name,)]}", f'"{name}" is not a unit of type {" or ".join(kinds)} in VPP_Units')
+                raise WorkbookError("Global_params", f"cell {first}{table.cells[(name,)]}",
+                                    f'"{name}" is not a unit of type {" or ".join(kinds)} in VPP_Units')
             per_unit[name] = _whole(table.number((name,), column), "Global_params", f'"{column}" of {name}', 0, PERIODS)
     for name, kind in units.items():
         if kind in ("NDRES", "STH", "D") and name not in per_unit:
             raise WorkbookError("Global_params", "columns F:Z", f'unit "{name}" ({kind}) has no day-ahead budget')
-    return Budgets(prices["pGamma_Price_DAM [-]"], prices["pGamma_Price_SRM_up [-]"], prices["pGamma_Price_SRM_down [-]"],
+    return Budgets(prices["pGamma_Price_DAM [-]"], prices["pGamma_Price_SRM_up [-]"],
+                   prices["pGamma_Price_SRM_down [-]"],
                    MappingProxyType(per_unit))
 
 
@@ -505,13 +515,15 @@ def _forecast(sheets: _Sheets, name: str, periods: tuple[str, ...]) -> pd.DataFr
     table = sheets.table("Energy_Forecast", "A", "T", 2, columns)
     missing = [t for t in periods if (name, t) not in table.rows]
     if missing:
-        raise WorkbookError("Energy_Forecast", "columns A:B", f'unit "{name}" has no forecast for {", ".join(missing[:3])}')
+        raise WorkbookError("Energy_Forecast", "columns A:B",
+                            f'unit "{name}" has no forecast for {", ".join(missing[:3])}')
     frame = pd.DataFrame({"available_mw": [table.number((name, t), columns[0]) for t in periods],
                           "deviation_mw": [table.number((name, t), columns[1]) for t in periods]},
                          index=pd.Index(periods, name="period"))
     bad = frame.index[(frame.deviation_mw < 0) | (frame.deviation_mw > frame.available_mw + 1e-9)]
     if len(bad):
-        raise WorkbookError("Energy_Forecast", f'unit "{name}" period {bad[0]}', "the deviation must lie in [0, available power]")
+        raise WorkbookError("Energy_Forecast", f'unit "{name}" period {bad[0]}',
+                            "the deviation must lie in [0, available power]")
     return frame
 
 
@@ -548,13 +560,15 @@ def _binary(value: float, sheet: str, name: str, column: str) -> bool:
 def _non_dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool],
                       periods: tuple[str, ...]) -> tuple[NonDispatchable, ...]:
     names = _of_type(units, "NDRES")
-    columns = ("Min power [MW]", "Operation Cost [Euro/MWh]", "SR Ramp Up [MW/min]", "SR Ramp Down [MW/min]", "Max power [MW]")
+    columns = ("Min power [MW]", "Operation Cost [Euro/MWh]", "SR Ramp Up [MW/min]", "SR Ramp Down [MW/min]",
+               "Max power [MW]")
     table = sheets.table("NDRES", "A", "F", 1, columns) if names else None
     out = []
     for name in names:
         key = _row_of(table, name, "NDRES", "non-dispatchable unit")
         if name not in NON_DISPATCHABLE_KINDS:
-            raise WorkbookError("VPP_Units", f'unit "{name}"', "the tool knows a non-dispatchable unit as wind (U3) or PV (U4) only by these names")
+            raise WorkbookError("VPP_Units", f'unit "{name}"',
+                                "the tool knows a non-dispatchable unit as wind (U3) or PV (U4) only by these names")
         kind = NON_DISPATCHABLE_KINDS[name]
         enabled = switches["sNDRES_exists"] and switches["sWF_exists" if kind == "wind" else "sPV_exists"]
         v = [table.number(key, c) for c in columns]
@@ -567,8 +581,9 @@ def _non_dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str
 def _solar_thermal(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool],
                    periods: tuple[str, ...]) -> tuple[SolarThermal, ...]:
     names = _of_type(units, "STH")
-    columns = ("Operation cost [Euro/MWh]", "Machine capacity [MW]", "Max electrical output [MW]", "Commit status t=0 [-]",
-               "Online periods prior t=1 [hour]", "Offline periods prior t=1 [hour]", "Min up time [hour]", "Min down time [hour]")
+    columns = ("Operation cost [Euro/MWh]", "Machine capacity [MW]", "Max electrical output [MW]",
+               "Commit status t=0 [-]", "Online periods prior t=1 [hour]", "Offline periods prior t=1 [hour]",
+               "Min up time [hour]", "Min down time [hour]")
     if not names:
         return ()
     table = sheets.table("STH", "F", "N", 1, columns)
@@ -585,11 +600,13 @@ def _solar_thermal(sheets: _Sheets, units: dict[str, str], switches: dict[str, b
             raise WorkbookError("STH", "columns P:S", f'plant "{name}" needs at least two power-block breakpoints')
         linked = [tank for (plant, tank) in tanks.rows if plant == name]
         if len(linked) > 1:
-            raise WorkbookError("VPP_Units", "columns H:I", f'plant "{name}" has {len(linked)} tanks; the tool links one')
+            raise WorkbookError("VPP_Units", "columns H:I",
+                                f'plant "{name}" has {len(linked)} tanks; the tool links one')
         for tank in linked:
             if units.get(tank) != "TES":
                 raise WorkbookError("VPP_Units", "columns H:I", f'tank "{tank}" of plant "{name}" is not a TES unit')
-        out.append(SolarThermal(name, switches["sSTH_exists"], cost_eur_per_mwh=v[0], p_in_max_mw_th=v[1], p_el_max_mw=v[2],
+        out.append(SolarThermal(name, switches["sSTH_exists"], cost_eur_per_mwh=v[0], p_in_max_mw_th=v[1],
+                                p_el_max_mw=v[2],
                                 initially_on=_binary(v[3], "STH", name, columns[3]), hours_on_before=v[4],
                                 hours_off_before=v[5], min_up_h=v[6], min_down_h=v[7], breakpoints=points,
                                 storage=linked[0] if linked else None, forecast=_forecast(sheets, name, periods)))
@@ -645,7 +662,8 @@ def _demands(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool],
                 if (name, lp, t) not in profiles.rows:
                     raise WorkbookError("Demand", "columns A:D", f'demand "{name}" profile {lp} has no value for {t}')
             shape[lp] = [profiles.number((name, lp, t), "Demand [MW]") for t in periods]
-            dev[lp] = [deviations.number((name, lp, t), "Dev Demand DAM [MW]") if (name, lp, t) in deviations.rows else 0.0
+            dev[lp] = [deviations.number((name, lp, t), "Dev Demand DAM [MW]") if (name, lp,
+                                                                                   t) in deviations.rows else 0.0
                        for t in periods]
         for t in periods:
             if (name, t) not in flex.rows:
@@ -653,9 +671,12 @@ def _demands(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool],
         index = pd.Index(periods, name="period")
         out.append(Demand(name, switches["sDem_exists"], profiles=pd.DataFrame(shape, index=index),
                           deviations=pd.DataFrame(dev, index=index),
-                          profile_costs=MappingProxyType({lp: costs.number((name, lp), "Cost [Euro]") for lp in chosen}),
-                          flex_dn=pd.Series([flex.number((name, t), "Negative fluctuation [pu]") for t in periods], index=index),
-                          flex_up=pd.Series([flex.number((name, t), "Positive fluctuation [pu]") for t in periods], index=index),
+                          profile_costs=MappingProxyType({lp: costs.number((name, lp),
+                                                                           "Cost [Euro]") for lp in chosen}),
+                          flex_dn=pd.Series([flex.number((name, t), "Negative fluctuation [pu]") for t in periods],
+                                            index=index),
+                          flex_up=pd.Series([flex.number((name, t), "Positive fluctuation [pu]") for t in periods],
+                                            index=index),
                           e_min_mwh=v[0], ramp_up_mw_per_h=v[1], ramp_dn_mw_per_h=v[2], sr_ramp_up_mw_per_min=v[3],
                           sr_ramp_dn_mw_per_min=v[4], p_init_mw=v[5], p_min_mw=v[6], p_max_mw=v[7]))
     return tuple(out)
@@ -719,9 +740,13 @@ def _chosen_profiles(sheets: _Sheets, periods: tuple[str, ...]) -> Mapping[str, 
     for name in dict.fromkeys(u for (u, _t) in written.rows):
         values = [written.number((name, t), "Demand profile DAM [MW]") if (name, t) in written.rows else math.nan
                   for t in periods]
-        matches = sorted({lp for (u, lp, _t) in profiles.rows if u == name
-                          and all(profiles.number((u, lp, t), "Demand [MW]") == v for t, v in zip(periods, values, strict=True))})
+        candidates = dict.fromkeys(lp for (u, lp, _t) in profiles.rows if u == name)
+        matches = sorted(lp for lp in candidates
+                         if all(profiles.number((name, lp, t), "Demand [MW]") == v
+                                for t, v in zip(periods, values, strict=True)))
         if len(matches) != 1:
-            raise WorkbookError("Trade_Units", "columns AZ:BB", f'the stored profile of demand "{name}" matches {len(matches)} of its load profiles, not one')
+            raise WorkbookError("Trade_Units", "columns AZ:BB",
+                                f'the stored profile of demand "{name}" matches {len(matches)} of its load '
+                                "profiles, not one")
         chosen[name] = matches[0]
     return MappingProxyType(chosen)
