@@ -15,7 +15,7 @@ import numpy as np
 import openpyxl
 import pytest
 
-from rvpp import load_case
+from rvpp import load_case, solve
 from rvpp.cli import main
 from rvpp.data.importers.gams_import import import_workbook
 from rvpp.data.importers.gams_workbook import WorkbookError, read_workbook
@@ -239,3 +239,27 @@ def test_a_file_that_is_not_a_workbook_is_refused(tmp_path):
     with pytest.raises(DataImportError, match='"RVPP_data.xlsx" cannot be read as an Excel workbook'):
         import_workbook(path, tmp_path / "case", DATE)
     assert not (tmp_path / "case").exists()
+
+
+@needs_workbook
+@pytest.mark.slow
+def test_rvpp_solves_the_imported_case_and_its_terms_follow_from_the_named_differences(imported):
+    """docs/gams-tool.md's reconciliation: without the dispatchable units the reserve base is
+    κ·max(0, ΣPmax of generation − ΣPmax of demand) = 0.1·max(0, 50 + 50 + 55 − 180) = 0 (D1), so no
+    band is sold; the demand sits at its energy floor, the chosen profile plus its deviation in the
+    Γ = 12 largest hours (1684 + 239.3 MWh)."""
+    _, case, book = imported
+    result = solve(case)
+    assert result.status == "optimal"
+    market = result.market
+    assert market[["r_sr_up_mw", "r_sr_dn_mw"]].abs().to_numpy().max() == pytest.approx(0.0, abs=1e-6)
+    (demand,) = book.demands
+    floor = demand.profiles["lp2"].sum() + np.sort(demand.deviations["lp2"].to_numpy())[::-1][:12].sum()
+    served = result.units.loc[result.units.unit == "U6", "p_mw"].sum() * case.dt_h
+    assert floor == pytest.approx(1923.3, abs=1e-9)
+    assert served == pytest.approx(floor, abs=1e-4)
+    by_unit = result.units.groupby("unit")["p_mw"].sum()
+    opex = sum(u.om_eur_per_mwh * by_unit[u.name] * case.dt_h for u in (*case.ndres, *case.csp))
+    assert result.parts["cost_opex_eur"] == pytest.approx(opex, abs=1e-6)
+    assert result.parts.get("revenue_sr_eur", 0.0) == pytest.approx(0.0, abs=1e-6)
+    assert (market.p_da_mw < 0).sum() > 12  # a buyer most of the day: the dispatchable units are missing
