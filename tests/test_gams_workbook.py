@@ -35,7 +35,7 @@ STORED = {"profit": -10_665.93, "revenue_dam": 17_604.31, "revenue_srm": 22_934.
 @pytest.fixture(scope="module")
 def imported(tmp_path_factory):
     folder = tmp_path_factory.mktemp("gams") / "case"
-    made = import_workbook(WORKBOOK, folder, DATE, omit_unsupported=True)
+    made = import_workbook(WORKBOOK, folder, DATE)
     return made, load_case(folder), read_workbook(WORKBOOK)
 
 
@@ -64,10 +64,7 @@ def test_the_imported_case_holds_the_workbooks_bands_exactly(imported):
 
 @needs_workbook
 def test_rvpps_accounting_of_the_stored_schedule_gives_the_tools_six_numbers(imported):
-    made, case, book = imported
-    assert [line for line in made.omitted] == ['hydro "U1" (sheet "DRES"): rvpp has no unit kind hydro',
-                                               'biomass "U2" (sheet "DRES"): rvpp has no unit kind biomass',
-                                               'battery "U10" (sheet "ESS"): rvpp has no unit kind battery']
+    _, case, book = imported
     day = audit_day(case)
     stored = book.result
     market = stored.market.rename(columns={"r_up_mw": "r_sr_up_mw", "r_dn_mw": "r_sr_dn_mw"}).reset_index(drop=True)
@@ -84,18 +81,19 @@ def test_rvpps_accounting_of_the_stored_schedule_gives_the_tools_six_numbers(imp
     def power(name: str) -> np.ndarray:
         return stored.units.loc[name, "power_mw"].to_numpy(float)
 
-    # Wind, PV and the solar thermal plant from the imported case's own costs [EUR/MWh]
+    # every unit's cost from the imported case: c·p·dt, and for hydro and biomass the start-up and
+    # shut-down costs counted from the stored commitment and the status before the day
     cost = sum(unit.om_eur_per_mwh * power(unit.name).sum() * dt_h for unit in (*case.ndres, *case.csp))
-    # hydro and biomass (no rvpp kind yet) from the workbook: c·p·dt, start-up and shut-down costs
-    # counted from the stored commitment and the status before the day
     starts = {}
-    for unit in book.dispatchable:
-        online = np.concatenate([[float(unit.initially_on)], np.round(stored.units.loc[unit.name, "online"])])
+    for unit in (*case.hydro, *case.biomass):
+        online = np.concatenate([[float(unit.initial_online)], np.round(stored.units.loc[unit.name, "online"])])
         starts[unit.name] = int((np.diff(online) > 0).sum())
-        cost += (unit.cost_eur_per_mwh * power(unit.name).sum() * dt_h + unit.startup_cost_eur * starts[unit.name]
+        cost += (unit.marginal_cost_eur_per_mwh * power(unit.name).sum() * dt_h
+                 + unit.startup_cost_eur * starts[unit.name]
                  + unit.shutdown_cost_eur * int((np.diff(online) < 0).sum()))
     assert starts == {"U1": 1, "U2": 1}
-    assert not any(s.enabled for s in book.storages if s.kind == "electrical")  # the battery costs nothing
+    (battery,) = case.battery
+    assert not battery.enabled  # switched off in the workbook: it costs nothing
     cost += sum(d.profile_costs[stored.demand_profiles[d.name]] for d in book.demands)
 
     ours = {"revenue_dam": revenue_dam, "revenue_srm": revenue_srm, "operating_cost": cost,
@@ -123,22 +121,19 @@ def test_the_dam_protection_is_the_asymmetric_form(imported):
 
 
 @needs_workbook
-def test_the_import_refuses_a_workbook_with_units_rvpp_has_no_kind_for(tmp_path):
-    with pytest.raises(WorkbookError, match=r'sheet "DRES" unit "U1": rvpp\'s case model has no unit kind hydro'):
-        import_workbook(WORKBOOK, tmp_path / "case", DATE)
-    assert not (tmp_path / "case").exists()
-
-
-@needs_workbook
 def test_the_command_writes_a_case_and_refuses_to_overwrite_it(tmp_path, capsys):
     out = tmp_path / "case"
-    argv = ["data", "import-workbook", str(WORKBOOK), "--out", str(out), "--date", "2025-06-01", "--omit-unsupported"]
+    argv = ["data", "import-workbook", str(WORKBOOK), "--out", str(out), "--date", "2025-06-01"]
     assert main(argv) == 0
     assert sorted(p.name for p in out.iterdir()) == ["case.yaml", "history.csv"]
     case = load_case(out)
-    assert [u.name for _, u in case.units()] == ["U3", "U4", "U5", "U6"]
-    assert case.markets.kappa == 0.1 and not case.markets.hpa and case.csp[0].storage.cyclic
-    assert "not imported: hydro" in capsys.readouterr().out
+    assert sorted((str(k), u.name) for k, u in case.all_units()) == [
+        ("battery", "U10"), ("biomass", "U2"), ("csp", "U5"), ("ed", "U6"), ("hydro", "U1"), ("pv", "U4"),
+        ("wind", "U3")]
+    assert [u.name for _, u in case.units()] == [n for n in case.unit_names() if n != "U10"]  # disabled
+    assert case.markets.kappa == 0.1 and case.markets.reserve_base == "installed" and not case.markets.hpa
+    assert case.csp[0].storage.cyclic and case.battery[0].cyclic
+    assert "battery U10 (disabled), hydro U1, biomass U2" in capsys.readouterr().out
     before = (out / "case.yaml").read_bytes()
     assert main(argv) == 1
     assert "already holds case.yaml" in capsys.readouterr().err
@@ -151,7 +146,7 @@ def test_the_command_writes_a_case_and_refuses_to_overwrite_it(tmp_path, capsys)
 @needs_workbook
 def test_the_copy_of_the_read_sheets_imports_as_the_workbook_does(small_copy, imported, tmp_path):
     """The copy the bad inputs start from is itself good: it gives the same case."""
-    made = import_workbook(small_copy, tmp_path / "case", DATE, omit_unsupported=True)
+    made = import_workbook(small_copy, tmp_path / "case", DATE)
     assert made.case.to_data() == imported[0].case.to_data()
     assert made.case.history == imported[0].case.history
 
@@ -205,6 +200,11 @@ def _row_named_twice(book):
     sheet.cell(_row_of(sheet, 1, "U4"), 1).value = "U3"
 
 
+def _dispatchable_renamed(book):
+    for sheet, column in (("VPP_Units", 1), ("DRES", 6)):
+        book[sheet].cell(_row_of(book[sheet], column, "U1"), column).value = "U7"
+
+
 def _without_sheet(book):
     del book["Energy_Forecast"]
 
@@ -220,16 +220,17 @@ def _not_a_number(book):
     (_unit_named_twice, r'sheet "VPP_Units" cell A\d+: U3 B5 NDRES is written twice \(first on row \d+\)'),
     (_row_named_twice, r'sheet "NDRES" cell A\d+: U3 is written twice \(first on row \d+\)'),
     (_without_sheet, r'sheet "Energy_Forecast": is missing; the tool\'s workbook has it'),
+    (_dispatchable_renamed, r'sheet "VPP_Units" unit "U7": the tool knows a dispatchable unit as hydro \(U1\)'),
     (_not_a_number, r'sheet "DRES" row \d+ column "Max energy \[MWh\]": \'lots\' is not a finite number'),
-], ids=["missing column", "unit named twice", "row named twice", "missing sheet", "not a number"])
+], ids=["missing column", "unit named twice", "row named twice", "missing sheet", "unknown dispatchable",
+        "not a number"])
 def test_a_bad_workbook_is_refused_by_name_and_nothing_is_written(small_copy, tmp_path, change, message):
     path = _copy(small_copy, tmp_path, change)
     out = tmp_path / "case"
     with pytest.raises(WorkbookError, match=message):
-        import_workbook(path, out, DATE, omit_unsupported=True)
+        import_workbook(path, out, DATE)
     assert not out.exists()
-    assert main(["data", "import-workbook", str(path), "--out", str(out), "--date", "2025-06-01",
-                 "--omit-unsupported"]) == 1
+    assert main(["data", "import-workbook", str(path), "--out", str(out), "--date", "2025-06-01"]) == 1
     assert not out.exists()
 
 
@@ -248,7 +249,9 @@ def test_rvpp_solves_the_imported_case_and_its_terms_follow_from_the_named_diffe
     κ·max(0, ΣPmax of generation − ΣPmax of demand) = 0.1·max(0, 50 + 50 + 55 − 180) = 0 (D1), so no
     band is sold; the demand sits at its energy floor, the chosen profile plus its deviation in the
     Γ = 12 largest hours (1684 + 239.3 MWh)."""
-    _, case, book = imported
+    _, imported_case, book = imported
+    # the portfolio rvpp's model holds today, with the paper's reserve base
+    case = imported_case.replace(hydro=[], biomass=[], battery=[], markets={"reserve_base": "net"})
     result = solve(case)
     assert result.status == "optimal"
     market = result.market

@@ -76,9 +76,6 @@ def add_data_commands(commands) -> None:
     workbook.add_argument("--out", type=path_option, required=True, metavar="FOLDER", help="case folder to write")
     workbook.add_argument("--date", type=date_option, required=True, metavar="YYYY-MM-DD",
                           help="delivery date to place the workbook's day on (the workbook has none)")
-    workbook.add_argument("--omit-unsupported", action="store_true",
-                          help="leave out (and list) the units whose kind rvpp's case model does not have, "
-                               "instead of refusing the workbook")
     workbook.add_argument("--force", action="store_true",
                           help="overwrite the case.yaml and history.csv of a folder that already holds them")
     workbook.set_defaults(run=_run_import_workbook)
@@ -142,8 +139,7 @@ def _run_import_workbook(args: argparse.Namespace) -> int:
     # heavy (openpyxl): loaded only when this command runs
     from ..data.importers.gams_import import import_workbook
 
-    made = import_workbook(args.workbook, args.out, dt.date.fromisoformat(args.date), overwrite=args.force,
-                           omit_unsupported=args.omit_unsupported)
+    made = import_workbook(args.workbook, args.out, dt.date.fromisoformat(args.date), overwrite=args.force)
     print("\n".join(made.lines()))
     return 0
 

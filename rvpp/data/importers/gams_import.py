@@ -55,6 +55,7 @@ Q_LO, Q_HI = 0.2, 0.8  # on six values: exactly the 2nd and the 5th
 TIMEZONE = "UTC"  # the workbook names no place; UTC has no clock change, so every day has 24 hours
 CSV_DIGITS = 6  # significant digits History.to_csv keeps
 SOURCE = "the authors' RVPP tool workbook"
+DISPATCHABLE = (UnitKind.HYDRO.value, UnitKind.BIOMASS.value)
 
 
 class Band(NamedTuple):
@@ -69,23 +70,21 @@ class Band(NamedTuple):
 
 @dataclass(frozen=True)
 class WorkbookImport:
-    """The case made from a workbook, the units left out and where it was written."""
+    """The case made from a workbook and where it was written."""
 
     case: Case
-    omitted: tuple[str, ...]  # units whose kind the case model does not have, one phrase each
     folder: Path | None = None
 
     def lines(self) -> list[str]:
-        units = ", ".join(f"{kind} {unit.name}" for kind, unit in self.case.units())
+        units = ", ".join(f"{kind} {unit.name}" + ("" if getattr(unit, "enabled", True) else " (disabled)")
+                          for kind, unit in self.case.all_units())
         out = [f"case {self.case.name!r} for {self.case.delivery_date}: {units}"]
-        out += [f"not imported: {phrase}" for phrase in self.omitted]
         if self.folder is not None:
             out.append(f"wrote {CASE_FILE} and {HISTORY_FILE} to {self.folder}")
         return out
 
 
-def import_workbook(path: str | Path, out: str | Path, date: dt.date, *, overwrite: bool = False,
-                    omit_unsupported: bool = False) -> WorkbookImport:
+def import_workbook(path: str | Path, out: str | Path, date: dt.date, *, overwrite: bool = False) -> WorkbookImport:
     """Read the workbook at ``path`` and write its case into the folder ``out``.
 
     Nothing is written unless the whole workbook maps: any :class:`WorkbookError` (or a case
@@ -93,20 +92,15 @@ def import_workbook(path: str | Path, out: str | Path, date: dt.date, *, overwri
     """
     out = Path(out)
     _check_out(out, overwrite)
-    made = workbook_case(read_workbook(path), date, omit_unsupported=omit_unsupported)
+    made = workbook_case(read_workbook(path), date)
     _write(made.case, out, overwrite)
-    return WorkbookImport(made.case, made.omitted, out)
+    return WorkbookImport(made.case, out)
 
 
-def workbook_case(book: Workbook, date: dt.date, *, omit_unsupported: bool = False) -> WorkbookImport:
-    """The rvpp case of ``book`` delivered on ``date`` (see the module docstring for the bands).
-
-    Units the case model has no kind for (the tool's hydro, biomass and battery before rvpp has
-    those kinds) are refused by name, or left out and listed when ``omit_unsupported``.
-    """
+def workbook_case(book: Workbook, date: dt.date) -> WorkbookImport:
+    """The rvpp case of ``book`` delivered on ``date`` (see the module docstring for the bands)."""
     units: dict[str, list[dict[str, Any]]] = {}
     series: dict[str, Band] = {}  # history column -> its band
-    omitted: list[str] = []
     for unit in book.non_dispatchable:
         units.setdefault(unit.kind, []).append(_non_dispatchable(book, unit))
         series[unit.name] = _production_band(unit.forecast, f'unit "{unit.name}"')
@@ -122,10 +116,13 @@ def workbook_case(book: Workbook, date: dt.date, *, omit_unsupported: bool = Fal
         hi = lo + demand.deviations[profile].to_numpy(float)
         series[demand.name] = Band(lo, _middle(lo, hi), hi, "Demand", f'unit "{demand.name}" profile {profile}')
     for unit in book.dispatchable:
-        omitted.append(_unsupported(unit.kind, unit.name, "DRES", omit_unsupported))
+        if unit.kind not in DISPATCHABLE:
+            raise WorkbookError("VPP_Units", f'unit "{unit.name}"', "the tool knows a dispatchable unit as hydro (U1) "
+                                                                    "or biomass (U2) only by these names")
+        units.setdefault(unit.kind, []).append(_dispatchable(book, unit))
     for storage in book.storages:
         if storage.kind == "electrical":
-            omitted.append(_unsupported("battery", storage.name, "ESS", omit_unsupported))
+            units.setdefault(UnitKind.BATTERY.value, []).append(_battery(storage))
     series.update(_price_bands(book))
     history = _window(series, date)
     data = {
@@ -137,6 +134,7 @@ def workbook_case(book: Workbook, date: dt.date, *, omit_unsupported: bool = Fal
         "timezone": TIMEZONE,
         "dt_h": book.settings.dt_h,
         "markets": {"dam": True, "srm": True, "hpa": False, "kappa": book.settings.reserve_share_vpp,
+                    "reserve_base": "installed",
                     "reserve_duration_min": book.settings.reserve_duration_min,
                     "hpa_tariff_eur_per_mwh": [0.0] * 24},
         "uncertainty": {"window_days": WINDOW_DAYS, "q_lo": Q_LO, "q_hi": Q_HI, "bands": {"default": "climatology"}},
@@ -155,16 +153,36 @@ def workbook_case(book: Workbook, date: dt.date, *, omit_unsupported: bool = Fal
     except CaseError as err:
         raise DataImportError("the workbook's values break a rule of rvpp's case model: "
                               + "; ".join(err.problems)) from None
-    return WorkbookImport(case, tuple(p for p in omitted if p))
+    return WorkbookImport(case)
 
 
-def _unsupported(kind: str, name: str, sheet: str, omit: bool) -> str:
-    if kind in set(UnitKind):
-        raise WorkbookError(sheet, f'unit "{name}"', f"rvpp has the kind {kind} but this import does not map it yet")
-    if not omit:
-        raise WorkbookError(sheet, f'unit "{name}"', f"rvpp's case model has no unit kind {kind}; the unit cannot "
-                                                     "be imported (--omit-unsupported leaves it out)")
-    return f'{kind} "{name}" (sheet "{sheet}"): rvpp has no unit kind {kind}'
+def _dispatchable(book: Workbook, unit) -> dict[str, Any]:
+    if unit.sr_ramp_up_mw_per_min != unit.sr_ramp_dn_mw_per_min:
+        raise WorkbookError("DRES", f'unit "{unit.name}" columns "SR ramp up/down [MW/min]"',
+                            "differ; rvpp has one reserve ramp per unit")
+    status_h = unit.hours_on_before if unit.initially_on else unit.hours_off_before
+    return {"name": unit.name, "enabled": unit.enabled, "p_min_mw": unit.p_min_mw, "p_max_mw": unit.p_max_mw,
+            "marginal_cost_eur_per_mwh": unit.cost_eur_per_mwh, "startup_cost_eur": unit.startup_cost_eur,
+            "shutdown_cost_eur": unit.shutdown_cost_eur, "ramp_up_mw_per_h": unit.ramp_up_mw_per_h,
+            "ramp_dn_mw_per_h": unit.ramp_dn_mw_per_h, "startup_ramp_mw_per_h": unit.startup_ramp_mw_per_h,
+            "shutdown_ramp_mw_per_h": unit.shutdown_ramp_mw_per_h, "min_up_h": unit.min_up_h,
+            "min_down_h": unit.min_down_h, "initial_online": unit.initially_on, "initial_hours_in_status": status_h,
+            "p_init_mw": unit.p_init_mw, "energy_max_mwh": unit.e_max_mwh,
+            "ramp_mw_per_min": unit.sr_ramp_up_mw_per_min,
+            "reserve_share": book.settings.reserve_share_dispatchable}
+
+
+def _battery(storage) -> dict[str, Any]:
+    if storage.sr_ramp_up_mw_per_min != storage.sr_ramp_dn_mw_per_min:
+        raise WorkbookError("ESS", f'unit "{storage.name}" columns "SR ramp up/down [MW/min]"',
+                            "differ; rvpp has one reserve ramp per unit")
+    throughput = storage.lifecycle_slope * storage.cost_eur / storage.e_max_mwh  # per MWh charged or discharged
+    return {"name": storage.name, "enabled": storage.enabled, "e_min_mwh": storage.e_min_mwh,
+            "e_max_mwh": storage.e_max_mwh, "p_ch_max_mw": storage.p_ch_max_mw, "p_dis_max_mw": storage.p_dis_max_mw,
+            "eta_ch": storage.eta_ch, "eta_dis": storage.eta_dis, "self_discharge_per_h": storage.self_discharge / 2400,
+            # per MWh discharged: what the throughput cost comes to on a cyclic day without self-discharge
+            "degradation_eur_per_mwh": throughput * (1 + 1 / (storage.eta_ch * storage.eta_dis)),
+            "ramp_mw_per_min": storage.sr_ramp_up_mw_per_min, "reserve_share": 1.0}
 
 
 def _non_dispatchable(book: Workbook, unit) -> dict[str, Any]:
