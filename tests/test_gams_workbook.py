@@ -133,6 +133,14 @@ def test_the_command_writes_a_case_and_refuses_to_overwrite_it(tmp_path, capsys)
     assert [u.name for _, u in case.units()] == [n for n in case.unit_names() if n != "U10"]  # disabled
     assert case.markets.kappa == 0.1 and case.markets.reserve_base == "installed" and not case.markets.hpa
     assert case.csp[0].storage.cyclic and case.battery[0].cyclic
+    # the tool's 1800 EUR / 60 MWh per MWh charged and per MWh discharged, per MWh discharged on a
+    # cyclic day with 0.95 each way: 30 + 30 / 0.9025
+    assert case.battery[0].degradation_eur_per_mwh == pytest.approx(30 + 30 / 0.9025, abs=1e-9)
+    (hydro,), (biomass,) = case.hydro, case.biomass
+    assert (hydro.energy_max_mwh, hydro.initial_online, hydro.initial_hours_in_status, hydro.reserve_share) == \
+        (996, False, 1, 0.5)
+    assert (biomass.min_up_h, biomass.initial_hours_in_status, biomass.startup_cost_eur, biomass.ramp_mw_per_min) == \
+        (3, 3, 300, 0.2)
     assert "battery U10 (disabled), hydro U1, biomass U2" in capsys.readouterr().out
     before = (out / "case.yaml").read_bytes()
     assert main(argv) == 1
