@@ -1,21 +1,22 @@
-"""``python -m rvpp data import|build-case|band-quality``: real data in, a case out."""
+"""``python -m rvpp data import|build-case|import-workbook|band-quality``: real data in, a case out."""
 
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import json
 import sys
 
 from ..data.case import PRICE_MODELS
 from ..data.files import check_replaceable
 from ..uncertainty.quality import SERIES
-from .options import DEFAULT_CASE, Number, path_option
+from .options import DEFAULT_CASE, Number, date_option, path_option
 
 DEFAULT_TEMPLATE = DEFAULT_CASE
 
 
 def add_data_commands(commands) -> None:
-    """Add ``data`` with ``build``, ``import``, ``build-case`` and ``band-quality``."""
+    """Add ``data`` with ``build``, ``import``, ``build-case``, ``import-workbook`` and ``band-quality``."""
     data = commands.add_parser("data", help="build the default dataset, import real data, build a case from it")
     commands = data.add_subparsers(title="data commands")
     build = commands.add_parser("build", help="regenerate the synthetic history of the paper case")
@@ -64,6 +65,20 @@ def add_data_commands(commands) -> None:
     build.add_argument("--force", action="store_true",
                        help="overwrite the case.yaml and history.csv of a folder that already holds them")
     build.set_defaults(run=_run_build_case)
+
+    workbook = commands.add_parser(
+        "import-workbook", help="write a case from the workbook of the authors' RVPP tool",
+        description="Read the workbook of the seed paper's authors' tool (RVPP_data.xlsx: the inputs of its "
+                    "day-ahead session) and write an rvpp case folder: its units, prices, bands and budgets. "
+                    "The workbook gives one day; the case holds a six-day window whose percentiles are the "
+                    "workbook's bands. docs/gams-tool.md lists every mapping and every model difference.")
+    workbook.add_argument("workbook", type=path_option, metavar="XLSX")
+    workbook.add_argument("--out", type=path_option, required=True, metavar="FOLDER", help="case folder to write")
+    workbook.add_argument("--date", type=date_option, required=True, metavar="YYYY-MM-DD",
+                          help="delivery date to place the workbook's day on (the workbook has none)")
+    workbook.add_argument("--force", action="store_true",
+                          help="overwrite the case.yaml and history.csv of a folder that already holds them")
+    workbook.set_defaults(run=_run_import_workbook)
 
     quality = commands.add_parser(
         "band-quality", help="width, misses and shortfall of climatology and forecast bands",
@@ -117,6 +132,15 @@ def _run_build_case(args: argparse.Namespace) -> int:
     built = build_case(args.sources, args.out, template=args.template, options=options, overwrite=args.force,
                        progress=lambda m: print(f"  {m}", file=sys.stderr))
     print("\n".join(built.lines()))
+    return 0
+
+
+def _run_import_workbook(args: argparse.Namespace) -> int:
+    # heavy (openpyxl): loaded only when this command runs
+    from ..data.importers.gams_import import import_workbook
+
+    made = import_workbook(args.workbook, args.out, dt.date.fromisoformat(args.date), overwrite=args.force)
+    print("\n".join(made.lines()))
     return 0
 
 

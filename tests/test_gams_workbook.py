@@ -1,0 +1,272 @@
+"""The authors' tool workbook: its import as a case, and rvpp's accounting of its stored result.
+
+The workbook (never committed) is read from ``shared/data/gams-tool`` beside the project; the
+tests that need it skip when it is absent. Bad inputs are copies of it changed with openpyxl in a
+temporary folder.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+from pathlib import Path
+
+import numpy as np
+import openpyxl
+import pytest
+
+from rvpp import load_case, solve
+from rvpp.cli import main
+from rvpp.data.importers.gams_import import import_workbook
+from rvpp.data.importers.gams_workbook import WorkbookError, read_workbook
+from rvpp.errors import DataImportError
+from rvpp.settle.audit import audit_day, price_exposures, protection_exact
+
+ROOT = Path(__file__).resolve().parents[1]
+WORKBOOK = Path(os.environ.get("RVPP_GAMS_WORKBOOK", ROOT.parent / "shared" / "data" / "gams-tool" / "RVPP_data.xlsx"))
+needs_workbook = pytest.mark.skipif(not WORKBOOK.is_file(), reason="the authors' tool workbook (shared/data/gams-tool/"
+                                    "RVPP_data.xlsx, or RVPP_GAMS_WORKBOOK) is not available")
+DATE = dt.date(2025, 6, 1)
+# The tool's stored day-ahead result (sheet DAM, column W) [EUR], as the issue quotes it.
+STORED = {"profit": -10_665.93, "revenue_dam": 17_604.31, "revenue_srm": 22_934.13, "operating_cost": 38_245.37,
+          "protection_dam": 6_140.49, "protection_srm": 6_818.52}
+
+
+@pytest.fixture(scope="module")
+def imported(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("gams") / "case"
+    made = import_workbook(WORKBOOK, folder, DATE)
+    return made, load_case(folder), read_workbook(WORKBOOK)
+
+
+@needs_workbook
+def test_the_imported_case_holds_the_workbooks_bands_exactly(imported):
+    _, case, book = imported
+    day = audit_day(case)  # the audit's own percentiles of the written history
+    prices = book.prices
+    np.testing.assert_allclose(day.sources["price_da"].nominal, prices.price_da, atol=1e-9)
+    np.testing.assert_allclose(day.sources["price_da"].deviation, prices.price_da_dev_dn, atol=1e-9)
+    np.testing.assert_allclose(day.sources["price_da"].deviation_up, prices.price_da_dev_up, atol=1e-9)
+    np.testing.assert_allclose(day.sources["price_sr_up"].nominal, prices.price_sr_up, atol=1e-9)
+    np.testing.assert_allclose(day.sources["price_sr_up"].deviation, prices.price_sr_up_dev_dn, atol=1e-9)
+    np.testing.assert_allclose(day.sources["price_sr_dn"].deviation, prices.price_sr_dn_dev_dn, atol=1e-9)
+    for unit in (*book.non_dispatchable, *book.solar_thermal):
+        np.testing.assert_allclose(day.sources[unit.name].nominal, unit.forecast.available_mw, atol=1e-9)
+        np.testing.assert_allclose(day.sources[unit.name].deviation, unit.forecast.deviation_mw, atol=1e-9)
+        assert day.sources[unit.name].gamma == book.budgets.units[unit.name]
+    (demand,) = book.demands
+    assert book.result.demand_profiles[demand.name] == "lp2"
+    np.testing.assert_allclose(day.sources[demand.name].nominal, demand.profiles["lp2"], atol=1e-9)
+    np.testing.assert_allclose(day.sources[demand.name].deviation, demand.deviations["lp2"], atol=1e-9)
+    assert {n: day.sources[n].gamma for n in ("price_da", "price_sr_up", "price_sr_dn")} == \
+        {"price_da": 12, "price_sr_up": 12, "price_sr_dn": 12}
+
+
+@needs_workbook
+def test_rvpps_accounting_of_the_stored_schedule_gives_the_tools_six_numbers(imported):
+    _, case, book = imported
+    day = audit_day(case)
+    stored = book.result
+    market = stored.market.rename(columns={"r_up_mw": "r_sr_up_mw", "r_dn_mw": "r_sr_dn_mw"}).reset_index(drop=True)
+    p_da, r_up, r_dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
+    dt_h = day.dt_h
+
+    revenue_dam = float(np.sum(day.sources["price_da"].nominal * p_da * dt_h))
+    revenue_srm = float(np.sum((day.sources["price_sr_up"].nominal * r_up
+                                + day.sources["price_sr_dn"].nominal * r_dn) * dt_h))
+    exposures = price_exposures(day, market)
+    protection_dam = protection_exact(exposures["price_da"], day.sources["price_da"].gamma)
+    protection_srm = sum(protection_exact(exposures[n], day.sources[n].gamma) for n in ("price_sr_up", "price_sr_dn"))
+
+    def power(name: str) -> np.ndarray:
+        return stored.units.loc[name, "power_mw"].to_numpy(float)
+
+    # every unit's cost from the imported case: c·p·dt, and for hydro and biomass the start-up and
+    # shut-down costs counted from the stored commitment and the status before the day
+    cost = sum(unit.om_eur_per_mwh * power(unit.name).sum() * dt_h for unit in (*case.ndres, *case.csp))
+    starts = {}
+    for unit in (*case.hydro, *case.biomass):
+        online = np.concatenate([[float(unit.initial_online)], np.round(stored.units.loc[unit.name, "online"])])
+        starts[unit.name] = int((np.diff(online) > 0).sum())
+        cost += (unit.marginal_cost_eur_per_mwh * power(unit.name).sum() * dt_h
+                 + unit.startup_cost_eur * starts[unit.name]
+                 + unit.shutdown_cost_eur * int((np.diff(online) < 0).sum()))
+    assert starts == {"U1": 1, "U2": 1}
+    (battery,) = case.battery
+    assert not battery.enabled  # switched off in the workbook: it costs nothing
+    cost += sum(d.profile_costs[stored.demand_profiles[d.name]] for d in book.demands)
+
+    ours = {"revenue_dam": revenue_dam, "revenue_srm": revenue_srm, "operating_cost": cost,
+            "protection_dam": protection_dam, "protection_srm": protection_srm,
+            "profit": revenue_dam + revenue_srm - cost - protection_dam - protection_srm}
+    for term, value in STORED.items():
+        assert value == pytest.approx(ours[term], abs=0.005), term
+    workbook_totals = {"profit": stored.profit_eur, "revenue_dam": stored.revenue_dam_eur,
+                       "revenue_srm": stored.revenue_srm_eur, "operating_cost": stored.operating_cost_eur,
+                       "protection_dam": stored.protection_dam_eur, "protection_srm": stored.protection_srm_eur}
+    for term, value in workbook_totals.items():
+        assert value == pytest.approx(ours[term], abs=1e-6), term
+
+
+@needs_workbook
+def test_the_dam_protection_is_the_asymmetric_form(imported):
+    """The stored schedule buys in two hours; pricing those with the downward deviation (the
+    symmetric form) misses the tool's number by more than a thousand euros."""
+    _, case, book = imported
+    day = audit_day(case)
+    p_da = book.result.market.p_da_mw.to_numpy(float)
+    assert list(np.flatnonzero(p_da < 0) + 1) == [8, 9]
+    symmetric = protection_exact(day.sources["price_da"].deviation * np.abs(p_da), 12)
+    assert symmetric == pytest.approx(7_667.63, abs=0.005)
+
+
+@needs_workbook
+def test_the_command_writes_a_case_and_refuses_to_overwrite_it(tmp_path, capsys):
+    out = tmp_path / "case"
+    argv = ["data", "import-workbook", str(WORKBOOK), "--out", str(out), "--date", "2025-06-01"]
+    assert main(argv) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["case.yaml", "history.csv"]
+    case = load_case(out)
+    assert sorted((str(k), u.name) for k, u in case.all_units()) == [
+        ("battery", "U10"), ("biomass", "U2"), ("csp", "U5"), ("ed", "U6"), ("hydro", "U1"), ("pv", "U4"),
+        ("wind", "U3")]
+    assert [u.name for _, u in case.units()] == [n for n in case.unit_names() if n != "U10"]  # disabled
+    assert case.markets.kappa == 0.1 and case.markets.reserve_base == "installed" and not case.markets.hpa
+    assert case.csp[0].storage.cyclic and case.battery[0].cyclic
+    # the tool's 1800 EUR / 60 MWh per MWh charged and per MWh discharged, per MWh discharged on a
+    # cyclic day with 0.95 each way: 30 + 30 / 0.9025
+    assert case.battery[0].degradation_eur_per_mwh == pytest.approx(30 + 30 / 0.9025, abs=1e-9)
+    (hydro,), (biomass,) = case.hydro, case.biomass
+    assert (hydro.energy_max_mwh, hydro.initial_online, hydro.initial_hours_in_status, hydro.reserve_share) == \
+        (996, False, 1, 0.5)
+    assert (biomass.min_up_h, biomass.initial_hours_in_status, biomass.startup_cost_eur, biomass.ramp_mw_per_min) == \
+        (3, 3, 300, 0.2)
+    assert "battery U10 (disabled), hydro U1, biomass U2" in capsys.readouterr().out
+    before = (out / "case.yaml").read_bytes()
+    assert main(argv) == 1
+    assert "already holds case.yaml" in capsys.readouterr().err
+    assert (out / "case.yaml").read_bytes() == before
+
+
+# ----------------------------------------------------------------------------- bad workbooks
+
+
+@needs_workbook
+def test_the_copy_of_the_read_sheets_imports_as_the_workbook_does(small_copy, imported, tmp_path):
+    """The copy the bad inputs start from is itself good: it gives the same case."""
+    made = import_workbook(small_copy, tmp_path / "case", DATE)
+    assert made.case.to_data() == imported[0].case.to_data()
+    assert made.case.history == imported[0].case.history
+
+
+@pytest.fixture(scope="module")
+def small_copy(tmp_path_factory) -> Path:
+    """The values of the sheets the import reads, rows 1 to 1000, in a workbook of their own
+    (the shipped file is large and slow to open for editing)."""
+    source = openpyxl.load_workbook(WORKBOOK, read_only=True, data_only=True)
+    book = openpyxl.Workbook()
+    book.remove(book.active)
+    for name in ("Global_params", "Buses", "VPP_Units", "NDRES", "STH", "DRES", "ESS", "Demand", "Energy_Forecast",
+                 "Price_Forecast", "Trade_Units", "DAM"):
+        sheet = book.create_sheet(name)
+        for row in source[name].iter_rows(min_row=1, max_row=1000, max_col=60, values_only=True):
+            sheet.append(row)
+    source.close()
+    path = tmp_path_factory.mktemp("workbook") / "RVPP_data.xlsx"
+    book.save(path)
+    return path
+
+
+def _copy(small_copy: Path, tmp_path: Path, change) -> Path:
+    book = openpyxl.load_workbook(small_copy)
+    change(book)
+    path = tmp_path / "changed.xlsx"
+    book.save(path)
+    return path
+
+
+def _header_column(sheet, header: str) -> int:
+    return next(c.column for c in sheet[15] if isinstance(c.value, str) and c.value.strip() == header)
+
+
+def _row_of(sheet, column: int, key: str) -> int:
+    return next(r for r in range(16, 1001) if sheet.cell(r, column).value == key)
+
+
+def _without_column(book):
+    sheet = book["NDRES"]
+    sheet.cell(15, _header_column(sheet, "Max power [MW]")).value = None
+
+
+def _unit_named_twice(book):
+    sheet = book["VPP_Units"]
+    sheet.cell(_row_of(sheet, 1, "U4"), 1).value = "U3"
+
+
+def _row_named_twice(book):
+    sheet = book["NDRES"]
+    sheet.cell(_row_of(sheet, 1, "U4"), 1).value = "U3"
+
+
+def _dispatchable_renamed(book):
+    for sheet, column in (("VPP_Units", 1), ("DRES", 6)):
+        book[sheet].cell(_row_of(book[sheet], column, "U1"), column).value = "U7"
+
+
+def _without_sheet(book):
+    del book["Energy_Forecast"]
+
+
+def _not_a_number(book):
+    sheet = book["DRES"]
+    sheet.cell(_row_of(sheet, 6, "U1"), _header_column(sheet, "Max energy [MWh]")).value = "lots"
+
+
+@needs_workbook
+@pytest.mark.parametrize(("change", "message"), [
+    (_without_column, r'sheet "NDRES" range A15:F1000: column "Max power \[MW\]" is missing \(header row 15\)'),
+    (_unit_named_twice, r'sheet "VPP_Units" cell A\d+: U3 B5 NDRES is written twice \(first on row \d+\)'),
+    (_row_named_twice, r'sheet "NDRES" cell A\d+: U3 is written twice \(first on row \d+\)'),
+    (_without_sheet, r'sheet "Energy_Forecast": is missing; the tool\'s workbook has it'),
+    (_dispatchable_renamed, r'sheet "VPP_Units" unit "U7": the tool knows a dispatchable unit as hydro \(U1\)'),
+    (_not_a_number, r'sheet "DRES" row \d+ column "Max energy \[MWh\]": \'lots\' is not a finite number'),
+], ids=["missing column", "unit named twice", "row named twice", "missing sheet", "unknown dispatchable",
+        "not a number"])
+def test_a_bad_workbook_is_refused_by_name_and_nothing_is_written(small_copy, tmp_path, change, message):
+    path = _copy(small_copy, tmp_path, change)
+    out = tmp_path / "case"
+    with pytest.raises(WorkbookError, match=message):
+        import_workbook(path, out, DATE)
+    assert not out.exists()
+    assert main(["data", "import-workbook", str(path), "--out", str(out), "--date", "2025-06-01"]) == 1
+    assert not out.exists()
+
+
+def test_a_file_that_is_not_a_workbook_is_refused(tmp_path):
+    path = tmp_path / "RVPP_data.xlsx"
+    path.write_text("timestamp,price_da\n")
+    with pytest.raises(DataImportError, match='"RVPP_data.xlsx" cannot be read as an Excel workbook'):
+        import_workbook(path, tmp_path / "case", DATE)
+    assert not (tmp_path / "case").exists()
+
+
+@needs_workbook
+@pytest.mark.slow
+def test_rvpp_solves_the_imported_case_and_its_terms_follow_from_the_named_differences(imported):
+    """docs/gams-tool.md's reconciliation. The installed reserve base is 0.1 x (50 + 10 + 50 + 50 + 55)
+    = 21.5 MW (the switched-off battery does not count); rvpp, like the tool, sells the whole down band
+    in every hour. rvpp's demand sits at its floor, the chosen profile plus its deviation in the Γ = 12
+    largest hours (1684 + 239.3 MWh), where the tool's may go 10 % below the profile (D23)."""
+    _, case, book = imported
+    result = solve(case)
+    assert result.status == "optimal"
+    market = result.market
+    np.testing.assert_allclose(market.r_sr_dn_mw, 21.5, atol=1e-6)
+    np.testing.assert_allclose(book.result.market.r_dn_mw, 21.5, atol=1e-9)
+    assert market.r_sr_up_mw.max() <= 21.5 + 1e-6
+    (demand,) = book.demands
+    floor = demand.profiles["lp2"].sum() + np.sort(demand.deviations["lp2"].to_numpy())[::-1][:12].sum()
+    served = result.units.loc[result.units.unit == "U6", "p_mw"].sum() * case.dt_h
+    assert floor == pytest.approx(1923.3, abs=1e-9)
+    assert served == pytest.approx(floor, abs=1e-4)
+    assert book.result.units.loc["U6", "power_mw"].sum() == pytest.approx(1754.9, abs=1e-9)
