@@ -12,7 +12,7 @@ import pyomo.environ as pyo
 from ..data.case import DispatchableUnit
 from ..uncertainty.problem import Problem
 from .csp import add_commitment
-from .scenarios import activation
+from ..data.scenarios import activation
 from .units import reserve_cap
 
 

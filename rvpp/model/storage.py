@@ -11,7 +11,7 @@ import pyomo.environ as pyo
 
 from ..data.case import Battery
 from ..uncertainty.problem import Problem
-from .scenarios import activation
+from ..data.scenarios import activation
 from .units import reserve_cap
 
 
