@@ -28,9 +28,9 @@ FIGURE_HEIGHT = 420
 # narrow (automargin) by drawing the whole figure again, which doubles the browser's work.
 FIGURE_MARGIN = {"t": 100, "b": 84, "l": 80, "r": 30}
 
-# A kind without a colour here is drawn grey (KIND_COLORS.get).
-KIND_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "hpa": GREY,
-               "battery": YELLOW, "hydro": BLUE}  # biomass: grey
+# Every unit kind has a colour: those named here, grey for any other (biomass, a kind added later).
+_NAMED_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "battery": YELLOW, "hydro": BLUE}
+KIND_COLORS = {**{kind: _NAMED_COLORS.get(kind, GREY) for kind in KINDS}, "hpa": GREY}
 KIND_LABELS = {kind: info.label for kind, info in KINDS.items()}
 KIND_GROUP_LABELS = {kind: info.group for kind, info in KINDS.items()}
 
