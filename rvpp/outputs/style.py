@@ -29,7 +29,8 @@ FIGURE_HEIGHT = 420
 FIGURE_MARGIN = {"t": 100, "b": 84, "l": 80, "r": 30}
 
 # Every unit kind has a colour: those named here, grey for any other (biomass, a kind added later).
-_NAMED_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "battery": YELLOW, "hydro": BLUE}
+_NAMED_COLORS = {"wind": SKY, "pv": ORANGE, "csp": VERMILION, "ed": PURPLE, "td": GREEN, "battery": YELLOW,
+                 "hydro": BLUE}
 KIND_COLORS = {**{kind: _NAMED_COLORS.get(kind, GREY) for kind in KINDS}, "hpa": GREY}
 KIND_LABELS = {kind: info.label for kind, info in KINDS.items()}
 KIND_GROUP_LABELS = {kind: info.group for kind, info in KINDS.items()}
