@@ -58,7 +58,7 @@ def test_solve_writes_every_export_with_the_public_columns(tmp_path, capsys):
     units = pd.read_csv(out / "units.csv")
     assert len(units) == 24 * 11 and set(units["kind"]) == {"wind", "pv", "csp", "ed", "td"}
     book = openpyxl.load_workbook(out / "plan.xlsx", read_only=True)
-    assert book.sheetnames == ["summary", "market", "units", "csp", "flexibility"]
+    assert book.sheetnames == ["summary", "market", "units", "csp", "dispatch", "flexibility"]
     assert audit_export(load_case(PAPER), out) == []
     # Another reader of the MPS file (HiGHS's own parser, not rvpp's compiler) finds the same optimum.
     highs = highspy.Highs()
@@ -149,8 +149,8 @@ def test_the_current_folder_takes_the_exports(tmp_path, capsys, monkeypatch):
     (tmp_path / "notes.txt").write_text("mine")
     code, err = run(capsys, "solve", "--case", str(PAPER), "--quiet", "--out", ".")
     assert code == 0, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["csp.csv", "flexibility.csv", "market.csv", "notes.txt",
-                                                          "plan.xlsx", "summary.json", "units.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["csp.csv", "dispatch.csv", "flexibility.csv", "market.csv",
+                                                          "notes.txt", "plan.xlsx", "summary.json", "units.csv"]
     assert (tmp_path / "notes.txt").read_text() == "mine"
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == "optimal"
 
@@ -385,7 +385,7 @@ def test_a_new_output_folder_appears_complete(tmp_path, paper_solve):
     from rvpp.outputs.export import write_plan
 
     written = write_plan(paper_solve(), tmp_path / "deep" / "plan")
-    assert [p.name for p in written] == [*(f"{t}.csv" for t in ("market", "units", "csp", "flexibility")),
+    assert [p.name for p in written] == [*(f"{t}.csv" for t in ("market", "units", "csp", "dispatch", "flexibility")),
                                          "plan.xlsx", "summary.json"]
     assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["plan"]
 
