@@ -53,15 +53,21 @@ def processes(monkeypatch):
     class FakeProcess:
         def __init__(self, args, **_options):
             self.args, self.pid, self.returncode = list(args), 4_000_000 + len(started), None
+            self.ended = threading.Event()
             started.append(self)
 
         def poll(self):
+            return self.returncode
+
+        def wait(self, timeout=None):  # the launch's reaper thread waits on every process it starts
+            self.ended.wait(timeout)
             return self.returncode
 
     monkeypatch.setattr(subprocess, "Popen", FakeProcess)
     yield started
     for process in started:
         process.returncode = 0
+        process.ended.set()
 
 
 # ----------------------------------------------------------------------------- labels
