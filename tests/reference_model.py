@@ -51,6 +51,8 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from rvpp.settle.audit import finer_band  # MODEL_SPEC §6 interpolation, the audit's own code (day_data)
+
 SCENARIOS = ("none", "up", "dn")
 MIP_REL_GAP = 1e-7
 BINARY = highspy.HighsVarType.kInteger
@@ -248,16 +250,29 @@ def budgets(case, nt: int) -> dict[str, int]:
 
 
 def day_data(case) -> DayData:
-    """Bands, budgets and tariffs of the case's delivery day (MODEL_SPEC §1, §6), from its history."""
+    """Bands, budgets and tariffs of the case's delivery day (MODEL_SPEC §1, §6), from its history.
+
+    Bands are drawn per clock hour; at 30 or 15 minutes each hourly band is brought to the
+    periods by MODEL_SPEC §6's mean-keeping interpolation, here the plan audit's own
+    implementation (``rvpp.settle.audit.finer_band``), which is written apart from the code that
+    makes the model's bands and is checked against its defining properties in test_periods.py.
+    """
     periods = local_periods(case)
     hours = np.asarray(periods.hour)
     nt = len(hours)
     gamma = budgets(case, nt)
+    hourly_periods = periods[::round(1 / case.dt_h)] if case.dt_h < 1 else periods
+    steps = nt // len(hourly_periods)
 
-    def band(name, column, scale, kind=None, forecast=None):
+    def band(name, column, scale, kind=None, forecast=None, low=None, high=None):
         if band_method(case, name, kind) == "forecast":
-            return forecast_error_band(case, column, scale, forecast, periods)
-        return hourly_band(case, column, scale, hours)
+            hourly = forecast_error_band(case, column, scale, forecast, hourly_periods)
+        else:
+            hourly = hourly_band(case, column, scale, np.asarray(hourly_periods.hour))
+        if steps == 1:
+            return hourly
+        held = (np.clip(x, -np.inf if low is None else low, np.inf if high is None else high) for x in hourly)
+        return finer_band(*held, steps, low, high)
 
     lo, mid, hi = band("price_da", "price_da", 1.0)
     price = {"price_da_mid": mid, "price_da_pos": hi - mid, "price_da_neg": mid - lo}
@@ -274,7 +289,7 @@ def day_data(case) -> DayData:
         else:
             column, scale, cap = unit.series or unit.name, unit.series_scale, getattr(unit, "p_max_mw", None)
             forecast = unit.forecast_series
-        lo, _, hi = band(unit.name, column, scale, kind, forecast)
+        lo, _, hi = band(unit.name, column, scale, kind, forecast, 0.0, cap if kind in ("wind", "pv", "csp") else None)
         if kind in ("wind", "pv", "csp"):
             top, bottom = np.clip(hi, 0.0, cap), np.clip(lo, 0.0, cap)
             uncertain[unit.name] = Uncertain(top, top - bottom, gamma[unit.name], -1.0)
