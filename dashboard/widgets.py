@@ -3,6 +3,7 @@ messages, table editors that go through the case model, case summaries and downl
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable
 from typing import Any
@@ -199,9 +200,12 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
     widget, base = f"{key}_{generation}", f"{key}_base"
     if widget not in st.session_state or base not in st.session_state:
         st.session_state[base] = build()
-    edited = st.data_editor(st.session_state[base], key=widget, **editor)
+    numbers = typed_numbers(st.session_state[base], editor.get("column_config") or {})
+    editor["column_config"] = {**(editor.get("column_config") or {}), **{
+        column: text_column(config) for column, config in numbers.items()}}
+    edited = st.data_editor(as_text(st.session_state[base], numbers), key=widget, **editor)
     try:
-        new = apply(edited)
+        new = apply(from_text(edited, numbers))
     except CaseError as err:
         problems(err.problems)
         st.button("Discard these edits", key=f"{key}_discard", on_click=reset_editor, args=(key,),
@@ -210,13 +214,79 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
     if new != state.case():
         st.session_state[f"{key}_accepted"] = changes(state.case(), new)
         state.set_case(new)
-        if not _same_cells(build(), edited):
+        if not _same_cells(as_text(build(), numbers), edited):
             reset_editor(key)
             st.rerun()
     if accepted := st.session_state.pop(f"{key}_accepted", None):
         st.success("**Edit accepted**: " + "; ".join(literal(c, limit=None) for c in accepted)
                    + ". The current case now holds it; solve again on Results to see its plan.",
                    icon=":material/check:")
+
+
+def typed_numbers(table: pd.DataFrame, config: dict) -> dict[str, dict]:
+    """The editable number columns of ``table`` with their settings (a label of its own where
+    ``config`` gives none).
+
+    The table editor shows them as text cells: a number cell of the browser's grid drops the
+    letters typed into it without a word, so "abc" would arrive as an empty cell. As text it
+    reaches :func:`from_text`, which refuses it by column and row.
+    """
+    numbers = {}
+    for column in table.columns:
+        setting = config.get(column) or {}
+        if (setting.get("type_config") or {}).get("type") not in (None, "number") or setting.get("disabled"):
+            continue
+        if pd.api.types.is_numeric_dtype(table[column]) and not pd.api.types.is_bool_dtype(table[column]):
+            numbers[column] = {**setting, "label": setting.get("label") or str(column)}
+    return numbers
+
+
+def text_column(setting: dict) -> dict:
+    """A number column's settings as a right-aligned text column."""
+    return st.column_config.TextColumn(setting["label"], help=setting.get("help"), width=setting.get("width"),
+                                       pinned=setting.get("pinned"), required=setting.get("required"),
+                                       alignment="right", default=number_text(setting.get("default")))
+
+
+def number_text(value: Any) -> str | None:
+    """A cell's number as typed (``50``, ``0.95``, ``1e-05``); an empty cell as ``None``."""
+    if value is None or pd.isna(value):
+        return None
+    value = float(value)
+    return str(int(value)) if value.is_integer() and abs(value) < 1e15 else f"{value:.12g}"
+
+
+def as_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
+    """``table`` with its ``numbers`` columns as text cells."""
+    shown = table.copy()
+    for column in numbers:
+        shown[column] = pd.Series([number_text(v) for v in table[column]], index=table.index, dtype=object)
+    return shown
+
+
+def from_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
+    """The edited ``table`` with its ``numbers`` columns read back as numbers; a cell that is not
+    a number is refused in the table's words (``WF1: P max [MW] "abc" is not a number``)."""
+    read, wrong = table.copy(), []
+    names = next((table[c] for c in ("name", "source", "hour") if c in table), None)
+    for column, setting in numbers.items():
+        values = []
+        for position, (index, cell) in enumerate(table[column].items()):
+            text = "" if cell is None or (not isinstance(cell, str) and pd.isna(cell)) else str(cell).strip()
+            try:
+                value = float(text) if text else float("nan")
+            except ValueError:
+                value = None
+            if value is None or (text and not math.isfinite(value)):
+                row = names[index] if names is not None and isinstance(names[index], str) else f"row {position + 1}"
+                hint = " (write decimals with a point: 1.5)" if re.fullmatch(r"[+-]?\d+,\d+", text) else ""
+                wrong.append(f'{row}: {setting["label"]} "{excerpt(text)}" is not a number{hint}')
+                value = float("nan")
+            values.append(value)
+        read[column] = pd.Series(values, index=table.index, dtype=float)
+    if wrong:
+        raise CaseError(wrong)
+    return read
 
 
 def changes(before: Case, after: Case) -> list[str]:

@@ -557,7 +557,7 @@ def test_a_capacity_edit_scales_the_band_and_moves_the_plans_bound(paper_case, p
     assert wf1.p_max_mw == 80.0 and wf1.series_scale == pytest.approx(80.0 / 50.0)
     # The table is drawn again from the case: it shows the scale that followed the capacity.
     table = next(e for e in at.data_editor if e.key.startswith("portfolio_wind_")).value
-    assert table.loc[0, "series_scale"] == pytest.approx(1.6)
+    assert table.loc[0, "series_scale"] == "1.6"  # number cells are text cells, as typed
     # (AppTest runs a switched-to page without app.py, so the sidebar is checked in tests/test_browser.py.)
     at.switch_page("pages/results.py").run()
     click(at, "results_solve")

@@ -190,7 +190,10 @@ def test_an_empty_cell_is_named_as_its_column():
 
 @pytest.mark.parametrize("change, message", [
     ({"p_max_mw": None}, "WF1: P max [MW] is empty; enter a number"),
-    ({"p_max_mw": "eighty"}, "WF1: P max [MW] is empty; enter a number"),
+    # Number cells are text cells in the browser, so letters reach the server and are named as typed.
+    ({"p_max_mw": "eighty"}, 'WF1: P max [MW] "eighty" is not a number'),
+    ({"p_max_mw": "1,5"}, 'WF1: P max [MW] "1,5" is not a number (write decimals with a point: 1.5)'),
+    ({"p_max_mw": "nan"}, 'WF1: P max [MW] "nan" is not a number'),
     ({"name": None}, "wind farm in row 1: Name is empty; enter a name"),
 ])
 def test_portfolio_names_an_emptied_cell_by_its_column(paper_case, change, message):
@@ -198,6 +201,21 @@ def test_portfolio_names_an_emptied_cell_by_its_column(paper_case, change, messa
     assert message in errors(at)
     assert "is required" not in errors(at)
     assert at.session_state["case"] == paper_case
+
+
+def test_letters_in_a_budget_or_tariff_cell_are_named_and_the_case_is_kept(paper_case):
+    at = open_app("uncertainty")
+    key = editor_key(at, "uncertainty_budgets_")
+    edit(at, key, edited_rows={row_of(at, key, "WF1"): {"gamma": "abc"}})
+    assert 'WF1: Γ [hours] "abc" is not a number' in errors(at)
+    assert at.session_state["case"] == paper_case
+    at.switch_page("pages/markets.py").run()
+    edit(at, editor_key(at, "markets_tariff_"), edited_rows={3: {"tariff_eur_per_mwh": "cheap"}})
+    assert '03:00–04:00: Tariff [EUR/MWh_th] "cheap" is not a number' in errors(at)
+    assert at.session_state["case"] == paper_case
+    edit(at, editor_key(at, "markets_tariff_"), edited_rows={3: {"tariff_eur_per_mwh": " 42.5 "}})
+    assert not errors(at)
+    assert at.session_state["case"].markets.hpa_tariff_eur_per_mwh[3] == 42.5
 
 
 def test_a_run_at_another_period_length_keeps_the_cases_own_overrides_in_hours(paper_case):
