@@ -42,7 +42,7 @@ HOUR = pd.Timedelta(hours=1)
 FIRST_YEAR, LAST_YEAR = FIRST_DATE.year, LAST_DATE.year
 DATE_RANGE = f"dates must lie between {FIRST_YEAR} and {LAST_YEAR}"
 SHOWN = 12  # gaps, duplicates and missing runs listed in full before "and N more"
-UNITS = {"price": "EUR/MWh", "actual": "MW", "forecast": "MW", "load": "MW"}
+UNITS = {"price": "EUR/MWh", "actual": "MW", "forecast": "MW", "load": "MW", "temperature": "°C"}
 
 
 def check_year(year: int, where: str, written: str) -> None:
