@@ -28,8 +28,14 @@ CSP unit ``C``, ``C_fc``  real-derived when the files give the solar fleet: the 
 ED unit ``E``, ``E_fc``    real-derived when the files give the system load: the load (and its
                           day-ahead forecast, its error scaled by ``K``) mapped onto the unit's
                           energy and range by :func:`scaled_to_demand`
-TD unit ``H``, ``H_fc``    the synthetic heat demand; ``H_fc`` a modelled day-ahead forecast with a
-                          stated error (:data:`HEAT_FORECAST_ERROR`, scaled by ``K``)
+TD unit ``H``             with a weather file (``--weather``), real-derived: the heating
+                          degree-hours of its temperature above a base share mapped onto the
+                          unit's energy and range by :func:`heat_from_temperature`; without
+                          one, the synthetic heat demand
+``H_fc``                  real-derived from the weather file's forecast temperature on the same
+                          map (its error scaled by ``K``) when it has one; else a modelled
+                          day-ahead forecast with a stated error (:data:`HEAT_FORECAST_ERROR`,
+                          scaled by ``K``)
 ED (without a system      synthetic series of :mod:`rvpp.data.synth` on the same hours
 load), CSP (without a
 solar fleet)
@@ -61,7 +67,8 @@ from . import synth
 from .case import Case, CASE_FILE, parse_case
 from .case_yaml import load_case, save_case
 from .history import History
-from .importers import ImportReport, fill_gaps, hourly_table, import_files
+from .importers import ImportReport, fill_gaps, hourly_table, import_files, weather
+from .importers.report import hourly
 
 FLEETS = {"wind": ("actual_wind_onshore", "forecast_wind_onshore"), "pv": ("actual_solar", "forecast_solar")}
 FORECAST_SUFFIX = "_fc"
@@ -75,6 +82,12 @@ LOAD = ("load_actual", "load_forecast")  # the system load and its day-ahead for
 # persistent over HEAT_FORECAST_PERSISTENCE_H hours (a district-heating load forecast from a
 # temperature forecast errs by a few per cent).
 HEAT_FORECAST_ERROR, HEAT_FORECAST_PERSISTENCE_H = 0.05, 6.0
+# Thermal demands from a temperature series: heating degree-hours below HEATING_BASE_C, on top
+# of a base that does not depend on the weather, HEAT_BASE_SHARE of an hour of average heating
+# (network losses and hot water in a district network; process heat has a larger base).
+HEATING_BASE_C = 15.5  # [°C] the base temperature of the UK's degree-day statistics
+HEAT_BASE_SHARE = 0.5  # [-]
+TEMPERATURE = ("temperature", "temperature_forecast")  # the weather series [°C]
 PRICE_LAG_DAYS = 7  # naive price forecasts look back up to a week before the window
 HISTORY_FILE = "history.csv"
 WRITTEN = (HISTORY_FILE, CASE_FILE)  # the files a build writes into its folder, in this order
@@ -94,6 +107,11 @@ class BuildOptions:
     seed: int | None = None
     fill_gaps_h: int = 0
     bands: str = "forecast"
+    weather: str | Path | None = None
+    weather_columns: tuple[str, ...] = ()
+    weather_timezone: str | None = None
+    heating_base_c: float = HEATING_BASE_C
+    heat_base_share: float = HEAT_BASE_SHARE
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.errors_scale) and self.errors_scale >= 0):
@@ -106,6 +124,14 @@ class BuildOptions:
             raise RvppError(f"--fill-gaps={self.fill_gaps_h} must be >= 0 hours")
         if self.bands not in ("forecast", "climatology"):
             raise RvppError(f"--bands {self.bands!r} must be forecast or climatology")
+        low, high = weather.TEMPERATURE_RANGE_C
+        if not (math.isfinite(self.heating_base_c) and low <= self.heating_base_c <= high):
+            raise RvppError(f"--heating-base {self.heating_base_c:g} °C must lie in {low:g} to {high:g} °C")
+        if not (math.isfinite(self.heat_base_share) and 0.0 < self.heat_base_share <= 1.0):
+            raise RvppError(f"--heat-base-share {self.heat_base_share:g} must be > 0 and <= 1 (a share of the "
+                            "demand in an hour of average heating)")
+        weather.WeatherColumns.parse(self.weather_columns)
+        weather.zone_of(self.weather_timezone)
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,6 +189,16 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
 
     if load:
         frame, load = _with_load(frame, table.frame[list(load)], load, options, base.timezone, notes, filled)
+    weather_report, temperature = None, ()
+    if options.weather is not None and not base.td:
+        notes.append("the template has no thermal demand: the weather file is not read")
+    elif options.weather is not None:
+        say("reading the weather file")
+        weather_report, series, runs = _weather(options, frame.index, base.timezone, first, last, notes)
+        frame = pd.concat([frame, series], axis=1)
+        temperature = tuple(series.columns)
+        notes += runs
+        filled += runs
 
     def made(how: str, *used: str) -> str:
         gaps = [f.split(": ", 1)[1] for f in filled if f.split(":", 1)[0] in used]
@@ -209,7 +245,8 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
         if getattr(base, kind) and kind not in fleets:
             notes.append(f"{kind}: the files give no {FLEETS[kind][0]}; {kind} units are synthetic")
     say("generating the synthetic series")
-    synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed)
+    synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed,
+                                         weather=bool(temperature))
     columns.update(synthetic)
     provenance.update(sources_text)
     if "pv" in fleets:
@@ -220,15 +257,22 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
         demands, demand_text = _demands_from_load(base, frame, load, options, table, made)
         columns.update(demands)
         provenance.update(demand_text)
-    heat_fc, heat_text = _heat_forecasts(base, columns, options, seed)
+    heated = ()
+    if temperature:
+        heat, heat_text, heated = _demands_from_weather(base, frame, temperature, options, weather_report, made,
+                                                        notes)
+        columns.update(heat)
+        provenance.update(heat_text)
+    heat_fc, heat_text = _heat_forecasts(base, columns, options, seed, skip=heated, weather=bool(temperature))
     columns.update(heat_fc)
     provenance.update(heat_text)
     history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source=HISTORY_FILE)
-    case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last, bool(load))
+    case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last, bool(load),
+                 bool(temperature))
     _write(case, out, overwrite)
     say(f"wrote {out}")
-    return BuiltCase(folder=out, case=case, reports=tuple(i.report for i in imports), capacities_mw=capacities,
-                     notes=tuple(notes))
+    reports = tuple(i.report for i in imports) + ((weather_report,) if weather_report else ())
+    return BuiltCase(folder=out, case=case, reports=reports, capacities_mw=capacities, notes=tuple(notes))
 
 
 def clear_sky_index(capacity_factor: np.ndarray, index: pd.DatetimeIndex,
@@ -367,19 +411,161 @@ def _demands_from_load(case: Case, frame: pd.DataFrame, load: tuple[str, ...], o
     return columns, provenance
 
 
-def _heat_forecasts(case: Case, columns: dict[str, np.ndarray], options: BuildOptions, seed: int):
-    """A modelled day-ahead forecast of each thermal demand: its series times ``1 − K·ε``, ``ε`` a
-    persistent error of :data:`HEAT_FORECAST_ERROR` standard deviation."""
-    out, provenance = {}, {}
+def heating_degree_hours(temperature: np.ndarray, base_c: float = HEATING_BASE_C) -> np.ndarray:
+    """Heating degree-hours of each hour [K·h per h]: ``HDH = max(0, T_base − T)``."""
+    return np.maximum(base_c - np.asarray(temperature, dtype=float), 0.0)
+
+
+def heat_from_temperature(temperature: np.ndarray, dates: np.ndarray, q_min_mwh: float, h_min_mw: float,
+                          h_max_mw: float, base_c: float = HEATING_BASE_C, base_share: float = HEAT_BASE_SHARE,
+                          reference: np.ndarray | None = None) -> np.ndarray | None:
+    """A thermal demand following the temperature [MW_th]; ``None`` when no hour needs heat.
+
+    The heating signal ``S = β + (1 − β)·HDH/HDH̄`` (``HDH`` of :func:`heating_degree_hours`,
+    ``HDH̄`` their mean over the hours with ``HDH > 0``, ``β`` the base share: the demand
+    that does not depend on the weather, as a share of an hour of average heating) is mapped
+    onto the demand as the system load is onto an electrical one (:func:`scaled_to_demand`):
+    a median day of ``S`` gets the median-day energy ``1.05·q_min``, and its swings are
+    narrowed where they would leave ``[1.2·h_min, 0.9·h_max]``. ``reference``: the
+    temperature whose ``HDH̄`` and map are used (a forecast takes the actual's).
+    """
+    actual = heating_degree_hours(temperature if reference is None else reference, base_c)
+    heating = actual[actual > 0.0]
+    if heating.size == 0:
+        return None
+    mean = float(heating.mean())
+
+    def signal(series: np.ndarray) -> np.ndarray:
+        return base_share + (1.0 - base_share) * heating_degree_hours(series, base_c) / mean
+
+    shape = (q_min_mwh, h_min_mw, h_max_mw)
+    if reference is None:
+        return scaled_to_demand(signal(temperature), dates, *shape)
+    return scaled_to_demand(signal(temperature), dates, *shape, reference=signal(reference))
+
+
+def _weather(options: BuildOptions, index: pd.DatetimeIndex, timezone: str, first: dt.date, last: dt.date,
+             notes: list[str]) -> tuple[ImportReport, pd.DataFrame, list[str]]:
+    """The weather file's temperature (and its forecast, when it has one and covers the period)
+    on the case's hours [°C], with the runs ``--fill-gaps`` interpolated."""
+    read = weather.read(options.weather, weather.WeatherColumns.parse(options.weather_columns),
+                        options.weather_timezone)
+    table, partial = hourly(read)
+    notes += [f"weather: {n}" for n in partial]
+    series = table.reindex(index)
+    runs: list[str] = []
+    actual = series[[TEMPERATURE[0]]]
+    if actual.isna().any().any() and options.fill_gaps_h:
+        try:
+            actual, runs = fill_gaps(actual, options.fill_gaps_h)
+        except DataImportError:
+            pass  # the days left empty are named below
+    if actual.isna().any().any():
+        raise DataImportError(_uncovered(actual[TEMPERATURE[0]], timezone, first, last, read.report, options))
+    if TEMPERATURE[1] not in series.columns:
+        return read.report, actual, runs
+    forecast = series[[TEMPERATURE[1]]]
+    if forecast.isna().any().any() and options.fill_gaps_h:
+        try:
+            forecast, more = fill_gaps(forecast, options.fill_gaps_h)
+            runs += more
+        except DataImportError:
+            pass
+    if forecast.isna().any().any():
+        days = _days(forecast[TEMPERATURE[1]], timezone)
+        notes.append(f"thermal demand forecasts stay modelled: the weather's {TEMPERATURE[1]} has no value on "
+                     f"{len(days)} day(s) of the case ({_ranges(days)})")
+        return read.report, actual, runs
+    return read.report, pd.concat([actual, forecast], axis=1), runs
+
+
+def _days(values: pd.Series, timezone: str) -> list[dt.date]:
+    """The local days with an hour where ``values`` is empty."""
+    empty = values.index[values.isna().to_numpy()]
+    return sorted(set(empty.tz_convert(timezone).date))
+
+
+def _ranges(days: list[dt.date]) -> str:
+    """``2018-01-01 to 2018-01-03, 2018-02-10`` (the first twelve runs, then how many more)."""
+    runs: list[list[dt.date]] = []
+    for day in days:
+        if runs and day - runs[-1][-1] == dt.timedelta(days=1):
+            runs[-1].append(day)
+        else:
+            runs.append([day])
+    text = [f"{r[0]} to {r[-1]}" if len(r) > 1 else f"{r[0]}" for r in runs[:12]]
+    return ", ".join(text) + (f" and {len(runs) - 12} more stretches" if len(runs) > 12 else "")
+
+
+def _uncovered(values: pd.Series, timezone: str, first: dt.date, last: dt.date, report: ImportReport,
+               options: BuildOptions) -> str:
+    days = _days(values, timezone)
+    hours = int(values.isna().sum())
+    span = (f"{report.start.tz_convert(timezone):%Y-%m-%d %H:%M} to {report.end.tz_convert(timezone):%Y-%m-%d %H:%M}")
+    filled = f" (runs of at most {options.fill_gaps_h} hours were interpolated)" if options.fill_gaps_h else ""
+    return (f"{report.files[0].name}: the weather does not cover the case's period {first} to {last}: no "
+            f"temperature in {hours} hour(s) of {len(days)} day(s): {_ranges(days)}{filled}; the file spans "
+            f"{span}. Give a weather file for the whole period, or choose --start/--end inside it"
+            + ("" if options.fill_gaps_h else " (or interpolate short gaps with --fill-gaps HOURS)"))
+
+
+def _demands_from_weather(case: Case, frame: pd.DataFrame, temperature: tuple[str, ...], options: BuildOptions,
+                          report: ImportReport, made: Callable[..., str], notes: list[str]):
+    """Each thermal demand (and its day-ahead forecast) from the weather's temperature; returns
+    the columns, their provenance and the units whose forecast came from the forecast temperature."""
+    dates = np.asarray(frame.index.tz_convert(case.timezone).date)
+    actual_t = frame[temperature[0]].to_numpy(float)
+    forecast_t = frame[temperature[1]].to_numpy(float) if len(temperature) > 1 else None
+    base_c, share = options.heating_base_c, options.heat_base_share
+    columns, provenance, heated = {}, {}, []
+    how = (f"heating degree-hours max(0, {base_c:g} °C − {temperature[0]}) over their mean in the hours that need "
+           f"heat, on a base share {share:g} (S = {share:g} + {1.0 - share:g}·HDH/HDH̄), mapped onto the unit's "
+           f"median-day energy {synth.MEDIAN_DAY_ENERGY_RATIO:g} × q_min and range")
     for unit in case.td:
+        shape = (unit.q_min_mwh_th, unit.h_min_mw_th, unit.h_max_mw_th)
+        actual = heat_from_temperature(actual_t, dates, *shape, base_c=base_c, base_share=share)
+        if actual is None:
+            level = synth.MEDIAN_DAY_ENERGY_RATIO * unit.q_min_mwh_th / synth.HOURS_PER_DAY
+            actual = np.full(len(actual_t), level)
+            columns[unit.column] = actual
+            provenance[unit.column] = _real(temperature[0], (report,), made(
+                f"no hour below {base_c:g} °C in the period: flat at the median-day level {level:g} MW_th",
+                temperature[0]), "real-derived")
+            notes.append(f'td "{unit.name}": no hour of the period is below {base_c:g} °C; the demand is flat at '
+                         "its median-day level and its forecast error is modelled")
+            continue
+        columns[unit.column] = actual
+        provenance[unit.column] = _real(temperature[0], (report,), made(f"{how} of {unit.name}", temperature[0]),
+                                        "real-derived")
+        if forecast_t is None:
+            continue
+        guess = heat_from_temperature(forecast_t, dates, *shape, base_c=base_c, base_share=share, reference=actual_t)
+        columns[unit.name + FORECAST_SUFFIX] = np.maximum(actual - options.errors_scale * (actual - guess), 0.0)
+        provenance[unit.name + FORECAST_SUFFIX] = _real(temperature[1], (report,), made(
+            f"{unit.column} − {options.errors_scale:g}·({unit.column} − {temperature[1]} on the same map), at least 0",
+            temperature[0], temperature[1]), "real-derived")
+        heated.append(unit.name)
+    return columns, provenance, tuple(heated)
+
+
+def _heat_forecasts(case: Case, columns: dict[str, np.ndarray], options: BuildOptions, seed: int,
+                    skip: tuple[str, ...] = (), weather: bool = False):
+    """A modelled day-ahead forecast of each thermal demand (but those in ``skip``): its series
+    times ``1 − K·ε``, ``ε`` a persistent error of :data:`HEAT_FORECAST_ERROR` standard deviation."""
+    out, provenance = {}, {}
+    made_from = " (the demand from the actual temperature; the weather file gives no forecast of it)" \
+        if weather else ""
+    for unit in case.td:
+        if unit.name in skip:
+            continue
         actual = columns[unit.column]
         error = HEAT_FORECAST_ERROR * synth.ar1(synth.component_rng(seed, f"forecast/{unit.name}"), len(actual),
                                                 HEAT_FORECAST_PERSISTENCE_H)
         out[unit.name + FORECAST_SUFFIX] = np.maximum(actual * (1.0 - options.errors_scale * error), 0.0)
         provenance[unit.name + FORECAST_SUFFIX] = {
             "origin": "modelled", "source": f"rvpp.data.synth (seed {seed})",
-            "note": f"{unit.column} × (1 − {options.errors_scale:g}·ε), ε a relative error of standard deviation "
-                    f"{HEAT_FORECAST_ERROR:g} persisting {HEAT_FORECAST_PERSISTENCE_H:g} h"}
+            "note": f"{unit.column}{made_from} × (1 − {options.errors_scale:g}·ε), ε a relative error of standard "
+                    f"deviation {HEAT_FORECAST_ERROR:g} persisting {HEAT_FORECAST_PERSISTENCE_H:g} h"}
     return out, provenance
 
 
@@ -485,7 +671,7 @@ def _real(column: str, reports: tuple[ImportReport, ...], how: str, origin: str 
 
 
 def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.date, real: dict[str, np.ndarray],
-               fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int):
+               fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int, weather: bool = False):
     """Reserve prices, demands (and wind, PV or, without a solar fleet, CSP solar-field heat the
     data does not give) from :mod:`rvpp.data.synth` on the same hours."""
     made = synth.build_history(seed, start=first.isoformat(), end=(last + dt.timedelta(days=1)).isoformat())
@@ -523,7 +709,7 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
     notes = {"wind": "modelled wind farm output", "pv": "modelled PV output", "ed": "modelled consumption",
              "td": "modelled heat consumption"}
     for kind in ("wind", "pv", "ed", "td"):
-        if kind in fleets or (kind == "ed" and "load_actual" in frame.columns):
+        if kind in fleets or (kind == "ed" and "load_actual" in frame.columns) or (kind == "td" and weather):
             continue
         for unit in getattr(case, kind):
             if unit.column not in profiles[kind]:
@@ -535,7 +721,7 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
 
 
 def _case(base: Case, name: str, history: History, delivery: dt.date, provenance: dict, options: BuildOptions,
-          fleets: dict, first: dt.date, last: dt.date, load: bool = False) -> Case:
+          fleets: dict, first: dt.date, last: dt.date, load: bool = False, heat: bool = False) -> Case:
     data = base.to_data()
     data["name"] = name
     real = " and ".join({"wind": "wind", "pv": "PV"}[k] for k in fleets)
@@ -546,6 +732,7 @@ def _case(base: Case, name: str, history: History, delivery: dt.date, provenance
         + (", solar-field heat from the solar fleet's clear-sky index" if "pv" in fleets and data["units"]["csp"]
            else "")
         + (", electrical demands from the system load" if load and data["units"]["ed"] else "")
+        + (", thermal demands from the temperature (heating degree-hours)" if heat and data["units"]["td"] else "")
         + "; everything else synthetic. See provenance.")
     data["delivery_date"] = delivery.isoformat()
     for kind, (_, forecast) in fleets.items():
