@@ -64,6 +64,7 @@ def add_data_commands(commands) -> None:
                        "(default: the published one)")
     build.add_argument("--force", action="store_true",
                        help="overwrite the case.yaml and history.csv of a folder that already holds them")
+    _add_weather_options(build)
     build.set_defaults(run=_run_build_case)
 
     workbook = commands.add_parser(
@@ -128,11 +129,37 @@ def _run_build_case(args: argparse.Namespace) -> int:
     options = BuildOptions(errors_scale=args.errors_scale, start=args.start, end=args.end, date=args.date,
                            zone=args.zone, wind_capacity_mw=args.wind_capacity,
                            solar_capacity_mw=args.solar_capacity, seed=args.seed, fill_gaps_h=args.fill_gaps,
-                           bands=args.bands)
+                           bands=args.bands, **_weather_options(args))
     built = build_case(args.sources, args.out, template=args.template, options=options, overwrite=args.force,
                        progress=lambda m: print(f"  {m}", file=sys.stderr))
     print("\n".join(built.lines()))
     return 0
+
+
+def _add_weather_options(build) -> None:
+    """``build-case``'s options for thermal demands that follow a temperature series."""
+    build.add_argument("--weather", type=path_option, metavar="CSV",
+                       help="weather CSV with a time and an air temperature [°C] column (and optionally its "
+                            "day-ahead forecast): thermal demands follow its heating degree-hours (default: "
+                            "modelled)")
+    build.add_argument("--weather-columns", nargs="+", default=(), metavar="ROLE=COLUMN",
+                       help="name the weather file's columns: time=..., temperature=..., forecast=... (default: "
+                            "found by name, e.g. time/timestamp, temperature/temp/t2m)")
+    build.add_argument("--weather-timezone", metavar="TZ",
+                       help="clock of weather times written without a UTC offset, e.g. UTC or Europe/Madrid")
+    build.add_argument("--heating-base", type=Number(-90, 60, unit="°C"), metavar="C",
+                       help="base temperature of the heating degree-hours max(0, base − T) (default 15.5 °C)")
+    build.add_argument("--heat-base-share", type=Number(0, 1, low_open=True), metavar="SHARE",
+                       help="share of a thermal demand that does not depend on the weather, in an hour of "
+                            "average heating (default 0.5)")
+
+
+def _weather_options(args: argparse.Namespace) -> dict:
+    """The weather options given (the library's defaults stand for the others)."""
+    given = {"weather": args.weather, "weather_columns": tuple(args.weather_columns),
+             "weather_timezone": args.weather_timezone, "heating_base_c": args.heating_base,
+             "heat_base_share": args.heat_base_share}
+    return {name: value for name, value in given.items() if value is not None}
 
 
 def _run_import_workbook(args: argparse.Namespace) -> int:
