@@ -69,6 +69,7 @@ CELSIUS_UNITS = {"°c", "ºc", "degc", "deg c", "c", "celsius", "degrees c", "de
 KELVIN_UNITS = {"k", "kelvin"}
 EMPTY = {"", "nan", "na", "n/a", "-"}
 ROLES = ("time", "temperature", "forecast")
+LIMIT_MB = 512.0  # the largest file read, as for the other importers (20 years of 10-minute rows is ~60 MB)
 
 _UNIT = re.compile(r"^(?P<name>.*?)\s*[\[(](?P<unit>[^\])]*)[\])]\s*$")
 _TIME = re.compile(r"^(\d{4})-(\d{2})-(\d{2})[T ](\d{2}):(\d{2})(?::(\d{2})(?:\.\d+)?)?\s*"
@@ -114,7 +115,7 @@ def read(path: str | Path, columns: WeatherColumns = WeatherColumns(), timezone:
     """Read a weather CSV into ``temperature`` (and ``temperature_forecast``) [°C], on its own
     step; ``timezone``: the clock of times written without an offset."""
     zone = zone_of(timezone)
-    data = read_bytes(path)
+    data = read_bytes(path, LIMIT_MB)
     name = Path(path).name
     text = decode(data, name)
     delimiter = _delimiter(text)
