@@ -283,3 +283,232 @@ def test_real_spanish_case_solves_a_day_of_2018(tmp_path):
     assert audit_result(result) == []
     source = result.problem.sources["WF1"]
     assert (source.nominal <= 50.0).all() and (source.deviation >= 0.0).all()
+
+
+# ----------------------------------------------------------------------------- thermal demands from a weather file
+
+LEVEL = 1.05 * 700 / 24  # both thermal demands of the paper case: q_min 700 MWh_th, median-day mean 30.625 MW_th
+COLD_DAY = dt.date(2021, 5, 20)
+
+
+def write_weather(path: Path, forecast: bool = True, drop_days: tuple[dt.date, ...] = (), warm: bool = False,
+                  blank_forecast: str | None = None) -> Path:
+    """Local naive times (Europe/Madrid), 2021-05-01 to 2021-06-14: 5.5 °C from 00:00 to 05:59, 18 °C the
+    rest of the day, and -14.5 °C all day on 2021-05-20; the forecast 1 °C warmer. ``warm``: 20 °C always."""
+    local = pd.date_range("2021-05-01", "2021-06-15", freq="h", inclusive="left")
+    temperature = np.where(local.hour < 6, 5.5, 18.0)
+    temperature[local.date == COLD_DAY] = -14.5
+    if warm:
+        temperature[:] = 20.0
+    keep = ~np.isin(local.date, drop_days)
+    table = pd.DataFrame({"Fecha": [f"{t:%Y-%m-%d %H:%M}" for t in local], "TMed": temperature})
+    if forecast:
+        table["TPrev"] = temperature + 1.0
+        if blank_forecast:
+            table.loc[table["Fecha"].str.startswith(blank_forecast), "TPrev"] = np.nan
+    table[keep].to_csv(path, index=False)
+    return path
+
+
+WEATHER_COLUMNS = ("time=Fecha", "temperature=TMed", "forecast=TPrev")
+
+
+def weather_options(path: Path, **more) -> BuildOptions:
+    return BuildOptions(weather=path, weather_columns=WEATHER_COLUMNS, weather_timezone=TZ, **more)
+
+
+def at(day: str, hour: int) -> pd.Timestamp:
+    return pd.Timestamp(f"{day} {hour:02d}:00", tz=TZ).tz_convert("UTC")
+
+
+def test_thermal_demands_follow_the_heating_degree_hours_mapped_by_hand(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv")
+    build_case([source], tmp_path / "case", template=PAPER, options=weather_options(weather, errors_scale=2.0))
+    case = load_case(tmp_path / "case")
+    history = case.history.frame
+    # Heating degree-hours below 15.5 °C: 10 K in the six cold hours of a normal day, 30 K all day on the cold
+    # day, 0 otherwise. Their mean over the 44·6 + 24 = 288 hours that need heat is 3,360 / 288 = 35/3 K.
+    # Signal S = 0.5 + 0.5·HDH/(35/3): 13/14 in a cold hour, 1/2 in a warm one, 25/14 on the cold day.
+    # The median day is a normal one: S̃ = (6·13/14 + 18·1/2)/24 = 17/28, so S/S̃ is 26/17, 14/17 and 50/17.
+    # Swings of ±level·(S/S̃ − 1) would reach 30.625·50/17 = 90 MW_th on the cold day, above 0.9·h_max, so the
+    # spread narrows until the cold day sits on the ceiling: spread = (0.9·h_max − level)/(50/17 − 1).
+    for unit, h_max in (("TD_industry", 80.0), ("TD_residential", 70.0)):
+        ceiling = 0.9 * h_max  # 72 and 63 MW_th
+        spread = (ceiling - LEVEL) / (33 / 17)  # 21.3144 and 16.6780 MW_th
+        series = history[unit]
+        assert series[at("2021-05-20", 12)] == pytest.approx(ceiling, rel=1e-5)
+        assert series[at("2021-05-11", 3)] == pytest.approx(LEVEL + spread * 9 / 17, rel=1e-5)
+        assert series[at("2021-05-11", 15)] == pytest.approx(LEVEL - spread * 3 / 17, rel=1e-5)
+        # The forecast, 1 °C warmer: 9 K in a cold hour, S = 0.5 + 0.5·9·3/35 = 31/35, on the actual's map,
+        # its error doubled (K = 2).
+        guess = LEVEL + spread * ((31 / 35) / (17 / 28) - 1)
+        actual = LEVEL + spread * 9 / 17
+        assert history[unit + "_fc"][at("2021-05-11", 3)] == pytest.approx(actual - 2 * (actual - guess), rel=1e-5)
+        assert history[unit + "_fc"][at("2021-05-11", 15)] == pytest.approx(series[at("2021-05-11", 15)], rel=1e-5)
+    assert history["TD_industry"][at("2021-05-11", 15)] == pytest.approx(26.8636, abs=1e-4)
+    assert history["TD_residential"][at("2021-05-11", 15)] == pytest.approx(27.6818, abs=1e-4)
+    # A median (normal) day holds the median-day energy 1.05·q_min whatever the narrowing.
+    day = history.loc[at("2021-05-11", 0):at("2021-05-11", 23), "TD_residential"]
+    assert day.sum() == pytest.approx(1.05 * 700, rel=1e-5)
+
+
+def test_the_base_temperature_and_share_are_the_users(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv")
+    build_case([source], tmp_path / "case", template=PAPER,
+               options=weather_options(weather, heating_base_c=20.0, heat_base_share=0.8))
+    history = load_case(tmp_path / "case").history.frame
+    # Below 20 °C: 14.5 K in a cold hour, 2 K in a warm one, 34.5 K on the cold day; every hour needs heat.
+    # Mean over all 1,080 hours: (44·(6·14.5 + 18·2) + 24·34.5)/1080 = 6240/1080 = 52/9 K.
+    # S = 0.8 + 0.2·HDH·9/52; a normal day's mean: 0.8 + 0.2·(123/24)·9/52.
+    mean = 52 / 9
+    typical = 0.8 + 0.2 * (123 / 24) / mean
+    cold = (0.8 + 0.2 * 34.5 / mean) / typical
+    night = (0.8 + 0.2 * 14.5 / mean) / typical
+    spread = min(LEVEL, (0.9 * 70 - LEVEL) / (cold - 1))
+    assert history["TD_residential"][at("2021-05-11", 3)] == pytest.approx(LEVEL + spread * (night - 1), rel=1e-5)
+    with pytest.raises(RvppError, match=r"--heat-base-share 0 must be > 0 and <= 1"):
+        BuildOptions(heat_base_share=0.0)
+    with pytest.raises(RvppError, match=r"--heating-base 99 °C must lie in -90 to 60 °C"):
+        BuildOptions(heating_base_c=99.0)
+
+
+def test_provenance_says_real_derived_or_modelled_per_thermal_series(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    with_forecast = write_weather(tmp_path / "weather.csv")
+    build_case([source], tmp_path / "both", template=PAPER, options=weather_options(with_forecast))
+    origins = load_case(tmp_path / "both").provenance_map
+    for unit in ("TD_industry", "TD_residential"):
+        assert origins[unit].origin == origins[unit + "_fc"].origin == "real-derived"
+        assert "weather.csv" in origins[unit].source and "sha256" in origins[unit].source
+        assert "heating degree-hours max(0, 15.5 °C − temperature)" in origins[unit].note
+        assert "temperature_forecast on the same map" in origins[unit + "_fc"].note
+    assert origins["ED_industry"].origin == "modelled"  # no system load in the table
+    actual_only = write_weather(tmp_path / "actual.csv", forecast=False)
+    build_case([source], tmp_path / "actual", template=PAPER,
+               options=BuildOptions(weather=actual_only, weather_columns=WEATHER_COLUMNS[:2], weather_timezone=TZ))
+    case = load_case(tmp_path / "actual")
+    origins = case.provenance_map
+    assert origins["TD_industry"].origin == "real-derived" and origins["TD_industry_fc"].origin == "modelled"
+    assert "from the actual temperature; the weather file gives no forecast of it" in origins["TD_industry_fc"].note
+    assert case.td[0].forecast_series == "TD_industry_fc"
+    assert case.uncertainty.band_method("TD_industry", "td") == "forecast"
+    error = case.history.frame["TD_industry_fc"] / case.history.frame["TD_industry"] - 1.0
+    assert 0.02 < error.std() < 0.08  # the stated 5 % modelled error
+    build_case([source], tmp_path / "none", template=PAPER)
+    origins = load_case(tmp_path / "none").provenance_map
+    assert origins["TD_industry"].origin == origins["TD_industry_fc"].origin == "modelled"
+
+
+def test_the_weather_must_cover_the_period_and_the_missing_days_are_named(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    short = write_weather(tmp_path / "weather.csv", drop_days=(dt.date(2021, 5, 2), dt.date(2021, 5, 3),
+                                                                dt.date(2021, 5, 4), dt.date(2021, 5, 7)))
+    with pytest.raises(DataImportError, match=r"weather.csv: the weather does not cover the case's period 2021-05-01 "
+                                              r"to 2021-06-14: no temperature in 96 hour\(s\) of 4 day\(s\): "
+                                              r"2021-05-02 to 2021-05-04, 2021-05-07"):
+        build_case([source], tmp_path / "case", template=PAPER, options=weather_options(short))
+    assert not (tmp_path / "case").exists()
+    build_case([source], tmp_path / "case", template=PAPER,
+               options=weather_options(short, start="2021-05-08"))
+    assert load_case(tmp_path / "case").provenance_map["TD_industry"].origin == "real-derived"
+
+
+def test_short_weather_gaps_are_interpolated_only_on_request(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv")
+    lines = weather.read_text().splitlines()
+    lines = [line for line in lines if not line.startswith(("2021-05-15 10:00", "2021-05-15 11:00"))]
+    weather.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataImportError, match=r"no temperature in 2 hour\(s\) of 1 day\(s\): 2021-05-15.*--fill-gaps"):
+        build_case([source], tmp_path / "case", template=PAPER, options=weather_options(weather))
+    built = build_case([source], tmp_path / "case", template=PAPER, options=weather_options(weather, fill_gaps_h=2))
+    assert any(n.startswith("temperature: 2 hour(s) from 2021-05-15T08:00Z") for n in built.notes)
+    assert "interpolated" in built.case.provenance_map["TD_industry"].note
+    assert built.case.history.frame["TD_industry"][at("2021-05-15", 10)] == pytest.approx(
+        built.case.history.frame["TD_industry"][at("2021-05-15", 9)], rel=1e-5)  # 18 °C either side
+
+
+def test_a_forecast_with_gaps_leaves_the_forecast_modelled_and_says_so(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv", blank_forecast="2021-05-15 10:00")
+    built = build_case([source], tmp_path / "case", template=PAPER, options=weather_options(weather))
+    assert any(n.startswith("thermal demand forecasts stay modelled: the weather's temperature_forecast has no "
+                            "value on 1 day(s) of the case (2021-05-15)") for n in built.notes)
+    origins = built.case.provenance_map
+    assert origins["TD_industry"].origin == "real-derived" and origins["TD_industry_fc"].origin == "modelled"
+
+
+def test_a_period_without_heating_gives_flat_demands_at_their_median_day_level(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv", warm=True)
+    built = build_case([source], tmp_path / "case", template=PAPER, options=weather_options(weather))
+    history = built.case.history.frame
+    assert np.allclose(history["TD_industry"], LEVEL) and np.allclose(history["TD_residential"], LEVEL)
+    assert built.case.provenance_map["TD_industry_fc"].origin == "modelled"
+    assert any('td "TD_industry": no hour of the period is below 15.5 °C' in n for n in built.notes)
+
+
+def test_command_line_builds_thermal_demands_from_a_weather_file(tmp_path, capsys):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv")
+    code = main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "case"), "--weather",
+                 str(weather), "--weather-columns", *WEATHER_COLUMNS, "--weather-timezone", TZ,
+                 "--heating-base", "15.5", "--heat-base-share", "0.5"])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    assert "TD_industry: real-derived" in printed.out and "TD_residential_fc: real-derived" in printed.out
+    code = main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "other"), "--weather",
+                 str(weather), "--weather-columns", *WEATHER_COLUMNS])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert "has no UTC offset" in err and "--weather-timezone" in err and "Traceback" not in err
+
+
+REAL_WEATHER_DAYS = ("2018-01-01", "2018-02-14")
+
+
+def spain_slice(tmp_path: Path) -> Path:
+    """The Spanish dataset's rows of January and February 2018 (a copy in tmp_path, never committed)."""
+    raw = pd.read_csv(REAL[0], dtype=str)
+    stamps = pd.to_datetime(raw["time"], utc=True)
+    keep = (stamps >= pd.Timestamp("2017-12-31 23:00", tz="UTC")) & (stamps < pd.Timestamp("2018-03-01", tz="UTC"))
+    path = tmp_path / "energy_dataset.csv"
+    raw[keep.to_numpy()].to_csv(path, index=False)
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not REAL[0].is_file(), reason="real Spanish data not present")
+def test_real_spanish_slice_with_and_without_a_weather_file(tmp_path):
+    source = spain_slice(tmp_path)
+    span = {"start": REAL_WEATHER_DAYS[0], "end": REAL_WEATHER_DAYS[1]}
+    without = build_case([source], tmp_path / "modelled", template=PAPER, options=BuildOptions(**span))
+    origins = without.case.provenance_map
+    assert origins["TD_industry"].origin == origins["TD_industry_fc"].origin == "modelled"
+    assert origins["ED_industry"].origin == "real-derived"  # the dataset gives the system load
+    # A winter day: 7 + 5·cos(2π(h − 15)/24) °C, 12 °C at 15:00 local and 2 °C at 03:00; the forecast 0.5 °C
+    # colder. Hand-written: there is no temperature in the shared data.
+    local = pd.date_range("2018-01-01", "2018-02-15", freq="h", inclusive="left", tz=TZ)
+    temperature = 7.0 + 5.0 * np.cos(2 * np.pi * (np.asarray(local.hour) - 15) / 24.0)
+    weather = tmp_path / "weather.csv"
+    pd.DataFrame({"time": [t.isoformat() for t in local], "temperature": temperature,
+                  "temperature_forecast": temperature - 0.5}).to_csv(weather, index=False)
+    built = build_case([source], tmp_path / "weather", template=PAPER, options=BuildOptions(weather=weather, **span))
+    case = load_case(tmp_path / "weather")
+    origins = case.provenance_map
+    assert origins["TD_industry"].origin == origins["TD_industry_fc"].origin == "real-derived"
+    assert origins["ED_industry"].origin == "real-derived" and origins["price_da"].origin == "real"
+    assert origins["WF1"].origin == "real-derived"
+    history = case.history.frame
+    # Colder at night than in the afternoon: more heat at 05:00 than at 15:00 on every day.
+    night = history.loc[history.index.tz_convert(TZ).hour == 5, "TD_residential"].to_numpy()
+    afternoon = history.loc[history.index.tz_convert(TZ).hour == 15, "TD_residential"].to_numpy()
+    assert (night > afternoon).all()
+    # The forecast is colder, so it expects more heat in every hour that needs heat.
+    assert (history["TD_residential_fc"] >= history["TD_residential"] - 1e-6).all()
+    assert history["TD_residential"].between(1.2 * 5, 0.9 * 70).all()
+    daily = history["TD_residential"].groupby(history.index.tz_convert(TZ).date).sum()
+    assert float(np.median(daily)) == pytest.approx(1.05 * 700, rel=1e-4)
+    assert built.case.delivery_date == dt.date(2018, 2, 14)
