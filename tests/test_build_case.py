@@ -292,12 +292,14 @@ COLD_DAY = dt.date(2021, 5, 20)
 
 
 def write_weather(path: Path, forecast: bool = True, drop_days: tuple[dt.date, ...] = (), warm: bool = False,
-                  blank_forecast: str | None = None) -> Path:
+                  blank_forecast: str | None = None, cold_day: bool = True) -> Path:
     """Local naive times (Europe/Madrid), 2021-05-01 to 2021-06-14: 5.5 °C from 00:00 to 05:59, 18 °C the
-    rest of the day, and -14.5 °C all day on 2021-05-20; the forecast 1 °C warmer. ``warm``: 20 °C always."""
+    rest of the day, and -14.5 °C all day on 2021-05-20 (``cold_day``); the forecast 1 °C warmer.
+    ``warm``: 20 °C always."""
     local = pd.date_range("2021-05-01", "2021-06-15", freq="h", inclusive="left")
     temperature = np.where(local.hour < 6, 5.5, 18.0)
-    temperature[local.date == COLD_DAY] = -14.5
+    if cold_day:
+        temperature[local.date == COLD_DAY] = -14.5
     if warm:
         temperature[:] = 20.0
     keep = ~np.isin(local.date, drop_days)
@@ -333,6 +335,7 @@ def test_thermal_demands_follow_the_heating_degree_hours_mapped_by_hand(tmp_path
     # The median day is a normal one: S̃ = (6·13/14 + 18·1/2)/24 = 17/28, so S/S̃ is 26/17, 14/17 and 50/17.
     # Swings of ±level·(S/S̃ − 1) would reach 30.625·50/17 = 90 MW_th on the cold day, above 0.9·h_max, so the
     # spread narrows until the cold day sits on the ceiling: spread = (0.9·h_max − level)/(50/17 − 1).
+    # (Narrowed, the demand no longer depends on HDH̄ or the base share: the test below pins those.)
     for unit, h_max in (("TD_industry", 80.0), ("TD_residential", 70.0)):
         ceiling = 0.9 * h_max  # 72 and 63 MW_th
         spread = (ceiling - LEVEL) / (33 / 17)  # 21.3144 and 16.6780 MW_th
@@ -351,6 +354,22 @@ def test_thermal_demands_follow_the_heating_degree_hours_mapped_by_hand(tmp_path
     # A median (normal) day holds the median-day energy 1.05·q_min whatever the narrowing.
     day = history.loc[at("2021-05-11", 0):at("2021-05-11", 23), "TD_residential"]
     assert day.sum() == pytest.approx(1.05 * 700, rel=1e-5)
+
+
+def test_without_narrowing_the_demand_is_its_level_times_the_signal_over_its_median_day(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    weather = write_weather(tmp_path / "weather.csv", cold_day=False)
+    build_case([source], tmp_path / "case", template=PAPER, options=weather_options(weather))
+    history = load_case(tmp_path / "case").history.frame
+    # Every day alike: 10 K in six hours, so HDH̄ = 10 K (the mean over the hours that need heat, not over
+    # all hours, which is 2.5 K). S = 0.5 + 0.5·HDH/10: 1 in a cold hour, 1/2 in a warm one; S̃ = 15/24 = 5/8.
+    # The swings level·(S/S̃ − 1) stay in [1.2·h_min, 0.9·h_max], so the demand is level·S/S̃.
+    for unit in ("TD_industry", "TD_residential"):
+        assert history[unit][at("2021-05-11", 3)] == pytest.approx(LEVEL * 8 / 5, rel=1e-5)  # 49.0 MW_th
+        assert history[unit][at("2021-05-11", 15)] == pytest.approx(LEVEL * 4 / 5, rel=1e-5)  # 24.5 MW_th
+        # The forecast, 1 °C warmer: S = 0.5 + 0.5·9/10 = 0.95 in a cold hour.
+        assert history[unit + "_fc"][at("2021-05-11", 3)] == pytest.approx(LEVEL * 0.95 * 8 / 5, rel=1e-5)
+    assert history["TD_industry"][at("2021-06-01", 0)] == pytest.approx(49.0, rel=1e-5)
 
 
 def test_the_base_temperature_and_share_are_the_users(tmp_path):
