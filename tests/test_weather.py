@@ -313,5 +313,5 @@ def test_messages_quote_only_a_short_excerpt_of_the_file(tmp_path):
     path = write(tmp_path, f"time,temperature\n2018-01-01T00:00Z,{secret}\n2018-01-01T01:00Z,1\n")
     message = refused(path, "weather.csv line 2", "is not a number")
     assert "SECRET-TAIL" not in message and "\n" not in message
-    path = write(tmp_path, f"time,temperature\n2018-01-01T00:00Z,\x1b[31m1\n2018-01-01T01:00Z,1\n", "escape.csv")
+    path = write(tmp_path, "time,temperature\n2018-01-01T00:00Z,\x1b[31m1\n2018-01-01T01:00Z,1\n", "escape.csv")
     assert "\x1b" not in refused(path, "escape.csv line 2")

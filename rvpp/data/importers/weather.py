@@ -85,7 +85,7 @@ class WeatherColumns:
     forecast: str | None = None
 
     @classmethod
-    def parse(cls, pairs: list[str] | tuple[str, ...] | None) -> "WeatherColumns":
+    def parse(cls, pairs: list[str] | tuple[str, ...] | None) -> WeatherColumns:
         """``["time=fecha", "temperature=ta"]`` (the words of ``--weather-columns``)."""
         chosen: dict[str, str] = {}
         for pair in pairs or ():
