@@ -315,3 +315,15 @@ def test_messages_quote_only_a_short_excerpt_of_the_file(tmp_path):
     assert "SECRET-TAIL" not in message and "\n" not in message
     path = write(tmp_path, "time,temperature\n2018-01-01T00:00Z,\x1b[31m1\n2018-01-01T01:00Z,1\n", "escape.csv")
     assert "\x1b" not in refused(path, "escape.csv line 2")
+
+
+def test_a_description_before_the_header_is_skipped(tmp_path):
+    """The layout of an Open-Meteo CSV download: the site, a blank line, then the table (times in the
+    chosen time zone, GMT here, without an offset)."""
+    path = write(tmp_path, "latitude,longitude,elevation,utc_offset_seconds,timezone,timezone_abbreviation\n"
+                           "37.2,-3.1,1100.0,0,GMT,GMT\n\ntime,temperature_2m (°C)\n2018-01-01T00:00,3.1\n"
+                           "2018-01-01T01:00,2.7\n")
+    item = read(path, timezone="UTC")
+    assert list(item.values.index) == [utc("2018-01-01 00:00"), utc("2018-01-01 01:00")]
+    assert item.values["temperature"].tolist() == [3.1, 2.7]
+    assert any("skipped 2 line(s) before the header" in n for n in item.report.notes)

@@ -29,6 +29,9 @@ Quirks of such files, each handled here:
 * **Reanalysis temperatures are in kelvin** (ERA5's ``t2m``): a header unit ``K`` is
   converted to °C and said so; a column without a unit is taken as °C, and values outside
   :data:`TEMPERATURE_RANGE_C` are refused, with a hint when they look like kelvin.
+* Some downloads describe the site before the table (Open-Meteo's CSV: latitude, longitude,
+  elevation and time zone, a blank line, then ``time,temperature_2m (°C)``): up to
+  :data:`PREAMBLE_LINES` lines before the header are skipped and said so.
 * Spreadsheet exports of continental Europe separate cells by ``;`` and write decimal
   commas (``12,5``); both are read. An empty cell, ``NaN``, ``NA`` or ``-`` is a missing
   value, reported and never filled.
@@ -69,6 +72,7 @@ CELSIUS_UNITS = {"°c", "ºc", "degc", "deg c", "c", "celsius", "degrees c", "de
 KELVIN_UNITS = {"k", "kelvin"}
 EMPTY = {"", "nan", "na", "n/a", "-"}
 ROLES = ("time", "temperature", "forecast")
+PREAMBLE_LINES = 10  # lines a download may put before the header (Open-Meteo: site and time zone)
 LIMIT_MB = 512.0  # the largest file read, as for the other importers (20 years of 10-minute rows is ~60 MB)
 
 _UNIT = re.compile(r"^(?P<name>.*?)\s*[\[(](?P<unit>[^\])]*)[\])]\s*$")
@@ -120,17 +124,13 @@ def read(path: str | Path, columns: WeatherColumns = WeatherColumns(), timezone:
     text = decode(data, name)
     delimiter = _delimiter(text)
     reader = csv.reader(io.StringIO(text), delimiter=delimiter)
-    header, body = None, []
-    for row in reader:
-        if not any(cell.strip() for cell in row):
-            continue
-        if header is None:
-            header = [cell.strip() for cell in row]
-        else:
-            body.append((reader.line_num, row))
-    if header is None:
+    lines = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
+    if not lines:
         raise DataImportError(f"{name}: the file is empty")
+    skipped = _header_line(lines, columns, name)
+    header = [cell.strip() for cell in lines[skipped][1]]
     found = _columns(header, columns, name)
+    body = lines[skipped + 1:]
     if not body:
         raise DataImportError(f"{name}: has a header but no rows of data")
     width = len(header)
@@ -141,8 +141,8 @@ def read(path: str | Path, columns: WeatherColumns = WeatherColumns(), timezone:
     time_index = found["time"][0]
     starts, dst = _instants([row[time_index].strip() for _, row in body], where, zone, header[time_index])
     step = _step(starts, where, header[time_index])
-    values, notes = {}, []
-    meanings = {}
+    values, meanings = {}, {}
+    notes = [f"skipped {skipped} line(s) before the header (a description of the download)"] if skipped else []
     for role in ("temperature", "forecast"):
         if role not in found:
             continue
@@ -162,9 +162,23 @@ def read(path: str | Path, columns: WeatherColumns = WeatherColumns(), timezone:
 
 
 def _delimiter(text: str) -> str:
+    """The separator: the most frequent of comma, semicolon and tab in the first line (a decimal
+    comma comes with a semicolon or a tab, never in a header)."""
     first = next((line for line in text.splitlines() if line.strip()), "")
     counts = {d: first.count(d) for d in (",", ";", "\t")}
     return max(counts, key=lambda d: (counts[d], d == ","))
+
+
+def _header_line(lines: list[tuple[int, list[str]]], chosen: WeatherColumns, name: str) -> int:
+    """How many lines come before the header: the first of :data:`PREAMBLE_LINES` lines whose
+    cells name a time and a temperature column (0 when none does, so its error names line 1)."""
+    for i, (_, row) in enumerate(lines[:PREAMBLE_LINES + 1]):
+        try:
+            _columns([cell.strip() for cell in row], chosen, name)
+        except DataImportError:
+            continue
+        return i
+    return 0
 
 
 def _split_unit(cell: str) -> tuple[str, str | None]:
