@@ -478,6 +478,8 @@ def test_command_line_builds_thermal_demands_from_a_weather_file(tmp_path, capsy
     printed = capsys.readouterr()
     assert code == 0, printed.err
     assert "TD_industry: real-derived" in printed.out and "TD_residential_fc: real-derived" in printed.out
+    assert "  Weather table (time, air temperature): weather.csv" in printed.out  # its report: span, gaps...
+    assert '  series temperature [°C]: air temperature, column "TMed"' in printed.out
     code = main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "other"), "--weather",
                  str(weather), "--weather-columns", *WEATHER_COLUMNS])
     assert code == 1

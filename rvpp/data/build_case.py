@@ -143,6 +143,7 @@ class BuiltCase:
     reports: tuple[ImportReport, ...]
     capacities_mw: dict[str, float]
     notes: tuple[str, ...]
+    weather: ImportReport | None = None  # the weather file's report, also among ``reports``
 
     def lines(self) -> list[str]:
         case = self.case
@@ -154,6 +155,8 @@ class BuiltCase:
         for column, origin in case.provenance:
             out.append(f"  {column}: {origin.origin}, {origin.source}" + (f" ({origin.note})" if origin.note else ""))
         out += [f"  note: {n}" for n in self.notes]
+        if self.weather is not None:
+            out += ["  " + line for line in self.weather.lines()]
         return out
 
 
@@ -272,7 +275,8 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     _write(case, out, overwrite)
     say(f"wrote {out}")
     reports = tuple(i.report for i in imports) + ((weather_report,) if weather_report else ())
-    return BuiltCase(folder=out, case=case, reports=reports, capacities_mw=capacities, notes=tuple(notes))
+    return BuiltCase(folder=out, case=case, reports=reports, capacities_mw=capacities, notes=tuple(notes),
+                     weather=weather_report)
 
 
 def clear_sky_index(capacity_factor: np.ndarray, index: pd.DatetimeIndex,
