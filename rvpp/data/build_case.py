@@ -249,7 +249,7 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
             notes.append(f"{kind}: the files give no {FLEETS[kind][0]}; {kind} units are synthetic")
     say("generating the synthetic series")
     synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed,
-                                         weather=bool(temperature))
+                                         heat_from_weather=bool(temperature))
     columns.update(synthetic)
     provenance.update(sources_text)
     if "pv" in fleets:
@@ -266,7 +266,8 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
                                                         notes)
         columns.update(heat)
         provenance.update(heat_text)
-    heat_fc, heat_text = _heat_forecasts(base, columns, options, seed, skip=heated, weather=bool(temperature))
+    heat_fc, heat_text = _heat_forecasts(base, columns, options, seed, skip=heated,
+                                         heat_from_weather=bool(temperature))
     columns.update(heat_fc)
     provenance.update(heat_text)
     history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source=HISTORY_FILE)
@@ -553,12 +554,12 @@ def _demands_from_weather(case: Case, frame: pd.DataFrame, temperature: tuple[st
 
 
 def _heat_forecasts(case: Case, columns: dict[str, np.ndarray], options: BuildOptions, seed: int,
-                    skip: tuple[str, ...] = (), weather: bool = False):
+                    skip: tuple[str, ...] = (), heat_from_weather: bool = False):
     """A modelled day-ahead forecast of each thermal demand (but those in ``skip``): its series
     times ``1 − K·ε``, ``ε`` a persistent error of :data:`HEAT_FORECAST_ERROR` standard deviation."""
     out, provenance = {}, {}
     made_from = " (the demand from the actual temperature; the weather file gives no forecast of it)" \
-        if weather else ""
+        if heat_from_weather else ""
     for unit in case.td:
         if unit.name in skip:
             continue
@@ -675,7 +676,8 @@ def _real(column: str, reports: tuple[ImportReport, ...], how: str, origin: str 
 
 
 def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.date, real: dict[str, np.ndarray],
-               fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int, weather: bool = False):
+               fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int,
+               heat_from_weather: bool = False):
     """Reserve prices, demands (and wind, PV or, without a solar fleet, CSP solar-field heat the
     data does not give) from :mod:`rvpp.data.synth` on the same hours."""
     made = synth.build_history(seed, start=first.isoformat(), end=(last + dt.timedelta(days=1)).isoformat())
@@ -713,7 +715,7 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
     notes = {"wind": "modelled wind farm output", "pv": "modelled PV output", "ed": "modelled consumption",
              "td": "modelled heat consumption"}
     for kind in ("wind", "pv", "ed", "td"):
-        if kind in fleets or (kind == "ed" and "load_actual" in frame.columns) or (kind == "td" and weather):
+        if kind in fleets or (kind == "ed" and "load_actual" in frame.columns) or (kind == "td" and heat_from_weather):
             continue
         for unit in getattr(case, kind):
             if unit.column not in profiles[kind]:
