@@ -432,6 +432,9 @@ def test_the_weather_must_cover_the_period_and_the_missing_days_are_named(tmp_pa
     build_case([source], tmp_path / "case", template=PAPER,
                options=weather_options(short, start="2021-05-08"))
     assert load_case(tmp_path / "case").provenance_map["TD_industry"].origin == "real-derived"
+    with pytest.raises(DataImportError, match=r"no temperature in 96 hour\(s\) of 4 day\(s\).*--fill-gaps "
+                                              r"interpolates runs of at most 3 hours"):
+        build_case([source], tmp_path / "filled", template=PAPER, options=weather_options(short, fill_gaps_h=3))
 
 
 def test_short_weather_gaps_are_interpolated_only_on_request(tmp_path):

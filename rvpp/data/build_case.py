@@ -417,7 +417,7 @@ def _demands_from_load(case: Case, frame: pd.DataFrame, load: tuple[str, ...], o
 
 
 def heating_degree_hours(temperature: np.ndarray, base_c: float = HEATING_BASE_C) -> np.ndarray:
-    """Heating degree-hours of each hour [K·h per h]: ``HDH = max(0, T_base − T)``."""
+    """Heating degree-hours of each hour [K, degree-hours of one hour]: ``HDH = max(0, T_base − T)``."""
     return np.maximum(base_c - np.asarray(temperature, dtype=float), 0.0)
 
 
@@ -507,7 +507,8 @@ def _uncovered(values: pd.Series, timezone: str, first: dt.date, last: dt.date, 
     days = _days(values, timezone)
     hours = int(values.isna().sum())
     span = (f"{report.start.tz_convert(timezone):%Y-%m-%d %H:%M} to {report.end.tz_convert(timezone):%Y-%m-%d %H:%M}")
-    filled = f" (runs of at most {options.fill_gaps_h} hours were interpolated)" if options.fill_gaps_h else ""
+    filled = f" (--fill-gaps interpolates runs of at most {options.fill_gaps_h} hours inside the file's span; " \
+        "these are longer or at its edge)" if options.fill_gaps_h else ""
     return (f"{report.files[0].name}: the weather does not cover the case's period {first} to {last}: no "
             f"temperature in {hours} hour(s) of {len(days)} day(s): {_ranges(days)}{filled}; the file spans "
             f"{span}. Give a weather file for the whole period, or choose --start/--end inside it"
