@@ -56,7 +56,8 @@ import pandas as pd
 
 from ...errors import DataImportError
 from ..files import excerpt, excerpt_names
-from .report import HOUR, Imported, Rows, SourceFile, assemble, check_year, decode, fingerprint, read_bytes
+from .report import (FIRST_YEAR, HOUR, LAST_YEAR, Imported, Rows, SourceFile, assemble, check_year, decode,
+                     fingerprint, read_bytes)
 
 SOURCE = "Weather table (time, air temperature)"
 TIME_NAMES = ("time", "timestamp", "datetime", "date_time", "time_utc", "valid_time", "date")
@@ -155,7 +156,7 @@ def read(path: str | Path, columns: WeatherColumns = WeatherColumns(), timezone:
         if unit == "K":
             notes.append(f'column "{excerpt(header[index])}" is in kelvin: converted to °C (− {KELVIN_AT_0_C})')
     rows = Rows()
-    rows.add_table(pd.DatetimeIndex(starts), pd.DatetimeIndex(starts) + step, pd.DataFrame(values), where)
+    rows.add_table(starts, starts + step, pd.DataFrame(values), where)
     file = SourceFile(name, fingerprint(data), len(body))
     return assemble(rows, source=SOURCE, files=[file], timezone=timezone or "UTC", zone=None, meanings=meanings,
                     dst=dst, notes=notes)
@@ -232,9 +233,9 @@ def _unit(cell: str, name: str) -> str:
 
 
 def _instants(text: list[str], where: list[str], zone: ZoneInfo | None,
-              column: str) -> tuple[list[pd.Timestamp], list[str]]:
+              column: str) -> tuple[pd.DatetimeIndex, list[str]]:
     """UTC start of every row, in row order, and a note per clock change met."""
-    parsed = []
+    naive, offsets = [], []
     for i, value in enumerate(text):
         match = _TIME.match(value)
         if not match:
@@ -242,61 +243,55 @@ def _instants(text: list[str], where: list[str], zone: ZoneInfo | None,
                                   "2018-01-01T00:00:00+01:00 (ISO 8601, with its UTC offset or a stated "
                                   "--weather-timezone)")
         year, month, day, hour, minute, second, offset = match.groups()
-        check_year(int(year), where[i], f"{excerpt(column)} {excerpt(value)!r}")
+        if not FIRST_YEAR <= int(year) <= LAST_YEAR:
+            check_year(int(year), where[i], f"{excerpt(column)} {excerpt(value)!r}")
         try:
-            naive = dt.datetime(int(year), int(month), int(day), int(hour), int(minute), int(second or 0))
+            naive.append(dt.datetime(int(year), int(month), int(day), int(hour), int(minute), int(second or 0)))
         except ValueError:
             raise DataImportError(f"{where[i]}: {excerpt(column)} {excerpt(value)!r} is not a valid date and "
                                   "time") from None
-        parsed.append((naive, offset))
-    with_offset = [offset is not None for _, offset in parsed]
-    if any(with_offset) and not all(with_offset):
-        i = with_offset.index(not with_offset[0])
+        offsets.append(offset)
+    with_offset = np.array([offset is not None for offset in offsets])
+    if with_offset.any() and not with_offset.all():
+        i = int(np.flatnonzero(with_offset != with_offset[0])[0])
         raise DataImportError(f"{where[i]}: {excerpt(column)} {excerpt(text[i])!r} "
                               f"{'has' if with_offset[i] else 'has no'} UTC offset, unlike the first row; "
                               "write every time the same way")
-    if all(with_offset):
-        starts = [pd.Timestamp(naive - _offset(offset)).tz_localize("UTC") for naive, offset in parsed]
-        offsets = sorted({offset for _, offset in parsed})
-        notes = [f"times carry UTC offsets ({', '.join(offsets)}); clock changes are placed by them"] \
-            if len(offsets) > 1 else []
+    local = pd.DatetimeIndex(naive)
+    if with_offset.all():
+        shifts = {offset: _offset(offset) for offset in set(offsets)}
+        starts = (local - pd.TimedeltaIndex([shifts[offset] for offset in offsets])).tz_localize("UTC")
+        notes = [f"times carry UTC offsets ({', '.join(sorted(shifts))}); clock changes are placed by them"] \
+            if len(shifts) > 1 else []
         return _ordered(starts, text, where, column), notes
     if zone is None:
         raise DataImportError(f"{where[0]}: {excerpt(column)} {excerpt(text[0])!r} has no UTC offset; say which "
                               "clock the file's times are on with --weather-timezone (e.g. UTC or Europe/Madrid)")
-    seen: dict[dt.datetime, int] = {}
-    for naive, _ in parsed:
-        seen[naive] = seen.get(naive, 0) + 1
-    occurrence: dict[dt.datetime, int] = {}
-    starts, changes, lengths = [], set(), {}
-    for i, (naive, _) in enumerate(parsed):
-        early, late = naive.replace(tzinfo=zone, fold=0), naive.replace(tzinfo=zone, fold=1)
-        back = early.astimezone(dt.timezone.utc).astimezone(zone).replace(tzinfo=None)
-        if back != naive:
-            raise DataImportError(f"{where[i]}: local time {naive:%Y-%m-%d %H:%M} does not exist in {zone.key} "
-                                  "(clocks go forward); it cannot be placed in time")
-        if early.utcoffset() != late.utcoffset():
-            count = seen[naive]
-            if count != 2:
-                raise DataImportError(f"{where[i]}: local time {naive:%Y-%m-%d %H:%M} occurs twice in {zone.key} "
-                                      f"(clocks go back) but the file gives it {count} time(s); it cannot be "
-                                      "placed: write the times with their UTC offsets")
-            occurrence[naive] = occurrence.get(naive, 0) + 1
-            stamp = early if occurrence[naive] == 1 else late
-            changes.add(naive.date())
-        else:
-            stamp = early
-        if naive.date() not in lengths:
-            lengths[naive.date()] = _day_hours(naive.date(), zone)
-        if lengths[naive.date()] != 24:
-            changes.add(naive.date())
-        starts.append(pd.Timestamp(stamp.astimezone(dt.timezone.utc)))
+    summer = local.tz_localize(zone.key, ambiguous=np.ones(len(local), dtype=bool), nonexistent="NaT")
+    if summer.isna().any():
+        i = int(np.flatnonzero(summer.isna())[0])
+        raise DataImportError(f"{where[i]}: local time {naive[i]:%Y-%m-%d %H:%M} does not exist in {zone.key} "
+                              "(clocks go forward); it cannot be placed in time")
+    twice = np.flatnonzero(local.tz_localize(zone.key, ambiguous="NaT", nonexistent="NaT").isna())
+    in_summer = np.ones(len(local), dtype=bool)
+    if len(twice):
+        repeated = pd.Series(local[twice])
+        counts = repeated.map(repeated.value_counts()).to_numpy()
+        if (counts != 2).any():
+            k = int(np.flatnonzero(counts != 2)[0])
+            i = int(twice[k])
+            raise DataImportError(f"{where[i]}: local time {naive[i]:%Y-%m-%d %H:%M} occurs twice in {zone.key} "
+                                  f"(clocks go back) but the file gives it {counts[k]} time(s); it cannot be "
+                                  "placed: write the times with their UTC offsets")
+        in_summer[twice] = ~repeated.duplicated(keep="first").to_numpy()  # the first is summer time
+    starts = local.tz_localize(zone.key, ambiguous=in_summer).tz_convert("UTC")
     notes = []
-    for day in sorted(changes):
-        hours = lengths[day]
-        rule = "clocks go forward, one local hour does not exist" if hours < 24 else \
-            "clocks go back, one local hour occurs twice: first in summer, then in winter time"
-        notes.append(f"{day}: {hours}-hour day in {zone.key} ({rule})")
+    for day in sorted(set(local.normalize().unique().date)):
+        hours = _day_hours(day, zone)
+        if hours != 24:
+            rule = "clocks go forward, one local hour does not exist" if hours < 24 else \
+                "clocks go back, one local hour occurs twice: first in summer, then in winter time"
+            notes.append(f"{day}: {hours}-hour day in {zone.key} ({rule})")
     return _ordered(starts, text, where, column), notes
 
 
@@ -314,17 +309,18 @@ def _day_hours(day: dt.date, zone: ZoneInfo) -> int:
     return round((end.astimezone(dt.timezone.utc) - start.astimezone(dt.timezone.utc)) / dt.timedelta(hours=1))
 
 
-def _ordered(starts: list[pd.Timestamp], text: list[str], where: list[str], column: str) -> list[pd.Timestamp]:
-    for i in range(1, len(starts)):
-        if starts[i] < starts[i - 1]:
-            raise DataImportError(f"{where[i]}: {excerpt(column)} {excerpt(text[i])!r} is before the row above it "
-                                  f"({excerpt(text[i - 1])!r}); rows must be in time order")
+def _ordered(starts: pd.DatetimeIndex, text: list[str], where: list[str], column: str) -> pd.DatetimeIndex:
+    back = np.flatnonzero(np.diff(starts.asi8) < 0)
+    if len(back):
+        i = int(back[0]) + 1
+        raise DataImportError(f"{where[i]}: {excerpt(column)} {excerpt(text[i])!r} is before the row above it "
+                              f"({excerpt(text[i - 1])!r}); rows must be in time order")
     return starts
 
 
-def _step(starts: list[pd.Timestamp], where: list[str], column: str) -> pd.Timedelta:
+def _step(starts: pd.DatetimeIndex, where: list[str], column: str) -> pd.Timedelta:
     """The file's period: the most common spacing of its rows (60 minutes or a whole divisor)."""
-    index = pd.DatetimeIndex(starts)
+    index = starts
     spacing = pd.Series(index[1:] - index[:-1])
     spacing = spacing[spacing > pd.Timedelta(0)]
     if spacing.empty:
