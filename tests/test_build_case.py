@@ -536,3 +536,6 @@ def test_real_spanish_slice_with_and_without_a_weather_file(tmp_path):
     daily = history["TD_residential"].groupby(history.index.tz_convert(TZ).date).sum()
     assert float(np.median(daily)) == pytest.approx(1.05 * 700, rel=1e-4)
     assert built.case.delivery_date == dt.date(2018, 2, 14)
+    result = solve(with_options(case, date="2018-02-10"))
+    assert result.status == "optimal"
+    assert audit_result(result) == []
