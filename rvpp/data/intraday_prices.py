@@ -28,8 +28,7 @@ import pandas as pd
 from ..errors import DataImportError, RvppError
 from .case import CASE_FILE, Case, parse_case
 from .case_yaml import load_case, save_case
-from .importers import HourlyTable, ImportReport, hourly_table
-from .importers import omie_intraday
+from .importers import HourlyTable, ImportReport, hourly_table, omie_intraday
 from .importers.omie_intraday import DEFAULT_PRESET, TIMEZONE, in_window, sessions_of
 
 SHOWN_HOURS = 3  # missing hours named in a refusal before "and N more"

@@ -43,6 +43,7 @@ Quirks of the source, each handled here:
 from __future__ import annotations
 
 import datetime as dt
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -208,7 +209,7 @@ def _read_text(text: str, name: str, day: dt.date, session: Session, zone: str, 
             continue
         if ended:
             raise DataImportError(f"{name} line {number}: data after the closing '*'")
-        fields = (line[:-1] if line.endswith(";") else line).split(";")
+        fields = line.removesuffix(";").split(";")  # one closing ";" per line
         where = f"{name} line {number}"
         if len(fields) < 6:
             raise DataImportError(f"{where}: expected YEAR;MONTH;DAY;PERIOD;PRICE_PT;PRICE_ES; but found "
@@ -227,7 +228,7 @@ def _read_text(text: str, name: str, day: dt.date, session: Session, zone: str, 
                 f"{where}: PERIOD={period} starts at {start.tz_convert(TIMEZONE):%H:%M} local, before "
                 f"{session.name}'s window opens at {session.first_hour:02d}:00; is the file of another session?")
         price = omie.price(fields[column], where)
-        priced += price == price
+        priced += not math.isnan(price)
         rows.add(start, start + step, {session.column: price}, where)
         periods.append(period)
     if not ended:
