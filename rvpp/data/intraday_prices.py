@@ -49,7 +49,7 @@ class AddedPrices:
         out = [f"added {', '.join(self.columns)} to the history of case {self.case.name!r} in {self.folder}",
                f"  days: {days[0]} to {days[-1]} ({len(days)} days)"]
         for column in self.columns:
-            origin = self.case.provenance_map()[column]
+            origin = self.case.provenance_map[column]
             out.append(f"  {column}: {origin.origin}, {origin.source} ({origin.note})")
         return out
 

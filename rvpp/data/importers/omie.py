@@ -191,14 +191,14 @@ def _step(day: dt.date) -> pd.Timedelta:
     return pd.Timedelta(minutes=15) if day >= QUARTER_HOURS_FROM else pd.Timedelta(hours=1)
 
 
-def _midnight(day: dt.date) -> pd.Timestamp:
+def midnight(day: dt.date) -> pd.Timestamp:
     return pd.Timestamp(day).tz_localize(TIMEZONE).tz_convert("UTC")
 
 
 def day_hours(day: dt.date) -> int:
-    return int(round((_midnight(day + dt.timedelta(days=1)) - _midnight(day)) / pd.Timedelta(hours=1)))
+    return int(round((midnight(day + dt.timedelta(days=1)) - midnight(day)) / pd.Timedelta(hours=1)))
 
 
 def period_start(day: dt.date, period: int, step: pd.Timedelta) -> pd.Timestamp:
     """UTC start of ``period`` (1-based): elapsed time from local midnight, not clock time."""
-    return _midnight(day) + (period - 1) * step
+    return midnight(day) + (period - 1) * step

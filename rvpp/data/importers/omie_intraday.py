@@ -45,7 +45,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pandas as pd
@@ -151,11 +151,20 @@ def read(paths: list[str | Path], preset: str = DEFAULT_PRESET, zone: str = "ES"
         notes = [f"periods numbered from local midnight ({TIMEZONE}); quarter-hourly from {QUARTER_HOURS_FROM}",
                  f"{session.name} delivers from {session.first_hour:02d}:00 local ({preset})"]
         clock = [f"{day}: {omie.day_hours(day)}-hour day" for day in sorted(met) if omie.day_hours(day) != 24]
-        out.append(assemble(rows, source=f"{SOURCE}, {session.name}", files=files, timezone=TIMEZONE,
-                            zone=f"{zone} ({omie.ZONE_NAMES[zone]})",
-                            meanings={session.column: f"{session.name} marginal price, {omie.ZONE_NAMES[zone]}"},
-                            dst=clock, notes=notes))
+        item = assemble(rows, source=f"{SOURCE}, {session.name}", files=files, timezone=TIMEZONE,
+                        zone=f"{zone} ({omie.ZONE_NAMES[zone]})",
+                        meanings={session.column: f"{session.name} marginal price, {omie.ZONE_NAMES[zone]}"},
+                        dst=clock, notes=notes)
+        # the hours before a window are no gap: the session does not trade them
+        gaps = tuple(g for g in item.report.gaps if not _before_window(g.start, g.end, session))
+        out.append(replace(item, report=replace(item.report, gaps=gaps)))
     return out
+
+
+def _before_window(start: pd.Timestamp, end: pd.Timestamp, session: Session) -> bool:
+    """True for a stretch from a local midnight to the session's window start of that day."""
+    day = start.tz_convert(TIMEZONE).date()
+    return start == omie.midnight(day) and end == window_start(day, session)
 
 
 def window_start(day: dt.date, session: Session) -> pd.Timestamp:
