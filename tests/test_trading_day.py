@@ -128,3 +128,58 @@ def test_a_damaged_record_is_refused_by_name(edit, message):
     edit(record)
     with pytest.raises(RvppError, match=message):
         session_table(record)
+
+
+# ----------------------------------------------------------------------------- on the Backtest page
+
+
+def store_with(paper_case, data_dir, records: list[dict]):
+    """A store in the test's data folder holding one backtest of the balanced preset with ``records``."""
+    import datetime as dt
+
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.store import BacktestStore, RecordKey
+
+    data_dir.mkdir(parents=True, exist_ok=True)
+    store = BacktestStore(f"sqlite:///{data_dir / 'rvpp.sqlite3'}")
+    settings = BacktestSettings(dt.date(2025, 5, 4), dt.date(2025, 5, 5), variants_of(["balanced"], [], False))
+    ident = store.open(paper_case, settings.stored(), keys_total=len(records), label="intraday days")
+    for record in records:
+        store.record(ident, RecordKey(record["day"], record["strategy"], record["gamma"]), record)
+    store.engine.dispose()
+    return ident
+
+
+def plain_day() -> dict:
+    """4 May without intraday sessions."""
+    record = {k: v for k, v in trading_record().items() if k not in ("intraday", "final_position_mw",
+                                                                     "intraday_revenue_eur")}
+    return {**record, "day": "2025-05-04", "net_cost_eur": 1000.0}
+
+
+@pytest.mark.slow
+def test_the_backtest_page_shows_the_trading_day(paper_case, data_dir):
+    from tests.factories import open_app
+    from tests.test_app import figures, trace, values
+
+    store_with(paper_case, data_dir, [plain_day(), trading_record()])
+    at = open_app("backtest")
+    assert at.selectbox(key="backtest_trading_day").options == ["2025-05-05"]  # the day without sessions is not offered
+    spec = next(s for title, s in figures(at).items() if title.startswith("Trading day 2025-05-05"))
+    assert list(values(trace(spec, "after IDA2")["y"]))[14] == 5.0
+    assert list(values(trace(spec, "IDA3 traded")["y"]))[21] == 3.0
+    (table,) = [t.value for t in at.dataframe if "Session" in t.value.columns]
+    assert list(table["Sold [MWh]"]) == [8.0, 0.0, 3.0] and list(table["Trading cost [EUR]"]) == [-400.0, 600.0, -140.0]
+    cards = {m.label: m.value for m in at.metric}
+    assert cards["Intraday trading cost [EUR]"] == "60 EUR"
+    assert cards["Imbalance left [MWh]"] == "1.2 short · 0.8 surplus"
+
+
+@pytest.mark.slow
+def test_the_backtest_page_without_intraday_shows_no_trading_day(paper_case, data_dir):
+    from tests.factories import open_app
+
+    store_with(paper_case, data_dir, [plain_day()])
+    at = open_app("backtest")
+    assert not [h for h in at.subheader if h.value.startswith("Trading day")]
+    assert not [k for k in ("backtest_trading_day",) if any(s.key == k for s in at.selectbox)]
