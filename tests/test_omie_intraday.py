@@ -349,3 +349,16 @@ def test_the_hours_before_a_window_are_no_gap(tmp_path):
     holed = pibc(tmp_path, "marginalpibc_2024070303.1", day_lines("2024;07;03", [p for p in range(13, 25) if p != 20]))
     (gap,) = read([*files, holed])[0].report.gaps
     assert (gap.start, gap.end) == (utc("2024-07-03 17:00"), utc("2024-07-03 18:00"))  # period 20: 19:00 local
+
+
+def test_the_days_asked_on_the_command_line(tmp_path, capsys):
+    files = [pibc(tmp_path, f"marginalpibc_2024070{d}01.1", day_lines(f"2024;07;0{d}", range(1, 25))) for d in (1, 2)]
+    assert main(["data", "import-omie-intraday", *map(str, files), "--start", "2024-07-02"]) == 1
+    assert ('"marginalpibc_2024070101.1" is for delivery day 2024-07-01, outside the days asked (from 2024-07-02)'
+            in capsys.readouterr().err)
+    assert main(["data", "import-omie-intraday", *map(str, files), "--end", "2024-07-01"]) == 1
+    assert "2024-07-02, outside the days asked (up to 2024-07-01)" in capsys.readouterr().err
+    assert main(["data", "import-omie-intraday", *map(str, files), "--start", "2024-07-02", "--end", "2024-07-01"]) == 1
+    assert "--start 2024-07-02 is after --end 2024-07-01" in capsys.readouterr().err
+    assert main(["data", "import-omie-intraday", *map(str, files), "--start", "2024-07-01", "--end", "2024-07-02"]) == 0
+    assert "series price_ida1 [EUR/MWh]: IDA1 marginal price, Spain; 48 values, 101 to 124" in capsys.readouterr().out

@@ -178,13 +178,13 @@ def _run_import_intraday(args: argparse.Namespace) -> int:
     return 0
 
 
-def _asked_days(start: str | None, end: str | None) -> tuple[dt.date, dt.date] | None:
+def _asked_days(start: str | None, end: str | None) -> tuple[dt.date | None, dt.date | None] | None:
     """The delivery days asked for by ``--start`` and ``--end`` (either may be open)."""
     if start is None and end is None:
         return None
-    first = dt.date.fromisoformat(start) if start else dt.date.min
-    last = dt.date.fromisoformat(end) if end else dt.date.max
-    if first > last:
+    first = dt.date.fromisoformat(start) if start else None
+    last = dt.date.fromisoformat(end) if end else None
+    if first and last and first > last:
         raise RvppError(f"--start {start} is after --end {end}; give the first day first")
     return first, last
 

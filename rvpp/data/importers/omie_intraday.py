@@ -122,12 +122,12 @@ def parse_name(name: str) -> FileName:
 
 
 def read(paths: list[str | Path], preset: str = DEFAULT_PRESET, zone: str = "ES",
-         days: tuple[dt.date, dt.date] | None = None) -> list[Imported]:
+         days: tuple[dt.date | None, dt.date | None] | None = None) -> list[Imported]:
     """Read marginalpibc files (or zip archives of them): one :class:`Imported` per session found,
     in the preset's order, each with one series ``price_<session>`` (e.g. ``price_ida2``).
 
-    ``days`` (first, last), when given, are the delivery days asked for: a file of another day is
-    refused by name.
+    ``days`` (first, last; either may be ``None``, open), when given, are the delivery days asked for:
+    a file of another day is refused by name.
     """
     sessions = sessions_of(preset)
     zone = zone.upper()
@@ -141,7 +141,7 @@ def read(paths: list[str | Path], preset: str = DEFAULT_PRESET, zone: str = "ES"
         name = Path(path).name
         if omie.is_archive(Path(path), data):
             for member, content in omie.members(name, data, PREFIX):
-                _read_file(member.split(":", 1)[1], member, content, sessions, preset, zone, days, found)
+                _read_file(member[len(name) + 1:], member, content, sessions, preset, zone, days, found)
             continue
         _read_file(name, name, data, sessions, preset, zone, days, found)
     out = []
@@ -180,16 +180,17 @@ def in_window(index: pd.DatetimeIndex, session: Session) -> pd.Series:
 
 
 def _read_file(name: str, where_name: str, data: bytes, sessions: tuple[Session, ...], preset: str, zone: str,
-               days: tuple[dt.date, dt.date] | None, found: dict) -> None:
+               days: tuple[dt.date | None, dt.date | None] | None, found: dict) -> None:
     """One daily file: its name checked against the preset and the days asked, then its lines."""
     said = parse_name(name)
     if not 1 <= said.number <= len(sessions):
         raise DataImportError(
             f'"{where_name}": session {said.number:02d} is not one of the {len(sessions)} sessions of {preset} '
             f"({sessions[0].name} to {sessions[-1].name}, numbered 01 to {len(sessions):02d})")
-    if days is not None and not days[0] <= said.day <= days[1]:
-        raise DataImportError(f'"{where_name}" is for delivery day {said.day}, outside the days asked '
-                              f"({days[0]} to {days[1]})")
+    first, last = days or (None, None)
+    if (first is not None and said.day < first) or (last is not None and said.day > last):
+        asked = f"{first} to {last}" if first and last else f"from {first}" if first else f"up to {last}"
+        raise DataImportError(f'"{where_name}" is for delivery day {said.day}, outside the days asked ({asked})')
     session = sessions[said.number - 1]
     rows, files, met = found.setdefault(said.number, (Rows(), [], set()))
     _read_text(decode(data, where_name), where_name, said.day, session, zone, rows)
