@@ -76,6 +76,11 @@ def test_the_figure_draws_each_position_trade_and_forecast_change():
     assert fig.layout.title.text.endswith("imbalance left by the settlement: 1.25 MWh short, 0.75 MWh in surplus</sup>")
 
 
+def test_a_label_is_shown_as_text_in_the_title():
+    fig = trading_day_figure({**trading_record(), "label": "<b>bold</b>"}, "Europe/Madrid")
+    assert fig.layout.title.text.startswith("Trading day 2025-05-05 · &lt;b&gt;bold&lt;/b&gt;<br>")
+
+
 def test_the_session_table_in_mwh_and_cost():
     table = session_table(trading_record())
     assert list(table["Session"]) == ["IDA1", "IDA2", "IDA3"]

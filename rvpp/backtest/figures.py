@@ -4,6 +4,7 @@ from :mod:`rvpp.outputs.style`."""
 
 from __future__ import annotations
 
+import html
 from collections.abc import Mapping
 from typing import Any
 
@@ -123,7 +124,7 @@ def trading_day_figure(record: Mapping[str, Any], timezone: str) -> go.Figure:
                                                                         ("surplus_mwh", "in surplus"))
                      if summary[key] is not None) or "not settled"
     layout = _layout()
-    fig.update_layout(title=f"Trading day {day.day} · {day.label}<br><sup>imbalance left by the settlement: "
+    fig.update_layout(title=f"Trading day {day.day} · {html.escape(day.label)}<br><sup>imbalance left by the settlement: "
                             f"{left}</sup>", barmode="group", **{**layout, "height": 2 * FIGURE_HEIGHT})
     for row in (1, 2, 3):
         fig.update_xaxes(type="category", gridcolor=GRID_COLOR, row=row, col=1)
