@@ -59,6 +59,24 @@ def records(ident: str, done: int) -> pd.DataFrame:
     return _records(default_url(), ident, done)
 
 
+@st.cache_data(max_entries=RECORDS_KEPT, show_spinner=False)
+def _timezone(url: str, ident: str) -> str:
+    case, _ = BacktestStore(engine=_store(url).engine).load(ident)
+    return case.timezone
+
+
+def timezone_of(ident: str) -> str:
+    """The time zone of the case a backtest ran (the clock of its days)."""
+    return _timezone(default_url(), ident)
+
+
+def record_of(records: pd.DataFrame, day: str, label: str) -> dict:
+    """The record of ``day`` and the variant labelled ``label``, as plain data (keys a record
+    does not have left out, as the store holds them)."""
+    row = records[(records["day"] == day) & (records["label"] == label)].iloc[0]
+    return {key: value for key, value in row.items() if isinstance(value, (list, dict)) or not pd.isna(value)}
+
+
 def fractions_of(settings: dict) -> list[float]:
     """The Γ grid of a backtest's stored settings: its fractions, and 0 when it ran the deterministic plan."""
     grid = {float(gamma) for strategy, gamma in settings["variants"] if strategy == FRACTION}

@@ -11,8 +11,9 @@ from dashboard import state, widgets
 from rvpp import RvppError
 from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS,
                           PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict, beats_presets_on_training,
-                          cumulative_figure, distribution_figure, export_zip, launch, metrics, parse_numbers,
-                          recommendation_from, reopen_case, robustness_figure, shortfalls, variants_of)
+                          cumulative_figure, day_summary, distribution_figure, export_zip, intraday_days, launch,
+                          metrics, parse_numbers, recommendation_from, reopen_case, robustness_figure, session_table,
+                          shortfalls, trading_day_figure, variants_of)
 
 state.through_app("pages/backtest.py")
 
@@ -63,6 +64,21 @@ WORST_COLUMNS = {
     "surplus_mwh": st.column_config.NumberColumn("Energy surplus [MWh]", format="%.1f"),
     "unserved_heat_mwh": st.column_config.NumberColumn("Heat not served [MWh_th]", format="%.1f"),
     "plan_status": st.column_config.TextColumn("Plan"),
+}
+EUR_HELP = "Cost: positive when the plant pays, negative when it earns"
+TRADING_COLUMNS = {
+    "Session": st.column_config.TextColumn("Session", pinned=True),
+    "Gate closure": st.column_config.TextColumn("Gate closure (local time)"),
+    "Status": st.column_config.TextColumn("Solve"),
+    "Sold [MWh]": st.column_config.NumberColumn("Sold [MWh]", format="%,.1f"),
+    "Bought [MWh]": st.column_config.NumberColumn("Bought [MWh]", format="%,.1f"),
+    "Trading cost [EUR]": st.column_config.NumberColumn(
+        "Trading cost [EUR]", format=EUR_DAY, help="Minus the session's trading revenue: positive when the plant "
+                                                   "buys more than it sells"),
+    "Expected imbalance before [MWh]": st.column_config.NumberColumn(
+        "Expected imbalance before [MWh]", format="%,.1f",
+        help="The imbalance the position would leave on the forecasts of the session's gate closure"),
+    "Expected imbalance after [MWh]": st.column_config.NumberColumn("Expected imbalance after [MWh]", format="%,.1f"),
 }
 COMPARISON_COLUMNS = {
     "variant": st.column_config.TextColumn("Bidding rule", pinned=True),
@@ -351,6 +367,42 @@ else:
     st.caption("This backtest ran only the perfect-information plan.")
 if st.session_state.get("backtest_problem"):
     refuse(RvppError(st.session_state.pop("backtest_problem")), "Not done", "Nothing was changed.")
+
+
+def trading_day(ident: str, records) -> None:
+    """One day traded in intraday sessions: the position after each session, the trades, the forecast
+    change behind them and the imbalance the settlement left (only for records with sessions)."""
+    traded = intraday_days(records)
+    if traded.empty:
+        return
+    st.subheader("Trading day: the intraday sessions of one day")
+    st.caption("After the day-ahead market each intraday session corrects the position as the forecasts change: "
+               "the lines show the position after each session, the bars what each session sold (+) or bought "
+               "(−), the bottom panel the forecast change seen at its gate closure. The settlement measures the "
+               "imbalance against the final position.")
+    left, right = st.columns(2)
+    label = left.selectbox("Strategy", list(dict.fromkeys(traded["label"])), key="backtest_trading_variant")
+    day = right.selectbox("Day", list(traded.loc[traded["label"] == label, "day"]), key="backtest_trading_day")
+    record = bt.record_of(records, day, label)
+    try:
+        figure = trading_day_figure(record, bt.timezone_of(ident))
+        table, summary = session_table(record), day_summary(record)
+    except RvppError as err:
+        refuse(err, "This day cannot be shown", "The record is kept as it is.")
+        return
+    cards = st.columns(4)
+    cards[0].metric("Net cost [EUR]", widgets.eur(summary["net_cost_eur"]), help=EUR_HELP)
+    cards[1].metric("Intraday trading cost [EUR]", widgets.eur(summary["intraday_cost_eur"]), help=EUR_HELP)
+    cards[2].metric("Penalty [EUR]", widgets.eur(summary["penalty_eur"]), help=EUR_HELP)
+    short, surplus = summary["deficit_mwh"], summary["surplus_mwh"]
+    cards[3].metric("Imbalance left [MWh]", "–" if short is None or surplus is None else
+                    f"{short:,.1f} short · {surplus:,.1f} surplus", help="Energy short and in surplus against the "
+                    "final position, from the settlement")
+    st.plotly_chart(figure, key="backtest_trading_figure")
+    st.dataframe(table, hide_index=True, width="stretch", column_config=TRADING_COLUMNS)
+
+
+trading_day(ident, records)
 
 st.download_button("Export records and inputs (zip)", lambda: export_zip(bt.store(), ident),
                    file_name=f"backtest-{ident[:12]}.zip", mime="application/zip", on_click="ignore",

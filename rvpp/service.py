@@ -21,9 +21,10 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .backtest import launch, metrics
     from .backtest.engine import reopen_case
     from .backtest.export import export_zip
-    from .backtest.figures import cumulative_figure, distribution_figure, robustness_figure
+    from .backtest.figures import cumulative_figure, distribution_figure, robustness_figure, trading_day_figure
     from .backtest.recommend import (CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS, Verdict, beats_presets_on_training,
                                      recommendation_from, shortfalls)
+    from .backtest.trading_day import day_summary, intraday_days, session_table
     from .backtest.settings import CARRY, FRACTION, PERFECT, PRESET, BacktestSettings, BacktestVariant, variants_of
     from .data.case import PRICE_MODELS, STRATEGIES, parse_case
     from .data.edits import (FIELDS, PERIOD_NAMES, describe_edits, field_words, follow_capacity, label, plain_message,
@@ -72,6 +73,10 @@ _WHERE = {
     "cumulative_figure": ".backtest.figures",
     "distribution_figure": ".backtest.figures",
     "robustness_figure": ".backtest.figures",
+    "trading_day_figure": ".backtest.figures",
+    "day_summary": ".backtest.trading_day",
+    "intraday_days": ".backtest.trading_day",
+    "session_table": ".backtest.trading_day",
     "CRITERION_NAMES": ".backtest.recommend",
     "MIN_TEST_DAYS": ".backtest.recommend",
     "MIN_TRAIN_DAYS": ".backtest.recommend",
@@ -190,14 +195,16 @@ __all__ = [
     "STRATEGY_BUDGETS_H", "STUDIES", "StudyOutput", "StudySettings", "TRADE_NAMES", "UNIT_KINDS", "UnitKind", "Variant",
     "Verdict", "band_overlays", "band_specs", "bands_figure", "beats_presets_on_training", "case_data",
     "case_workbook_bytes", "case_zip_bytes", "compare_trades_figure", "cost_table", "cumulative_figure", "curve_figure",
-    "default_url", "delivery_periods", "describe_edits", "deviating_periods", "distribution_figure", "economics",
+    "day_summary", "default_url", "delivery_periods", "describe_edits", "deviating_periods", "distribution_figure", "economics",
     "evaluation_days", "excerpt", "explanation", "export_zip", "exposure_figure", "field_words", "figures",
-    "flexibility_table", "follow_capacity", "has_forecast", "idle_trades", "kpi_table", "label", "launch", "markets",
+    "flexibility_table", "follow_capacity", "has_forecast", "idle_trades", "intraday_days", "kpi_table", "label", "launch", "markets",
     "metrics", "new_unit_row", "parse_case", "parse_numbers", "plain_message", "plan_workbook_bytes", "plots",
     "power_unit", "prepare", "price_exposures", "protection_exact", "read_case_files", "realizations_used",
-    "recommendation_from", "reopen_case", "robustness_figure", "run_label", "sensitivity", "shortfalls", "solve",
+    "recommendation_from", "reopen_case", "robustness_figure", "run_label", "sensitivity", "session_table", "shortfalls",
+    "solve",
     "solve_problem", "strategy_budgets", "sweep_gamma", "table_csv", "table_message", "tables_workbook_bytes",
-    "tariff_figure", "thin_clock_ticks", "tied_budgets", "top_gamma_deviation", "trades_figure", "training_days",
+    "tariff_figure", "thin_clock_ticks", "tied_budgets", "top_gamma_deviation", "trades_figure", "trading_day_figure",
+    "training_days",
     "unit_columns", "variants_of", "waterfall_figure", "with_period_length", "workbook",
 ]
 

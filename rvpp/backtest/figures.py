@@ -1,13 +1,24 @@
-"""Figures of a backtest: the price-of-robustness curve, the cumulative net cost and the spread of
-the daily net cost per variant. Colours, dashes and markers come from :mod:`rvpp.outputs.style`."""
+"""Figures of a backtest: the price-of-robustness curve, the cumulative net cost, the spread of
+the daily net cost per variant and one day's intraday trading. Colours, dashes and markers come
+from :mod:`rvpp.outputs.style`."""
 
 from __future__ import annotations
 
+import html
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
 import pandas as pd
 import plotly.graph_objects as go
+from plotly.subplots import make_subplots
 
-from ..outputs.style import FIGURE_HEIGHT, GRID_COLOR, NET_COLOR, ORANGE, SKY, TRANSPARENT, VERMILION, run_style
+from ..data.periods import delivery_periods, period_labels
+from ..errors import RvppError
+from ..outputs.style import (DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, NET_COLOR, ORANGE, SERIES_COLORS, SKY,
+                             TRANSPARENT, VERMILION, run_style)
 from . import metrics
+from .trading_day import day_summary, sessions
 
 PARTS = (("mean_market_cost_eur", "market cost", SKY, "dash"), ("mean_penalty_eur", "penalty", VERMILION, "dot"),
          ("mean_net_cost_eur", "net cost", NET_COLOR, "solid"))
@@ -65,6 +76,60 @@ def distribution_figure(records: pd.DataFrame) -> go.Figure:
     fig.update_layout(title="Daily net cost per strategy (box: quartiles and median; points: days)",
                       xaxis_title="strategy", yaxis_title="daily net cost [EUR/day]", showlegend=False,
                       **{k: v for k, v in _layout().items() if k != "legend"})
+    return fig
+
+
+def trading_day_figure(record: Mapping[str, Any], timezone: str) -> go.Figure:
+    """One day of intraday trading (MODEL_SPEC §14) from its backtest record: the position after each
+    session [MW] (day-ahead, after each session, final), what each session traded [MW] (+ sell,
+    − buy), the forecast change per source seen at each session's gate closure [MW], and in the
+    title the imbalance the settlement left [MWh]. ``timezone``: the case's, for the clock labels."""
+    day = sessions(record)
+    labels = period_labels(delivery_periods(day.day, timezone, day.dt_h))
+    if len(labels) != day.periods:
+        raise RvppError(f"the record of {day.day} has {day.periods} periods, but the day has {len(labels)} of "
+                        f"{day.dt_h:g} h in {timezone}")
+    colors = [SERIES_COLORS[(i + 1) % len(SERIES_COLORS)] for i in range(len(day.sessions))]
+    fig = make_subplots(rows=3, cols=1, shared_xaxes=True, vertical_spacing=0.08, row_heights=[0.45, 0.3, 0.25],
+                        subplot_titles=("Position after each session [MW]",
+                                        "Traded in each session [MW] (+ sell, − buy)",
+                                        "Forecast change seen at each gate closure [MW]"))
+    step = {"shape": "hv"}
+    fig.add_trace(go.Scatter(x=labels, y=day.p_da_mw, name="day-ahead", mode="lines",
+                             line={**step, "color": GREY, "dash": "dot", "width": 2},
+                             hovertemplate="%{x}: %{y:,.2f} MW<extra>day-ahead</extra>"), row=1, col=1)
+    for s, color in zip(day.sessions, colors):
+        fig.add_trace(go.Scatter(x=labels, y=s.position_mw, name=f"after {s.session}", mode="lines",
+                                 line={**step, "color": color, "width": 1.5},
+                                 hovertemplate="%{x}: %{y:,.2f} MW<extra>after " + s.session + "</extra>"),
+                      row=1, col=1)
+    fig.add_trace(go.Scatter(x=labels, y=day.final_position_mw, name="final", mode="lines",
+                             line={**step, "color": NET_COLOR, "width": 3},
+                             hovertemplate="%{x}: %{y:,.2f} MW<extra>final position</extra>"), row=1, col=1)
+    for s, color in zip(day.sessions, colors):
+        fig.add_trace(go.Bar(x=labels, y=s.traded_mw, name=f"{s.session} traded", marker={"color": color},
+                             customdata=s.price_eur_per_mwh,
+                             hovertemplate="%{x}: %{y:+,.2f} MW at %{customdata:,.2f} EUR/MWh<extra>"
+                             + s.session + "</extra>"), row=2, col=1)
+    for s, color in zip(day.sessions, colors):
+        for index, (source, change) in enumerate(s.forecast_change_mw.items()):
+            if not np.any(change):
+                continue
+            fig.add_trace(go.Scatter(x=labels, y=change, name=f"{s.session}: {source}", mode="lines",
+                                     line={**step, "color": color, "dash": DASHES[index % len(DASHES)]},
+                                     hovertemplate="%{x}: %{y:+,.2f} MW<extra>" + f"{s.session}: {source}"
+                                     + "</extra>"), row=3, col=1)
+    summary = day_summary(record)
+    left = ", ".join(f"{summary[key]:,.2f} MWh {word}" for key, word in (("deficit_mwh", "short"),
+                                                                        ("surplus_mwh", "in surplus"))
+                     if summary[key] is not None) or "not settled"
+    layout = _layout()
+    fig.update_layout(title=f"Trading day {day.day} · {html.escape(day.label)}<br><sup>imbalance left by the settlement: "
+                            f"{left}</sup>", barmode="group", **{**layout, "height": 2 * FIGURE_HEIGHT})
+    for row in (1, 2, 3):
+        fig.update_xaxes(type="category", gridcolor=GRID_COLOR, row=row, col=1)
+        fig.update_yaxes(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR, row=row, col=1)
+    fig.update_xaxes(title_text="period start (local clock)", row=3, col=1)
     return fig
 
 

@@ -1,4 +1,5 @@
-"""``python -m rvpp data import|build-case|import-workbook|band-quality``: real data in, a case out."""
+"""``python -m rvpp data import|import-omie-intraday|build-case|import-workbook|band-quality``: real data in, a
+case out."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ import sys
 
 from ..data.case import PRICE_MODELS
 from ..data.files import check_replaceable
+from ..data.importers.omie_intraday import DEFAULT_PRESET as DEFAULT_INTRADAY_PRESET, PRESETS as INTRADAY_PRESETS
+from ..errors import RvppError
 from ..uncertainty.quality import SERIES
 from .options import DEFAULT_CASE, Number, date_option, path_option
 
@@ -16,7 +19,8 @@ DEFAULT_TEMPLATE = DEFAULT_CASE
 
 
 def add_data_commands(commands) -> None:
-    """Add ``data`` with ``build``, ``import``, ``build-case``, ``import-workbook`` and ``band-quality``."""
+    """Add ``data`` with ``build``, ``import``, ``import-omie-intraday``, ``build-case``, ``import-workbook`` and
+    ``band-quality``."""
     data = commands.add_parser("data", help="build the default dataset, import real data, build a case from it")
     commands = data.add_subparsers(title="data commands")
     build = commands.add_parser("build", help="regenerate the synthetic history of the paper case")
@@ -34,6 +38,29 @@ def add_data_commands(commands) -> None:
     read.add_argument("--out", type=path_option, metavar="CSV", help="write the series on one UTC hour grid "
                       "(time_utc, time_local, series...); quarter-hours are averaged to hours")
     read.set_defaults(run=_run_import)
+
+    intraday = commands.add_parser(
+        "import-omie-intraday", help="read OMIE intraday auction price files into a table or a case's history",
+        description="Read OMIE marginalpibc files (marginalpibc_YYYYMMDDSS.V: day, session, version; or their zip "
+                    "archives), print what each session holds, and write the prices as hourly columns "
+                    "price_ida1, price_ida2, ... into a CSV table or into a case's history (hours before a "
+                    "session's window hold the day-ahead price, as the case's provenance says).")
+    intraday.add_argument("files", nargs="+", type=path_option, metavar="FILE")
+    intraday.add_argument("--sessions", choices=INTRADAY_PRESETS, default=DEFAULT_INTRADAY_PRESET,
+                          help="the sessions the files belong to: iberian_2024 (default: IDA1, IDA2, IDA3) or "
+                               "idm_7 (IDM1 to IDM7, the seed paper's tool)")
+    intraday.add_argument("--zone", default="ES", help="OMIE price zone ES (default) or PT")
+    intraday.add_argument("--start", type=date_option, metavar="YYYY-MM-DD",
+                          help="first delivery day asked for; a file of an earlier day is refused")
+    intraday.add_argument("--end", type=date_option, metavar="YYYY-MM-DD",
+                          help="last delivery day asked for; a file of a later day is refused")
+    intraday.add_argument("--out", type=path_option, metavar="CSV", help="write the prices on one UTC hour grid "
+                          "(time_utc, time_local, price_ida1, ...); quarter-hours are averaged to hours")
+    intraday.add_argument("--case", type=path_option, metavar="FOLDER",
+                          help="add the prices to the history of this case (its days are the days asked for)")
+    intraday.add_argument("--force", action="store_true",
+                          help="with --case: replace intraday price columns the history already holds")
+    intraday.set_defaults(run=_run_import_intraday)
 
     build = commands.add_parser(
         "build-case", help="build a case folder from downloaded files",
@@ -120,6 +147,47 @@ def _run_import(args: argparse.Namespace) -> int:
         write_table(table.frame, args.out)
         print(f"wrote {len(table.frame)} hours of {', '.join(table.frame.columns)} to {args.out}", file=sys.stderr)
     return 0
+
+
+def _run_import_intraday(args: argparse.Namespace) -> int:
+    # heavy (the case model and pandas' readers): loaded only when this command runs
+    from ..data.importers import TABLE_HEADER, hourly_table, write_table
+    from ..data.importers.omie_intraday import read
+    from ..data.intraday_prices import add_intraday_prices
+
+    if args.case and (args.start or args.end):
+        raise RvppError("--start and --end cannot be given with --case: the case's history gives the days")
+    if args.out:
+        check_replaceable(args.out, (TABLE_HEADER,), "a table rvpp wrote")
+    if args.case:
+        added = add_intraday_prices(args.files, args.case, preset=args.sessions, zone=args.zone,
+                                    overwrite=args.force)
+        for report in added.reports:
+            print("\n".join(report.lines()))
+        print("\n".join(added.lines()))
+        table = added.table
+    else:
+        imports = read(args.files, args.sessions, args.zone, days=_asked_days(args.start, args.end))
+        for item in imports:
+            print("\n".join(item.report.lines()))
+        table = hourly_table(imports)
+    if args.out:
+        for note in table.notes:
+            print(f"note: {note}", file=sys.stderr)
+        write_table(table.frame, args.out)
+        print(f"wrote {len(table.frame)} hours of {', '.join(table.frame.columns)} to {args.out}", file=sys.stderr)
+    return 0
+
+
+def _asked_days(start: str | None, end: str | None) -> tuple[dt.date | None, dt.date | None] | None:
+    """The delivery days asked for by ``--start`` and ``--end`` (either may be open)."""
+    if start is None and end is None:
+        return None
+    first = dt.date.fromisoformat(start) if start else None
+    last = dt.date.fromisoformat(end) if end else None
+    if first and last and first > last:
+        raise RvppError(f"--start {start} is after --end {end}; give the first day first")
+    return first, last
 
 
 def _run_build_case(args: argparse.Namespace) -> int:

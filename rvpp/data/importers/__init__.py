@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ...errors import DataImportError
-from . import entsoe, omie, tables
+from . import entsoe, omie, omie_intraday, tables
 from .report import Imported, ImportReport, decode, hourly, read_bytes
 from ..files import replacing
 
@@ -40,6 +40,9 @@ def detect(path: str | Path) -> str:
     if omie.is_archive(path, data):
         return "omie"
     text = decode(data[:65536], path.name)
+    if omie_intraday.looks_like(text):
+        raise DataImportError(f'"{path.name}" is an OMIE intraday auction price file (marginalpibc); read it with '
+                              '"rvpp data import-omie-intraday", which knows its sessions')
     for name, test in (("omie", omie.looks_like), ("time_utc", tables.looks_like_time_utc),
                        ("dataset", tables.looks_like_dataset), ("entsoe", entsoe.looks_like)):
         if test(text):

@@ -71,7 +71,7 @@ def read(paths: list[str | Path], zone: str = "ES") -> Imported:
         data = read_bytes(path)
         name = Path(path).name
         if is_archive(Path(path), data):
-            for member, content in _members(name, data):
+            for member, content in members(name, data):
                 _read_text(decode(content, member), member, zone, rows, days)
                 files.append(SourceFile(member, fingerprint(content), content.count(b"\n")))
             continue
@@ -79,10 +79,10 @@ def read(paths: list[str | Path], zone: str = "ES") -> Imported:
         files.append(SourceFile(name, fingerprint(data), data.count(b"\n")))
     clock = []
     for day, periods in sorted(days.items()):
-        hours, count = _day_hours(day), len(periods)
+        hours, count = day_hours(day), len(periods)
         if hours == 23:
             step = _step(day)
-            first = _period_start(day, 3 if step == pd.Timedelta(hours=1) else 9, step)
+            first = period_start(day, 3 if step == pd.Timedelta(hours=1) else 9, step)
             local = first.tz_convert(TIMEZONE)
             clock.append(f"{day}: 23-hour day (clocks go forward at 02:00); {count} periods, period "
                          f"{3 if step == pd.Timedelta(hours=1) else 9} starts at {local:%H:%M} (+02:00)")
@@ -94,8 +94,9 @@ def read(paths: list[str | Path], zone: str = "ES") -> Imported:
                     meanings={"price_da": f"day-ahead marginal price, {ZONE_NAMES[zone]}"}, dst=clock, notes=notes)
 
 
-def _members(name: str, data: bytes):
-    """Daily files inside an archive, with limits against oversized or nested content."""
+def members(name: str, data: bytes, prefix: str = "marginalpdbc"):
+    """Daily files whose names start with ``prefix`` inside an archive, with limits against oversized
+    or nested content."""
     try:
         archive = zipfile.ZipFile(io.BytesIO(data))
     except UNREADABLE_ZIP:
@@ -106,7 +107,7 @@ def _members(name: str, data: bytes):
     found = 0
     for entry in sorted(entries, key=lambda e: e.filename):
         member = f"{name}:{Path(entry.filename).name}"
-        if not Path(entry.filename).name.lower().startswith("marginalpdbc"):
+        if not Path(entry.filename).name.lower().startswith(prefix):
             continue
         if entry.file_size > MAX_MEMBER_BYTES:
             raise DataImportError(f"{member} is {entry.file_size / 1e6:.1f} MB unpacked; a daily file is far "
@@ -120,7 +121,7 @@ def _members(name: str, data: bytes):
         found += 1
         yield member, content
     if not found:
-        raise DataImportError(f'"{name}" holds no marginalpdbc file')
+        raise DataImportError(f'"{name}" holds no {prefix} file')
 
 
 def _read_text(text: str, name: str, zone: str, rows: Rows, days: dict[dt.date, set[int]]) -> None:
@@ -143,22 +144,22 @@ def _read_text(text: str, name: str, zone: str, rows: Rows, days: dict[dt.date, 
             raise DataImportError(f"{name} line {number}: expected YEAR;MONTH;DAY;PERIOD;PRICE_PT;PRICE_ES; "
                                   f"but found {len(fields)} fields")
         where = f"{name} line {number}"
-        day = _date(fields[:3], where)
-        period = _whole(fields[3], "PERIOD", where)
+        day = date_of(fields[:3], where)
+        period = whole(fields[3], "PERIOD", where)
         step = _step(day)
-        count = int(round(_day_hours(day) * pd.Timedelta(hours=1) / step))
+        count = int(round(day_hours(day) * pd.Timedelta(hours=1) / step))
         if not 1 <= period <= count:
             raise DataImportError(f"{where}: PERIOD={period} does not exist on {day}, which has {count} periods "
                                   f"of {step.total_seconds() / 60:g} minutes")
-        start = _period_start(day, period, step)
-        rows.add(start, start + step, {"price_da": _price(fields[column], where)}, where)
+        start = period_start(day, period, step)
+        rows.add(start, start + step, {"price_da": price(fields[column], where)}, where)
         days.setdefault(day, set()).add(period)
     if not ended:
         raise DataImportError(f"{name}: the closing line '*' is missing; the file may be cut short")
 
 
-def _date(fields: list[str], where: str) -> dt.date:
-    year, month, day = (_whole(f, n, where) for f, n in zip(fields, ("YEAR", "MONTH", "DAY")))
+def date_of(fields: list[str], where: str) -> dt.date:
+    year, month, day = (whole(f, n, where) for f, n in zip(fields, ("YEAR", "MONTH", "DAY")))
     check_year(year, where, f"YEAR={year}")
     try:
         return dt.date(year, month, day)
@@ -166,14 +167,14 @@ def _date(fields: list[str], where: str) -> dt.date:
         raise DataImportError(f"{where}: {year:04d}-{month:02d}-{day:02d} is not a date") from None
 
 
-def _whole(text: str, field: str, where: str) -> int:
+def whole(text: str, field: str, where: str) -> int:
     try:
         return int(text.strip())
     except ValueError:
         raise DataImportError(f"{where}: {field}={excerpt(text.strip())!r} must be a whole number") from None
 
 
-def _price(text: str, where: str) -> float:
+def price(text: str, where: str) -> float:
     text = text.strip()
     if not text:
         return float("nan")
@@ -190,14 +191,14 @@ def _step(day: dt.date) -> pd.Timedelta:
     return pd.Timedelta(minutes=15) if day >= QUARTER_HOURS_FROM else pd.Timedelta(hours=1)
 
 
-def _midnight(day: dt.date) -> pd.Timestamp:
+def midnight(day: dt.date) -> pd.Timestamp:
     return pd.Timestamp(day).tz_localize(TIMEZONE).tz_convert("UTC")
 
 
-def _day_hours(day: dt.date) -> int:
-    return int(round((_midnight(day + dt.timedelta(days=1)) - _midnight(day)) / pd.Timedelta(hours=1)))
+def day_hours(day: dt.date) -> int:
+    return int(round((midnight(day + dt.timedelta(days=1)) - midnight(day)) / pd.Timedelta(hours=1)))
 
 
-def _period_start(day: dt.date, period: int, step: pd.Timedelta) -> pd.Timestamp:
+def period_start(day: dt.date, period: int, step: pd.Timedelta) -> pd.Timestamp:
     """UTC start of ``period`` (1-based): elapsed time from local midnight, not clock time."""
-    return _midnight(day) + (period - 1) * step
+    return midnight(day) + (period - 1) * step
