@@ -65,8 +65,11 @@ def add_data_commands(commands) -> None:
     build = commands.add_parser(
         "build-case", help="build a case folder from downloaded files",
         description="Build a case from imported series: real day-ahead prices, wind and PV from the fleet's "
-                    "capacity factor (actual and day-ahead forecast); reserve prices, CSP solar-field heat and "
-                    "demands stay synthetic. The case's provenance section says which column is which.")
+                    "capacity factor (actual and day-ahead forecast), the CSP's solar-field heat from the real sky "
+                    "(a clear-sky index of the solar series), electrical demands from the system load and its "
+                    "forecast, thermal demands from a temperature series (--weather) or modelled; reserve prices "
+                    "stay modelled. The case's provenance section says, per column, real, real-derived or "
+                    "modelled.")
     build.add_argument("--from", dest="sources", nargs="+", type=path_option, required=True, metavar="FILE")
     build.add_argument("--out", type=path_option, required=True, metavar="FOLDER", help="case folder to write")
     build.add_argument("--template", type=path_option, default=DEFAULT_TEMPLATE,
