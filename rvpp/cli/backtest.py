@@ -78,6 +78,9 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
                              "fraction F of the storage range (may run down to that level)")
     add_settlement_options(parser)
     parser.add_argument("--no-audit", action="store_true", help="do not audit the plans")
+    parser.add_argument("--intraday", action="store_true",
+                        help="after the day-ahead market, trade the case's intraday sessions (IDA1-IDA3 unless the "
+                             "case lists others) and settle against the final position; docs/intraday.md")
     parser.add_argument("--scheduler", type=scheduler_option, default="processes",
                         help="processes (default: local process pool), serial, local (a local Dask cluster) or "
                              "the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
@@ -126,7 +129,7 @@ def settings_from(args: argparse.Namespace, first, last, strategies, fractions) 
     return BacktestSettings(first_day=first, last_day=last,
                             variants=variants_of(strategies, fractions, perfect=not args.no_perfect),
                             penalties=penalties, storage_end=args.storage_end, fix_commitment=args.fix_commitment,
-                            audit=not args.no_audit)
+                            audit=not args.no_audit, intraday=bool(getattr(args, "intraday", False)))
 
 
 def check_out(out: Path | None) -> None:
