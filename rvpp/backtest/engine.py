@@ -132,7 +132,10 @@ def run_day(task: DayTask) -> dict[str, Any]:
         case = day_case(task.case, task.day, task.variant, task.state, settings.storage_end, task.start)
         real = realization(case, task.day)
         intraday = settings.trades_intraday(case) and not task.variant.is_perfect
-        result = perfect_plan(case, real) if task.variant.is_perfect else plan(case, keep_schedule=intraday)
+        if task.variant.is_perfect:
+            result = perfect_plan(case, real)
+        else:
+            result = plan(case, keep_schedule=True) if intraday else plan(case)
     except RvppError as exc:
         return _finish({**record, "status": "error", "plan_status": "error", "message": str(exc),
                         "end_state": task.state, "state_source": "start (the day could not be prepared)"}, started)
