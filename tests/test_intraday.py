@@ -266,3 +266,64 @@ def test_every_session_of_the_paper_day_keeps_its_commitments_and_net_is_market_
     assert record["market_cost_eur"] == pytest.approx(market, abs=CENT)
     assert round(record["net_cost_eur"], 2) == pytest.approx(round(record["market_cost_eur"] + record["penalty_eur"], 2),
                                                              abs=CENT)
+
+
+# ----------------------------------------------------------------------------- a window from noon, and the audit
+
+
+IDA3_ONLY = [{"name": "IDA3", "gate_closure": "10:00", "gate_day": 0, "window_from": "12:00"}]
+
+
+def test_a_session_from_noon_trades_only_its_window_and_the_morning_stays_as_planned():
+    case = _hand_case(sessions=IDA3_ONLY, **{"wind_fc_ida3": IDA2_FC, "price_ida3": IDA2_PRICE})
+    record = _run(case)
+    [ida3] = record["intraday"]
+    assert ida3["status"] == "optimal" and ida3["window_first_period"] == 12 and ida3["audit_violations"] == 0
+    assert ida3["traded_mw"] == pytest.approx([0.0] * 12 + [-20.0] * 12, abs=1e-6)
+    assert ida3["forecast_change_mw"]["W"] == pytest.approx([0.0] * 12 + [-20.0] * 12, abs=1e-9)
+    # Morning: 40 MW sold, 18 MW blown: 22 MW × 12 h short; afternoon: 2 MW × 12 h; at 100 EUR/MWh.
+    assert record["deficit_mwh"] == pytest.approx(22 * 12 + 2 * 12, abs=1e-6)
+    assert record["penalty_eur"] == pytest.approx(100.0 * (22 * 12 + 2 * 12), abs=CENT)
+    assert record["intraday_revenue_eur"] == pytest.approx(-20.0 * 12 * IDA2_PRICE, abs=CENT)
+
+
+def _session_and_commitments(case):
+    from rvpp.model.session import Commitments
+    from rvpp.settle.recourse import first_stage, realization
+    from rvpp.solving.intraday import solve_session
+    from rvpp.solving.plan import solve
+
+    plan = solve(case, keep_schedule=True)
+    bids = first_stage(plan)
+    [session] = session_times(case.intraday, DAY, plan.problem.periods, case.timezone, case.dt_h)
+    problem, _ = session_problem(case, plan.problem, plan.problem, session, realization(case, DAY).values)
+    commitments = Commitments(bids.p_da, bids.r_sr_up, bids.r_sr_dn, bids.h_hpa, np.zeros(24), session.first,
+                              plan.schedule)
+    return plan, solve_session(problem, commitments, session), commitments
+
+
+def test_the_session_audit_finds_a_changed_bid_a_trade_before_the_window_and_a_moved_morning():
+    from dataclasses import replace
+
+    from rvpp.settle.audit import audit_session
+
+    case = _hand_case(sessions=IDA3_ONLY, **{"wind_fc_ida3": IDA2_FC, "price_ida3": IDA2_PRICE})
+    plan, result, commitments = _session_and_commitments(case)
+    assert result.status == "optimal"
+    assert audit_session(result, commitments, plan.units) == []
+    market = result.market.copy()
+    market.loc[3, "p_da_mw"] += 1.0
+    checks = {v.check for v in audit_session(replace(result, market=market), commitments, plan.units)}
+    assert "session.fixed_p_da" in checks
+    market = result.market.copy()
+    market.loc[5, ["traded_mw", "position_mw"]] += 1.0
+    checks = {v.check for v in audit_session(replace(result, market=market), commitments, plan.units)}
+    assert "session.no_trade_before_window" in checks and "electric_balance[none]" in checks
+    units = result.units.copy()
+    units.loc[(units["unit"] == "W") & (units["t"] == 2), "p_mw"] -= 3.0
+    checks = {v.check for v in audit_session(replace(result, units=units), commitments, plan.units)}
+    assert "session.kept_p_mw" in checks
+    traded = result.market.copy()
+    traded.loc[15, ["traded_mw", "position_mw"]] -= 1.0
+    checks = {v.check for v in audit_session(replace(result, market=traded), commitments, plan.units)}
+    assert "session.revenue" in checks and "electric_balance[none]" in checks
