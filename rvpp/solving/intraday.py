@@ -33,7 +33,10 @@ def solve_session(problem: Problem, commitments: Commitments, session: SessionTi
         m = build_session_model(problem, commitments)
         build_s = time.perf_counter() - started
         highs = HighsModel(m)
-        outcome = highs.solve(problem.case.solver, scale=day_scale(problem, m))
+        # The step before's integer schedule as MIP start: where the forecasts moved little it is
+        # still feasible, and HiGHS completes it or drops it otherwise.
+        ones = (name for name, value in commitments.schedule.items() if value > 0.5)
+        outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(ones), scale=day_scale(problem, m))
         tables, schedule = ({}, {})
         if outcome.usable:
             tables, schedule = extract_session(m, problem), schedule_of(m, problem)
