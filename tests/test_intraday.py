@@ -327,3 +327,30 @@ def test_the_session_audit_finds_a_changed_bid_a_trade_before_the_window_and_a_m
     traded.loc[15, ["traded_mw", "position_mw"]] -= 1.0
     checks = {v.check for v in audit_session(replace(result, market=traded), commitments, plan.units)}
     assert "session.revenue" in checks and "electric_balance[none]" in checks
+
+
+def test_an_interrupted_intraday_backtest_resumes_to_the_records_of_an_uninterrupted_one(tmp_path):
+    from rvpp.backtest.engine import run_backtest
+    from rvpp.store import BacktestStore
+
+    case = _hand_case().replace(history=_history(3, **{"W": ACTUAL, "wind_fc_ida2": IDA2_FC,
+                                                        "price_ida2": IDA2_PRICE}))
+    settings = BacktestSettings(DAY, DAY + dt.timedelta(days=1), variants_of(["deterministic"], perfect=False),
+                                intraday=True)
+    store = BacktestStore(f"sqlite:///{tmp_path / 'resumed.sqlite3'}")
+
+    def stop(_key, _record):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_backtest(case, settings, store, on_record=stop)
+    ident = run_backtest(case, settings, store)
+    whole = BacktestStore(f"sqlite:///{tmp_path / 'whole.sqlite3'}")
+    resumed, straight = store.records(ident), whole.records(run_backtest(case, settings, whole))
+    assert len(resumed) == len(straight) == 2
+    # D: the day-ahead band is D-1's 40 MW, IDA2 says 20: buy 20 MW × 24 h at 55 EUR/MWh. D+1: the band
+    # is D's 18 MW, IDA2 says 20: sell 2 MW × 24 h at 55 EUR/MWh.
+    for (_, a), (_, b), cash in zip(resumed.iterrows(), straight.iterrows(), (-26_400.0, 2_640.0)):
+        assert a["net_cost_eur"] == pytest.approx(b["net_cost_eur"], abs=CENT)
+        assert a["intraday"][0]["traded_mw"] == pytest.approx(b["intraday"][0]["traded_mw"], abs=1e-9)
+        assert a["intraday_revenue_eur"] == pytest.approx(cash, abs=CENT)
