@@ -10,19 +10,26 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
 
 import rvpp
-from rvpp.backtest.engine import DayTask, run_day
+from rvpp.backtest.engine import DayTask, run_backtest, run_day
 from rvpp.backtest.settings import BacktestSettings, variants_of
 from rvpp.backtest.state import initial_state
 from rvpp.data.history import History
 from rvpp.data.intraday import session_times
 from rvpp.data.periods import delivery_periods
 from rvpp.errors import CaseError
+from rvpp.model.session import Commitments
+from rvpp.settle.audit import audit_session
+from rvpp.settle.recourse import first_stage, realization
+from rvpp.solving.intraday import solve_session
+from rvpp.solving.plan import solve
+from rvpp.store import BacktestStore
 from rvpp.uncertainty.intraday import lead_factor, realized_price, session_problem
 from rvpp.uncertainty.problem import prepare
 
@@ -288,11 +295,6 @@ def test_a_session_from_noon_trades_only_its_window_and_the_morning_stays_as_pla
 
 
 def _session_and_commitments(case):
-    from rvpp.model.session import Commitments
-    from rvpp.settle.recourse import first_stage, realization
-    from rvpp.solving.intraday import solve_session
-    from rvpp.solving.plan import solve
-
     plan = solve(case, keep_schedule=True)
     bids = first_stage(plan)
     [session] = session_times(case.intraday, DAY, plan.problem.periods, case.timezone, case.dt_h)
@@ -303,10 +305,6 @@ def _session_and_commitments(case):
 
 
 def test_the_session_audit_finds_a_changed_bid_a_trade_before_the_window_and_a_moved_morning():
-    from dataclasses import replace
-
-    from rvpp.settle.audit import audit_session
-
     case = _hand_case(sessions=IDA3_ONLY, **{"wind_fc_ida3": IDA2_FC, "price_ida3": IDA2_PRICE})
     plan, result, commitments = _session_and_commitments(case)
     assert result.status == "optimal"
@@ -330,9 +328,6 @@ def test_the_session_audit_finds_a_changed_bid_a_trade_before_the_window_and_a_m
 
 
 def test_an_interrupted_intraday_backtest_resumes_to_the_records_of_an_uninterrupted_one(tmp_path):
-    from rvpp.backtest.engine import run_backtest
-    from rvpp.store import BacktestStore
-
     case = _hand_case().replace(history=_history(3, **{"W": ACTUAL, "wind_fc_ida2": IDA2_FC,
                                                         "price_ida2": IDA2_PRICE}))
     settings = BacktestSettings(DAY, DAY + dt.timedelta(days=1), variants_of(["deterministic"], perfect=False),
