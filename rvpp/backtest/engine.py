@@ -149,11 +149,13 @@ def run_day(task: DayTask) -> dict[str, Any]:
         violations = audit_result(result, bands=result.problem.bands if task.variant.is_perfect else None)
         record.update(audit_violations=len(violations), audit_first=str(violations[0]) if violations else "",
                       audit_s=time.perf_counter() - t0)
-    if intraday and result.has_plan:
-        try:
-            bids, sessions = trade_sessions(case, result, bids, real, settings.penalties, settings.audit)
-        except RvppError as exc:  # the sessions could not be placed on the day: settled on the day-ahead bids
-            sessions = [{"status": "error", "message": str(exc)}]
+    if intraday:  # a day without a plan trades no session: it has no schedule to correct
+        sessions: list[dict[str, Any]] = []
+        if result.has_plan:
+            try:
+                bids, sessions = trade_sessions(case, result, bids, real, settings.penalties, settings.audit)
+            except RvppError as exc:  # the sessions could not be placed on the day: settled on the day-ahead bids
+                sessions = [{"status": "error", "message": str(exc)}]
         record["intraday"] = sessions
         record["final_position_mw"] = bids.position.tolist()
     settled = evaluate(case, bids, real, settings.penalties, with_end_state=True)
