@@ -87,7 +87,8 @@ def _session(name: str, gate: str, day: int, start: str = "00:00") -> Session:
 
 
 PRESET_SESSIONS: dict[str, tuple[Session, ...]] = {
-    "iberian_2024": (_session("IDA1", "15:00", -1), _session("IDA2", "22:00", -1), _session("IDA3", "10:00", 0, "12:00")),
+    "iberian_2024": (_session("IDA1", "15:00", -1), _session("IDA2", "22:00", -1),
+                     _session("IDA3", "10:00", 0, "12:00")),
     "tool_seven": (_session("IDM1", "18:45", -1), _session("IDM2", "21:45", -1), _session("IDM3", "01:45", 0, "04:00"),
                    _session("IDM4", "04:45", 0, "07:00"), _session("IDM5", "08:45", 0, "11:00"),
                    _session("IDM6", "12:45", 0, "15:00"), _session("IDM7", "16:45", 0, "19:00")),
