@@ -19,6 +19,8 @@ from .outcome import Outcome
 from .plan import day_scale
 from .results import SessionResult
 
+STARTED_PERIOD_MIN_H = 1.0  # [h]: the shortest period whose sessions start from the step before's schedule
+
 
 def solve_session(problem: Problem, commitments: Commitments, session: SessionTime) -> SessionResult:
     """The robust trade and re-dispatch of ``session`` given what is fixed before it (MODEL_SPEC §14)."""
@@ -33,9 +35,11 @@ def solve_session(problem: Problem, commitments: Commitments, session: SessionTi
         m = build_session_model(problem, commitments)
         build_s = time.perf_counter() - started
         highs = HighsModel(m)
-        # The step before's integer schedule as MIP start: where the forecasts moved little it is
-        # still feasible, and HiGHS completes it or drops it otherwise.
-        ones = (name for name, value in commitments.schedule.items() if value > 0.5)
+        # The step before's integer schedule as MIP start on hourly days: where the forecasts moved
+        # little it is still feasible, and HiGHS completes it or drops it otherwise. Shorter periods
+        # start cold, as the backtest's day-ahead plans do (docs/performance.md).
+        started_days = problem.dt_h >= STARTED_PERIOD_MIN_H
+        ones = (name for name, value in commitments.schedule.items() if value > 0.5 and started_days)
         outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(ones), scale=day_scale(problem, m))
         tables, schedule = ({}, {})
         if outcome.usable:
