@@ -8,10 +8,12 @@ day ``D`` of the period, one pure step (:func:`run_day`):
    ``D`` (:func:`rvpp.uncertainty.problem.prepare` reads nothing of ``D`` itself), solved by
    :func:`plan`, on hourly days with ``D − 1``'s plan as MIP start (its integer variables
    at one, ``plan_integer_ones`` in the record);
-2. **settle**: the plan's first-stage bids re-dispatched against ``D``'s own observations
+2. **trade** (when intraday sessions are on, :mod:`rvpp.backtest.intraday`): each session in
+   turn corrects the position from the forecasts at its gate closure (MODEL_SPEC §14);
+3. **settle**: the plan's first-stage bids re-dispatched against ``D``'s own observations
    by the recourse model (:func:`rvpp.settle.recourse.evaluate`), which also reports the
    state at the end of the day;
-3. **record**: one plain dict (settlement, plan numbers, bids, audit, start and end
+4. **record**: one plain dict (settlement, plan numbers, bids, audit, start and end
    state), written to the store at once.
 
 Days of one variant form a chain (day ``D + 1`` needs ``D``'s end state); chains run side
@@ -42,6 +44,7 @@ from ..settle.recourse import FirstStage, Realization, evaluate, first_stage, re
 from ..solving.plan import solve, solve_problem
 from ..solving.results import Result
 from ..store import BacktestStore, RecordKey
+from .intraday import trade_sessions
 from .settings import BacktestSettings, BacktestVariant
 from .state import State, initial_state, with_state
 
@@ -55,9 +58,10 @@ HISTORY_MARGIN_DAYS = 8  # days of history kept before a task's band window (e.g
 STARTED_PERIOD_MIN_H = 1.0
 
 
-def plan(case: Case) -> Result:
-    """The plan of a day: the one place to plug in a faster solve (same case in, same result out)."""
-    return solve(case)
+def plan(case: Case, keep_schedule: bool = False) -> Result:
+    """The plan of a day: the one place to plug in a faster solve (same case in, same result out);
+    ``keep_schedule``: with every unit variable's value, for the intraday sessions after it."""
+    return solve(case, keep_schedule=keep_schedule)
 
 
 def perfect_plan(case: Case, real: Realization) -> Result:
@@ -127,7 +131,11 @@ def run_day(task: DayTask) -> dict[str, Any]:
     try:
         case = day_case(task.case, task.day, task.variant, task.state, settings.storage_end, task.start)
         real = realization(case, task.day)
-        result = perfect_plan(case, real) if task.variant.is_perfect else plan(case)
+        intraday = settings.trades_intraday(case) and not task.variant.is_perfect
+        if task.variant.is_perfect:
+            result = perfect_plan(case, real)
+        else:
+            result = plan(case, keep_schedule=True) if intraday else plan(case)
     except RvppError as exc:
         return _finish({**record, "status": "error", "plan_status": "error", "message": str(exc),
                         "end_state": task.state, "state_source": "start (the day could not be prepared)"}, started)
@@ -141,6 +149,15 @@ def run_day(task: DayTask) -> dict[str, Any]:
         violations = audit_result(result, bands=result.problem.bands if task.variant.is_perfect else None)
         record.update(audit_violations=len(violations), audit_first=str(violations[0]) if violations else "",
                       audit_s=time.perf_counter() - t0)
+    if intraday:  # a day without a plan trades no session: it has no schedule to correct
+        sessions: list[dict[str, Any]] = []
+        if result.has_plan:
+            try:
+                bids, sessions = trade_sessions(case, result, bids, real, settings.penalties, settings.audit)
+            except RvppError as exc:  # the sessions could not be placed on the day: settled on the day-ahead bids
+                sessions = [{"status": "error", "message": str(exc)}]
+        record["intraday"] = sessions
+        record["final_position_mw"] = bids.position.tolist()
     settled = evaluate(case, bids, real, settings.penalties, with_end_state=True)
     record.update({
         "status": str(settled.pop("status")), "realization": settled.pop("fingerprint"),
@@ -149,6 +166,8 @@ def run_day(task: DayTask) -> dict[str, Any]:
     settled.pop("day")
     end = settled.pop("end_state")
     record.update(settled)  # the settlement [EUR], slacks [MWh] and the settled CSP dispatch
+    if "intraday" in record:
+        record["intraday_revenue_eur"] = record["revenue_intraday_eur"]
     if end is None:
         record.update(end_state=task.state, state_source="start (the settlement has no solution)")
     else:

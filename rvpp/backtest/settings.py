@@ -111,6 +111,8 @@ class BacktestSettings:
     target, never below it nor below the start if that was lower; see docs/backtest.md).
     ``fix_commitment``: settle with the plan's turbine schedule (no start where the plan
     is off). ``audit``: audit every plan (:func:`rvpp.settle.audit.audit_result`).
+    ``intraday``: trade the intraday sessions of the case after the day-ahead market (also on
+    when the case's ``intraday.enabled`` is; MODEL_SPEC §14, docs/intraday.md).
     """
 
     first_day: dt.date
@@ -120,6 +122,7 @@ class BacktestSettings:
     storage_end: str | float = CARRY
     fix_commitment: bool = False
     audit: bool = True
+    intraday: bool = False
 
     def __post_init__(self) -> None:
         problems = []
@@ -151,7 +154,8 @@ class BacktestSettings:
         return {"engine_version": ENGINE_VERSION, "from": self.first_day.isoformat(),
                 "to": self.last_day.isoformat(), "variants": [[v.strategy, v.gamma] for v in self.variants],
                 "penalties": dataclasses.asdict(self.penalties), "storage_end": self.storage_end,
-                "fix_commitment": self.fix_commitment, "audit": self.audit}
+                "fix_commitment": self.fix_commitment, "audit": self.audit,
+                **({"intraday": True} if self.intraday else {})}  # written only when on: older ids stay
 
     @classmethod
     def from_stored(cls, data: dict[str, Any]) -> "BacktestSettings":
@@ -161,7 +165,12 @@ class BacktestSettings:
                                 f"this rvpp computes version {ENGINE_VERSION}")
         return cls(first_day=dt.date.fromisoformat(data["from"]), last_day=dt.date.fromisoformat(data["to"]),
                    variants=tuple(BacktestVariant(*v) for v in data["variants"]), penalties=Penalties(**data["penalties"]),
-                   storage_end=data["storage_end"], fix_commitment=data["fix_commitment"], audit=data["audit"])
+                   storage_end=data["storage_end"], fix_commitment=data["fix_commitment"], audit=data["audit"],
+                   intraday=bool(data.get("intraday", False)))
+
+    def trades_intraday(self, case: Case) -> bool:
+        """True when the days of ``case`` trade the intraday sessions (this setting or the case's)."""
+        return self.intraday or case.intraday.enabled
 
     def with_changes(self, **changes: Any) -> "BacktestSettings":
         return dataclasses.replace(self, **changes)

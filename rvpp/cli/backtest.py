@@ -2,7 +2,9 @@
 
 * ``backtest --from D1 --to D2 [--strategies ...] [--fractions ...]``: run or resume;
 * ``backtest recommend --train D1:D2 --test D3:D4 [--criterion cvar95]``: choose Γ;
-* ``backtest export ID --out FOLDER`` and ``backtest list``: what the store holds.
+* ``backtest export ID --out FOLDER`` and ``backtest list``: what the store holds;
+* ``backtest intraday-compare --from D1 --to D2 --out FOLDER``: the same days with and without the
+  intraday sessions, per strategy.
 """
 
 from __future__ import annotations
@@ -57,6 +59,18 @@ def add_backtest_commands(commands) -> None:
                            help="the Γ grid as fractions of the day (default 0,0.0625,...,0.375,0.5)")
     recommend.set_defaults(run=run_recommend_command)
 
+    compare = actions.add_parser(
+        "intraday-compare", help="the same backtest without and with the intraday sessions, per strategy",
+        description="Run (or resume) the backtest of --from..--to twice, on the day-ahead bids alone and with the "
+                    "case's intraday sessions (IDA1-IDA3 unless the case lists others), and report the mean daily "
+                    "net cost, penalty and market (trading) cost of each strategy; docs/intraday.md.")
+    _add_run_options(compare)
+    compare.add_argument("--from", dest="first", required=True, metavar="D1", help="first delivery day YYYY-MM-DD")
+    compare.add_argument("--to", dest="last", required=True, metavar="D2", help="last delivery day (included)")
+    compare.add_argument("--strategies", type=listed(_strategy, "a comma-separated subset of " + ",".join(STRATEGIES)),
+                         default=STRATEGIES, help="comma-separated presets (default: all four)")
+    compare.set_defaults(run=run_intraday_compare_command, fractions=None)
+
     export = actions.add_parser("export", help="write a stored backtest's records and inputs to a folder")
     export.add_argument("ident", metavar="ID", help="the backtest id (see backtest list)")
     export.add_argument("--out", type=path_option, required=True,
@@ -78,6 +92,9 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
                              "fraction F of the storage range (may run down to that level)")
     add_settlement_options(parser)
     parser.add_argument("--no-audit", action="store_true", help="do not audit the plans")
+    parser.add_argument("--intraday", action="store_true",
+                        help="after the day-ahead market, trade the case's intraday sessions (IDA1-IDA3 unless the "
+                             "case lists others) and settle against the final position; docs/intraday.md")
     parser.add_argument("--scheduler", type=scheduler_option, default="processes",
                         help="processes (default: local process pool), serial, local (a local Dask cluster) or "
                              "the address of a Dask scheduler, e.g. tcp://10.0.0.5:8786")
@@ -126,7 +143,7 @@ def settings_from(args: argparse.Namespace, first, last, strategies, fractions) 
     return BacktestSettings(first_day=first, last_day=last,
                             variants=variants_of(strategies, fractions, perfect=not args.no_perfect),
                             penalties=penalties, storage_end=args.storage_end, fix_commitment=args.fix_commitment,
-                            audit=not args.no_audit)
+                            audit=not args.no_audit, intraday=bool(getattr(args, "intraday", False)))
 
 
 def check_out(out: Path | None) -> None:
@@ -281,3 +298,32 @@ def run_list_command(args: argparse.Namespace) -> int:
         print(f"{info.id}  {info.keys_done}/{info.keys_total}  {state:<11}  {info.created_at[:19]}  "
               f"{excerpt(info.label, LABEL_LENGTH)}")  # a label stored before the rule: shown, never obeyed
     return 0
+
+
+def run_intraday_compare_command(args: argparse.Namespace) -> int:
+    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
+    from ..data.files import replacing
+    from ..solving.parallel import open_executor
+    from ..store import BacktestStore
+    from ..studies.intraday import compare_intraday
+    from ..studies.report import markdown_table
+
+    settings = settings_from(args, parse_day(args.first, "--from"), parse_day(args.last, "--to"), args.strategies, ())
+    settings = settings.with_changes(variants=tuple(v for v in settings.variants if not v.is_perfect))
+    case = load_case(args.case)
+    settings.check_case(case)
+    store = BacktestStore(args.store)
+    bar = ProgressBar(not args.quiet, "intraday comparison")
+    stop_on_terminate()
+    with open_executor(args.scheduler, args.workers) as executor:
+        table = compare_intraday(case, settings, store, executor, bar)
+    bar.close()
+    print(table.to_string(index=False, float_format=lambda v: f"{v:,.1f}"))
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        for name, text in (("intraday_comparison.csv", table.to_csv(index=False)),
+                           ("intraday_comparison.md", markdown_table(table, digits=1) + "\n")):
+            with replacing(args.out / name) as temporary:
+                temporary.write_text(text, encoding="utf-8")
+    unreconciled = int((table["days_settled"] - table["days_reconciled"]).sum())
+    return 0 if unreconciled == 0 else 1

@@ -27,6 +27,7 @@ from .case_messages import as_number, kind_of, show_value, validate_into
 from .files import CONTROL_CHARACTERS, excerpt, excerpt_names, refused_character
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .kinds import DISPATCHABLE_KINDS, KINDS, PAPER_KINDS, SHARED_CLASS_KINDS, UNIT_KINDS, UnitKind
+from .intraday import IntradaySettings
 from .periods import ALLOWED_DT_H
 
 
@@ -744,6 +745,7 @@ class Case(_Frozen):
     uncertainty: UncertaintySettings = UncertaintySettings()
     budgets: Budgets = Budgets()
     solver: SolverSettings = SolverSettings()
+    intraday: IntradaySettings = IntradaySettings()
     wind: tuple[NdresUnit, ...] = ()
     pv: tuple[NdresUnit, ...] = ()
     csp: tuple[CSP, ...] = ()
@@ -818,7 +820,7 @@ class Case(_Frozen):
             if key in UNIT_KINDS:
                 data["units"][key] = [_plain(kind=key, unit=u) for u in value]
             elif key in _SECTIONS and isinstance(value, Mapping):
-                data[key] = {**data[key], **value}
+                data[key] = {**data.get(key, {}), **value}
             else:
                 data[key] = value
         return parse_case(data, history)
@@ -835,6 +837,11 @@ class Case(_Frozen):
         if dump["budgets"]["ties"] == "choose":
             del dump["budgets"]["ties"]  # written only when set: cases and their digests stay as they were
         dump["provenance"] = dict(dump["provenance"])
+        if self.intraday == IntradaySettings():
+            del dump["intraday"]  # written only when set: cases and their digests stay as they were
+        else:
+            dump["intraday"]["sessions"] = [{k: v for k, v in s.items() if v is not None}
+                                            for s in dump["intraday"]["sessions"]]
         return {**dump, "units": units}
 
     @field_validator("delivery_date", mode="before")
@@ -980,7 +987,8 @@ UNIT_MODELS: dict[UnitKind, type[_Frozen]] = {UnitKind.WIND: NdresUnit, UnitKind
                                                UnitKind.ED: ElectricalDemand, UnitKind.TD: ThermalDemand,
                                                UnitKind.BATTERY: Battery, UnitKind.HYDRO: DispatchableUnit,
                                                UnitKind.BIOMASS: DispatchableUnit}
-_SECTIONS = {"markets": Markets, "uncertainty": UncertaintySettings, "budgets": Budgets, "solver": SolverSettings}
+_SECTIONS = {"markets": Markets, "uncertainty": UncertaintySettings, "budgets": Budgets, "solver": SolverSettings,
+             "intraday": IntradaySettings}
 _TOP_FIELDS = {"name", "description", "delivery_date", "timezone", "dt_h", "history", "units", "provenance",
                *_SECTIONS}
 

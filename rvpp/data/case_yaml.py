@@ -231,6 +231,8 @@ def save_case(case: Case, folder: str | Path, history_file: str = "history.csv")
     else:
         ordered["solver"]["mip_start"] = list(ordered["solver"]["mip_start"])
     ordered["markets"]["hpa_tariff_eur_per_mwh"] = list(ordered["markets"]["hpa_tariff_eur_per_mwh"])
+    if "intraday" in data:
+        ordered["intraday"] = data["intraday"]
     if data["provenance"]:
         ordered["provenance"] = data["provenance"]
     text = yaml.safe_dump(ordered, sort_keys=False, allow_unicode=True, width=100)

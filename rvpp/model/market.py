@@ -45,24 +45,34 @@ def add_market_bids(m: pyo.ConcreteModel, problem: Problem) -> None:
     m.protection = pyo.Expression(list(PRICE_COLUMNS), initialize=0.0)
 
 
+def position(m: pyo.ConcreteModel):
+    """The energy position the units must deliver [MW]: ``p_da``, or in an intraday session
+    (:mod:`rvpp.model.session`) the total position ``p_da + Σ_{j≤k} q_j`` (MODEL_SPEC §14)."""
+    return m.position if hasattr(m, "position") else m.p_da
+
+
 def add_market_limits(m: pyo.ConcreteModel, problem: Problem) -> None:
     """RVPP trading limits (Power-Traded1-2) [MW].
 
-    ``p_da + r_sr_up ≤ ΣPmax_r + ΣPmax_θ`` and ``−ΣPmax_d ≤ p_da − r_sr_dn``.
+    ``p_da + r_sr_up ≤ ΣPmax_r + ΣPmax_θ`` and ``−ΣPmax_d ≤ p_da − r_sr_dn``, with the total
+    position in place of ``p_da`` in an intraday session (MODEL_SPEC §14).
     """
     generation, demand, _ = capacities(problem)
-    m.trade_upper = pyo.Constraint(m.T, rule=lambda m, t: m.p_da[t] + m.r_sr_up[t] <= generation)
-    m.trade_lower = pyo.Constraint(m.T, rule=lambda m, t: m.p_da[t] - m.r_sr_dn[t] >= -demand)
+    p = position(m)
+    m.trade_upper = pyo.Constraint(m.T, rule=lambda m, t: p[t] + m.r_sr_up[t] <= generation)
+    m.trade_lower = pyo.Constraint(m.T, rule=lambda m, t: p[t] - m.r_sr_dn[t] >= -demand)
 
 
 def add_electric_balance(m: pyo.ConcreteModel, problem: Problem) -> None:
     """Electrical balance in every activation scenario (Supply-Demand1; MODEL_SPEC §7) [MW].
 
-    ``Σr (p_r + a_s(r↑_r, r↓_r)) + Σθ e_θ,s − Σd (p_d − a_s(r↑_d, r↓_d)) = p_da + a_s(r↑_SR, r↓_SR)``
+    ``Σr (p_r + a_s(r↑_r, r↓_r)) + Σθ e_θ,s − Σd (p_d − a_s(r↑_d, r↓_d)) = p_da + a_s(r↑_SR, r↓_SR)``,
+    with the total position in place of ``p_da`` in an intraday session (MODEL_SPEC §14).
     """
     case = problem.case
+    p = position(m)
     m.electric_balance = pyo.Constraint(m.S, m.T, rule=lambda m, s, t: (
-        net_injection(m, case, s, t) == m.p_da[t] + activation(s, m.r_sr_up[t], m.r_sr_dn[t])))
+        net_injection(m, case, s, t) == p[t] + activation(s, m.r_sr_up[t], m.r_sr_dn[t])))
 
 
 def net_injection(m: pyo.Block, case, s: str, t: int):
@@ -86,11 +96,14 @@ def operating_cost(m: pyo.Block, case, dt: float):
 
 
 def add_heat_balance(m: pyo.ConcreteModel, problem: Problem) -> None:
-    """Heat balance ``Σθ h_θ + h_hpa = Σk h_k`` (Supply-Demand1_Heat) [MW_th]."""
+    """Heat balance ``Σθ h_θ + h_hpa = Σk h_k`` (Supply-Demand1_Heat) [MW_th]; in an intraday
+    session, whose HPA purchase is fixed, the heat its units cannot supply, ``heat_short``, is
+    added to the left (:mod:`rvpp.model.session`)."""
     case = problem.case
     supply, use = _unit_blocks(m, case, "heat_supply"), _unit_blocks(m, case, "heat_use")
+    short = m.heat_short if hasattr(m, "heat_short") else {t: 0.0 for t in m.T}
     m.heat_balance = pyo.Constraint(m.T, rule=lambda m, t: (
-        sum(b.heat_supply[t] for b in supply) + m.h_hpa[t] == sum(b.heat_use[t] for b in use)))
+        sum(b.heat_supply[t] for b in supply) + m.h_hpa[t] + short[t] == sum(b.heat_use[t] for b in use)))
 
 
 def add_objective(m: pyo.ConcreteModel, problem: Problem) -> None:

@@ -66,13 +66,16 @@ def _price_exposure(m, block, source: Source, problem: Problem) -> dict:
     """Loss per period if the price moves adversely by its full deviation [EUR]."""
     dt = problem.dt_h
     if source.name == "price_da":
+        # In an intraday session the price is the session's and the energy exposed to it is the
+        # trade q_k (MODEL_SPEC §14); otherwise the day-ahead bid.
+        energy = m.q_id if hasattr(m, "q_id") else m.p_da
         # w_t = λneg_t·y_t of (MILP-asymetric1): the larger of the selling loss
         # λneg·p·dt and the buying loss λpos·(−p)·dt; written without the ratio
         # λneg/λpos so a zero deviation on either side is well defined.
         block.w = pyo.Var(m.T, domain=pyo.NonNegativeReals)
         neg, pos = source.deviation, source.deviation_up
-        block.w_sell = pyo.Constraint(m.T, rule=lambda b, t: b.w[t] >= float(neg[t - 1]) * m.p_da[t] * dt)
-        block.w_buy = pyo.Constraint(m.T, rule=lambda b, t: b.w[t] >= -float(pos[t - 1]) * m.p_da[t] * dt)
+        block.w_sell = pyo.Constraint(m.T, rule=lambda b, t: b.w[t] >= float(neg[t - 1]) * energy[t] * dt)
+        block.w_buy = pyo.Constraint(m.T, rule=lambda b, t: b.w[t] >= -float(pos[t - 1]) * energy[t] * dt)
         return {t: block.w[t] for t in m.T}
     band = m.r_sr_up if source.name == "price_sr_up" else m.r_sr_dn
     return {t: float(source.deviation[t - 1]) * band[t] * dt for t in m.T}

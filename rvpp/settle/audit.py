@@ -377,10 +377,11 @@ def _read_table(path: Path) -> pd.DataFrame:
 
 def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: pd.DataFrame,
                  summary: dict | None = None, tol: float = TOLERANCE,
-                 dispatch: pd.DataFrame | None = None) -> list[Violation]:
+                 dispatch: pd.DataFrame | None = None, heat_short: np.ndarray | None = None) -> list[Violation]:
     """Audit plan tables against the day of :func:`audit_day`; with ``summary`` also the
     budgets it states and the objective. ``dispatch`` holds the batteries', hydro and biomass
-    units' rows (MODEL_SPEC §13)."""
+    units' rows (MODEL_SPEC §13); ``heat_short``: heat an intraday session plans short [MW_th],
+    on the supply side of the heat balance (MODEL_SPEC §14)."""
     a = _Auditor(tol)
     case, nt = day.case, day.nt
     if len(market) != nt:
@@ -405,7 +406,7 @@ def audit_tables(day: AuditDay, market: pd.DataFrame, units: pd.DataFrame, csp: 
         return a.violations
 
     _audit_market(a, day, market)
-    _audit_balances(a, day, market, by_unit, by_csp)
+    _audit_balances(a, day, market, by_unit, by_csp, heat_short)
     _audit_ndres(a, day, by_unit)
     _audit_demands(a, day, by_unit)
     for unit in case.csp:
@@ -459,7 +460,8 @@ def _audit_market(a: _Auditor, day: AuditDay, market: pd.DataFrame) -> None:
         a.eq(f"market.{column}", market[column].to_numpy(float), expected)
 
 
-def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: dict, by_csp: dict) -> None:
+def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: dict, by_csp: dict,
+                    heat_short: np.ndarray | None = None) -> None:
     case = day.case
     p_da, sr_up, sr_dn = (market[c].to_numpy(float) for c in ("p_da_mw", "r_sr_up_mw", "r_sr_dn_mw"))
     for s in Scenario:
@@ -477,6 +479,8 @@ def _audit_balances(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: d
             supply += u["p_mw"].to_numpy() + _activation(s, u["r_up_mw"].to_numpy(), u["r_dn_mw"].to_numpy())
         a.eq(f"electric_balance[{s}]", supply, p_da + _activation(s, sr_up, sr_dn))
     heat = market["h_hpa_mw"].to_numpy(float).copy()
+    if heat_short is not None:
+        heat += np.asarray(heat_short, dtype=float)
     for unit in case.csp:
         heat += by_csp[unit.name]["heat_to_td_mw"].to_numpy()
     need = sum((by_unit[k.name]["p_mw"].to_numpy() for k in case.td), np.zeros(day.nt))
@@ -799,3 +803,64 @@ def _audit_objective(a: _Auditor, day: AuditDay, market: pd.DataFrame, by_unit: 
     a.eq("objective.value_heat_kept_eur", summary.get("value_heat_kept_eur", 0.0), kept, scale=scale)
     total = revenue_dam + revenue_sr - cost_hpa - opex - sum(protection.values()) + kept
     a.eq("objective.total", summary["objective_eur"], total, scale=scale)
+
+
+# ----------------------------------------------------------------------------- intraday sessions
+
+
+def audit_session(result, commitments, previous_units: pd.DataFrame, tol: float = TOLERANCE) -> list[Violation]:
+    """Audit a solved intraday session (:class:`~rvpp.solving.results.SessionResult`) against what
+    was fixed before it (:class:`~rvpp.model.session.Commitments`; MODEL_SPEC §14).
+
+    Checked from the session's tables: the day-ahead bids unchanged; no trade before the window;
+    the position equal to ``p_da`` plus every trade so far; every unit's output and reserves
+    before the window equal to ``previous_units`` (the schedule of the step before); then every
+    rule of :func:`audit_tables` with the total position in place of ``p_da``, against the
+    session's bands and its budgets derived here (``⌊Γ_da·f_k·|W|/NT + ½⌋``); the intraday price
+    protection as the sum of the Γ largest exposures of the trade; and the trade's revenue.
+    """
+    if not result.has_plan:
+        return [Violation("plan", None, None, float("nan"), f"no session plan to audit ({result.status})")]
+    a = _Auditor(tol)
+    case, market, first = result.case, result.market, commitments.first
+    nt, dt = len(market), case.dt_h
+    for column, name in (("p_da_mw", "p_da"), ("r_sr_up_mw", "r_sr_up"), ("r_sr_dn_mw", "r_sr_dn"),
+                         ("h_hpa_mw", "h_hpa")):
+        a.eq(f"session.fixed_{name}", market[column].to_numpy(float), np.asarray(getattr(commitments, name), float))
+    traded = market["traded_mw"].to_numpy(float)
+    a.eq("session.no_trade_before_window", traded[:first], 0.0)
+    a.eq("session.position", market["position_mw"].to_numpy(float),
+         np.asarray(commitments.p_da, float) + np.asarray(commitments.traded, float) + traded)
+    if first:
+        for name, part in result.units.groupby("unit"):
+            before = previous_units[previous_units["unit"] == name].sort_values("t")
+            part = part.sort_values("t")
+            for column in ("p_mw", "r_up_mw", "r_dn_mw"):
+                a.eq(f"session.kept_{column}", part[column].to_numpy(float)[:first],
+                     before[column].to_numpy(float)[:first], name)
+    day = audit_day(case, bands=result.problem.bands)
+    k = [s.name for s in case.intraday.resolved].index(result.session) + 1
+    own = case.intraday.resolved[k - 1].gamma_factor
+    factor = own if own is not None else case.intraday.gamma_shrink ** k
+    window = nt - first
+    gammas = {}
+    for name, series in day.sources.items():
+        share = series.gamma * factor * window / nt
+        gammas[name] = min(window, int(share) + (1 if share - int(share) >= 0.5 else 0))
+    day = AuditDay(case=day.case, nt=day.nt, dt_h=day.dt_h, tariff_hpa=day.tariff_hpa,
+                   sources={name: Series(s.kind, s.unit_kind, s.nominal, s.deviation, gammas[name], s.deviation_up)
+                            for name, s in day.sources.items()})
+    frame = market.copy()
+    frame["p_da_mw"] = market["position_mw"]
+    a.violations += audit_tables(day, frame, result.units, result.csp, None, tol, dispatch=result.dispatch,
+                                 heat_short=market["heat_short_mw"].to_numpy(float))
+    price = day.sources["price_da"]
+    exposure = np.maximum.reduce([price.deviation * traded * dt, -price.deviation_up * traded * dt,
+                                  np.zeros(nt)])
+    for check, expected, stated in (
+            ("session.protection", protection_exact(exposure, price.gamma), result.parts["protection_intraday_eur"]),
+            ("session.revenue", float(np.sum(price.nominal * traded * dt)), result.parts["revenue_intraday_eur"])):
+        if abs(expected - stated) > MONEY_TOLERANCE:
+            a.fail(check, f"the session states {stated:.2f} EUR, derived {expected:.2f} EUR",
+                   excess=abs(expected - stated))
+    return a.violations

@@ -14,8 +14,10 @@ slack                 meaning                                                uni
 ``g``                 unserved heat                                          [MW_th]
 ====================  =====================================================  ===========
 
-Settlement at realized prices: market cost ``= −(DAM revenue + SR revenue) + HPA cost
-+ operating cost``; penalty ``= Σt dt·[π_def·s_neg − π_sur·s_pos + m_sr·(λup·q_up + λdn·q_dn)
+Settlement at realized prices: market cost ``= −(DAM revenue + SR revenue + intraday revenue)
++ HPA cost + operating cost``, the intraday revenue ``Σ_k Σt λ_k·q_k·dt`` of the trades made in
+intraday sessions at their realized prices (0 without; the imbalance is then measured against the
+final position ``p_da + Σ_k q_k``, MODEL_SPEC §14); penalty ``= Σt dt·[π_def·s_neg − π_sur·s_pos + m_sr·(λup·q_up + λdn·q_dn)
 + c_heat·g]`` with the imbalance prices ``π_def = λda + (m_def − 1)·|λda|`` and
 ``π_sur = λda − (1 − m_sur)·|λda|`` (``m_def·λda`` and ``m_sur·λda`` for ``λda ≥ 0``), or the
 case's real imbalance price series; net cost = market cost + penalty, which the recourse
@@ -131,17 +133,35 @@ class Penalties:
 
 @dataclass(frozen=True, eq=False)
 class FirstStage:
-    """Market bids per period [MW], [MW_th]; optionally the CSP commitment to keep fixed."""
+    """Market bids per period [MW], [MW_th]; optionally the CSP commitment to keep fixed and the
+    intraday trades: one ``(q_k, λ_k)`` pair per session, the trade [MW] (+ sell, − buy) and the
+    realized intraday price it settles at [EUR/MWh] (MODEL_SPEC §14)."""
 
     p_da: np.ndarray
     r_sr_up: np.ndarray
     r_sr_dn: np.ndarray
     h_hpa: np.ndarray
     online: dict[str, np.ndarray] = field(default_factory=dict)
+    intraday: tuple[tuple[np.ndarray, np.ndarray], ...] = ()
 
     @property
     def nt(self) -> int:
         return len(self.p_da)
+
+    @property
+    def traded(self) -> np.ndarray:
+        """``Σ_k q_k`` per period [MW]."""
+        return sum((np.asarray(q, dtype=float) for q, _ in self.intraday), np.zeros(self.nt))
+
+    @property
+    def position(self) -> np.ndarray:
+        """The final position ``p_da + Σ_k q_k`` [MW] the imbalance is measured against."""
+        return np.asarray(self.p_da, dtype=float) + self.traded
+
+    def intraday_revenue(self, dt_h: float) -> float:
+        """``Σ_k Σ_t λ_k·q_k·dt`` [EUR]: the intraday cash flows (+ received, − paid)."""
+        return float(sum(np.dot(np.asarray(price, dtype=float), np.asarray(q, dtype=float)) * dt_h
+                         for q, price in self.intraday))
 
 
 def first_stage(result, fix_commitment: bool = False) -> FirstStage:
@@ -292,6 +312,9 @@ def add_fixed_bids(m: pyo.ConcreteModel, bids: FirstStage) -> None:
     for name in FIRST_STAGE:
         values = getattr(bids, name)
         m.add_component(name, pyo.Param(m.T, initialize=lambda _, t, v=values: float(v[t - 1])))
+    traded = bids.traded
+    m.q_id = pyo.Param(m.T, initialize=lambda _, t: float(traded[t - 1]))
+    m.intraday_cash = bids.intraday_revenue(1.0)  # [EUR/h of period]: × dt in the settlement
 
 
 def add_scenario(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalties: Penalties,
@@ -346,11 +369,14 @@ def add_slacks(m: pyo.ConcreteModel, b: pyo.Block) -> None:
 def add_recourse_electric_balance(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem) -> None:
     """Supply-Demand1 with slacks in every activation scenario ``s`` [MW]:
 
-    ``net_injection_s = p_da − s_neg + s_pos + a_s(r_sr↑ − q↑, r_sr↓ − q↓)``.
+    ``net_injection_s = p_da + Σ_k q_k − s_neg + s_pos + a_s(r_sr↑ − q↑, r_sr↓ − q↓)``: the
+    imbalance is measured against the final position (the intraday trades ``Σ_k q_k`` are 0
+    without intraday sessions; MODEL_SPEC §14).
     """
     case = problem.case
+    traded = m.q_id if hasattr(m, "q_id") else {t: 0.0 for t in b.T}
     b.electric_balance = pyo.Constraint(b.S, b.T, rule=lambda b, s, t: (
-        net_injection(b, case, s, t) == m.p_da[t] - b.s_neg[t] + b.s_pos[t]
+        net_injection(b, case, s, t) == m.p_da[t] + traded[t] - b.s_neg[t] + b.s_pos[t]
         + activation(s, m.r_sr_up[t] - b.q_up[t], m.r_sr_dn[t] - b.q_dn[t])))
 
 
@@ -375,7 +401,9 @@ def add_settlement(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalti
     b.revenue_sr = pyo.Expression(expr=total(lambda t, i: float(up[i]) * m.r_sr_up[t] + float(dn[i]) * m.r_sr_dn[t]))
     b.cost_hpa = pyo.Expression(expr=total(lambda t, i: float(hpa[i]) * m.h_hpa[t]))
     b.cost_opex = pyo.Expression(expr=operating_cost(b, case, dt_h))
-    b.market_cost = pyo.Expression(expr=-(b.revenue_dam + b.revenue_sr) + b.cost_hpa + b.cost_opex)
+    b.revenue_intraday = pyo.Expression(expr=getattr(m, "intraday_cash", 0.0) * dt_h)
+    b.market_cost = pyo.Expression(expr=-(b.revenue_dam + b.revenue_sr + b.revenue_intraday) + b.cost_hpa
+                                   + b.cost_opex)
     # A realized problem may carry real imbalance prices; otherwise they follow the DAM price.
     short, long = penalties.imbalance_prices(da, getattr(problem, "imbalance_short", None),
                                              getattr(problem, "imbalance_long", None),
@@ -392,7 +420,8 @@ def add_settlement(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalti
 # ----------------------------------------------------------------------------- evaluation
 
 
-SETTLEMENT = ("market_cost", "penalty", "net_cost", "revenue_dam", "revenue_sr", "cost_hpa", "cost_opex",
+SETTLEMENT = ("market_cost", "penalty", "net_cost", "revenue_dam", "revenue_sr", "revenue_intraday", "cost_hpa",
+              "cost_opex",
               "penalty_deficit", "penalty_surplus", "penalty_reserve", "penalty_heat")
 SLACKS = {"deficit_mwh": "s_neg", "surplus_mwh": "s_pos", "reserve_up_short_mwh": "q_up",
           "reserve_dn_short_mwh": "q_dn", "unserved_heat_mwh": "g"}

@@ -207,3 +207,22 @@ def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     if not frames:
         return pd.DataFrame()
     return pd.concat(frames, ignore_index=True)
+
+
+def extract_session(m: pyo.ConcreteModel, problem: Problem) -> dict:
+    """Read a solved intraday session (:mod:`rvpp.model.session`) into plain numbers and tables.
+
+    Its ``market`` table is the day-ahead one with the cleared bids, the price columns of the
+    session's price (``price_da_*`` hold the intraday price band) and two more columns:
+    ``traded_mw`` (the session's trade ``q_k``) and ``position_mw`` (``p_da + Σ_{j≤k} q_j``).
+    """
+    T = list(m.T)
+    parts = {"revenue_intraday_eur": _v(m.revenue_intraday), "protection_intraday_eur": _v(m.protection["price_da"]),
+             "cost_opex_eur": _v(m.cost_opex), "value_heat_kept_eur": _v(m.value_heat_kept),
+             "cost_heat_short_eur": _v(m.cost_heat_short)}
+    market = _market_table(m, problem, T)
+    market["traded_mw"] = _series(m.q_id, T)
+    market["position_mw"] = _series(m.position, T)
+    market["heat_short_mw"] = _series(m.heat_short, T)
+    return {"parts": parts, "market": market, "units": _units_table(m, problem, T), "csp": _csp_table(m, problem, T),
+            "dispatch": _dispatch_table(m, problem, T)}

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from collections.abc import Callable
@@ -16,6 +17,7 @@ from .diagnose import explain_infeasibility
 from .highs import HighsModel, model_lifetime, objective_scale
 from .outcome import Outcome, SolveOutcome, Watch
 from ..model import build_model
+from ..model.session import schedule_of
 from ..uncertainty.problem import Problem, infeasibility_reasons, prepare
 from ..model.robust import budget_choices
 from .extract import extract
@@ -25,34 +27,36 @@ from ..data.files import replacing
 Progress = Callable[[str], None]
 
 
-def solve(case: Case, progress: Progress | None = None, watch: Watch | None = None) -> Result:
+def solve(case: Case, progress: Progress | None = None, watch: Watch | None = None,
+          keep_schedule: bool = False) -> Result:
     """Compute the robust day-ahead plan of ``case`` for its delivery date.
 
     ``watch`` is shown the solver's search as it goes (:class:`~rvpp.solving.outcome.Search`:
     the best plan's objective, the bound, their gap) and may end it early, keeping the best
-    plan found so far: the result's status is then ``stopped``, with its gap.
+    plan found so far: the result's status is then ``stopped``, with its gap. ``keep_schedule``: the
+    result carries every unit variable's value (:attr:`Result.schedule`, for intraday sessions).
     """
     require(case, Case, "rvpp.solve: case", "from rvpp.load_case")
     say = progress or (lambda _msg: None)
     started = time.perf_counter()
     say("preparing forecast bands")
     problem = prepare(case)
-    return solve_problem(problem, progress=say, started=started, watch=watch)
+    return solve_problem(problem, progress=say, started=started, watch=watch, keep_schedule=keep_schedule)
 
 
 def solve_problem(problem: Problem, progress: Progress | None = None, started: float | None = None,
-                  watch: Watch | None = None) -> Result:
+                  watch: Watch | None = None, keep_schedule: bool = False) -> Result:
     """Solve an already prepared :class:`Problem` (``watch``: as for :func:`solve`).
 
     The Pyomo model lives inside :func:`~rvpp.solving.highs.model_lifetime` (the cyclic
     collector paused, the model collected young).
     """
     with model_lifetime():
-        return _solve_problem(problem, progress, started, watch)
+        return _solve_problem(problem, progress, started, watch, keep_schedule)
 
 
 def _solve_problem(problem: Problem, progress: Progress | None, started: float | None,
-                   watch: Watch | None = None) -> Result:
+                   watch: Watch | None = None, keep_schedule: bool = False) -> Result:
     say = progress or (lambda _msg: None)
     started = time.perf_counter() if started is None else started
     reasons = infeasibility_reasons(problem)
@@ -65,7 +69,10 @@ def _solve_problem(problem: Problem, progress: Progress | None, started: float |
     highs = HighsModel(m)
     outcome = highs.solve(problem.case.solver, start=highs.start_at_ones(problem.case.solver.mip_start),
                           scale=day_scale(problem, m), watch=watch)
-    return plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
+    result = plan_result(problem, m, outcome, build_s, say, highs.integer_ones())
+    if keep_schedule and result.has_plan:
+        result = dataclasses.replace(result, schedule=schedule_of(m, problem))
+    return result
 
 
 def day_scale(problem: Problem, m) -> int:

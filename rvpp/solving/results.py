@@ -44,6 +44,8 @@ class Result:
     lp_iterations: int | None = None
     # The plan's integer variables at one, by name: the solver settings' ``mip_start`` for the next day.
     integer_ones: tuple[str, ...] = field(default=(), repr=False)
+    # Every unit variable's value by name, kept when asked: what an intraday session keeps before its window.
+    schedule: dict[str, float] = field(default_factory=dict, repr=False)
     parts: dict[str, float] = field(default_factory=dict)
     protection_eur: dict[str, float] = field(default_factory=dict)
     market: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
@@ -131,3 +133,47 @@ def flexibility_table(units: pd.DataFrame, case) -> pd.DataFrame:
         rows.append({"kind": kind, "r_up_mwh": up, "r_dn_mwh": dn, "capacity_mw": capacity,
                      "r_up_h": up / capacity, "r_dn_h": dn / capacity})
     return pd.DataFrame(rows, columns=["kind", "r_up_mwh", "r_dn_mwh", "capacity_mw", "r_up_h", "r_dn_h"])
+
+
+@dataclass(frozen=True, eq=False)
+class SessionResult:
+    """Outcome of one intraday session's solve (MODEL_SPEC §14): status, timings, the trade and
+    the position, the objective's parts and the tidy tables of the re-dispatch.
+
+    ``market`` holds, besides the cleared day-ahead bids, ``traded_mw`` (``q_k``, + sell, − buy)
+    and ``position_mw`` (``p_da + Σ_{j≤k} q_j``); its ``price_da_*`` columns hold the session's
+    intraday price band. ``schedule``: every unit variable's value, which the next session keeps
+    before its window.
+    """
+
+    problem: Problem = field(repr=False)
+    session: str
+    gate_closure: str
+    first: int
+    status: Outcome
+    termination: str
+    message: str = ""
+    objective_eur: float | None = None
+    bound_eur: float | None = None
+    mip_gap: float | None = None
+    build_s: float = 0.0
+    solve_s: float = 0.0
+    parts: dict[str, float] = field(default_factory=dict)
+    market: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
+    units: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
+    csp: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
+    dispatch: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
+    schedule: dict[str, float] = field(default_factory=dict, repr=False)
+
+    @property
+    def has_plan(self) -> bool:
+        return self.status.usable and self.objective_eur is not None and not self.market.empty
+
+    @property
+    def case(self):
+        return self.problem.case
+
+    @property
+    def traded_mw(self) -> np.ndarray:
+        """The session's trade per period [MW] (zeros without a plan)."""
+        return self.market["traded_mw"].to_numpy(float) if self.has_plan else np.zeros(self.problem.nt)
