@@ -143,8 +143,8 @@ def test_the_tool_preset_has_seven_sessions_with_their_windows():
     case = _hand_case().replace(intraday={"enabled": True, "sessions": [], "preset": "tool_seven"})
     periods = delivery_periods(DAY, case.timezone, 1.0)
     times = session_times(case.intraday, DAY, periods, case.timezone, 1.0)
-    assert [(s.name, s.first) for s in times] == [("IDM1", 0), ("IDM2", 0), ("IDM3", 4), ("IDM4", 7), ("IDM5", 11),
-                                                  ("IDM6", 15), ("IDM7", 19)]
+    assert [(s.name, s.first) for s in times] == [("IDM1", 0), ("IDM2", 0), ("IDM3", 4), ("IDM4", 7), ("IDM5", 12),
+                                                  ("IDM6", 16), ("IDM7", 20)]
 
 
 def test_a_window_not_on_a_period_boundary_is_refused_by_name():

@@ -92,13 +92,13 @@ def test_the_25_hour_day_moves_ida3_to_period_14(tmp_path):
 
 def test_the_23_hour_day_of_the_seven_session_preset(tmp_path):
     path = pibc(tmp_path, "marginalpibc_2018032507.1", day_lines("2018;03;25", range(20, 24)))
-    prices = only(read([path], "idm_7"), "price_idm7")
+    prices = only(read([path], "tool_seven"), "price_idm7")
     assert list(prices.index) == [utc("2018-03-25 18:00"), utc("2018-03-25 19:00"), utc("2018-03-25 20:00"),
                                   utc("2018-03-25 21:00")]
     assert list(prices) == [120.0, 121.0, 122.0, 123.0]
     beyond = pibc(tmp_path, "marginalpibc_2018032506.1", day_lines("2018;03;25", [24]))
     with pytest.raises(DataImportError, match="PERIOD=24 does not exist on 2018-03-25, which has 23 periods of 60"):
-        read([beyond], "idm_7")
+        read([beyond], "tool_seven")
 
 
 def test_quarter_hours_from_march_2025_average_to_the_hour(tmp_path):
@@ -185,7 +185,7 @@ def test_zip_limits(tmp_path):
     ("marginalpibc_2024070104.1", "iberian_2024",
      r"session 04 is not one of the 3 sessions of iberian_2024 \(IDA1 to IDA3, numbered 01 to 03\)"),
     ("marginalpibc_2024070100.1", "iberian_2024", "session 00 is not one of the 3 sessions"),
-    ("marginalpibc_2024070108.1", "idm_7", r"session 08 is not one of the 7 sessions of idm_7 \(IDM1 to IDM7"),
+    ("marginalpibc_2024070108.1", "tool_seven", r"session 08 is not one of the 7 sessions of tool_seven \(IDM1 to IDM7"),
     ("marginalpibc_2024023001.1", "iberian_2024", "2024-02-30 in its name is not a date"),
     ("marginalpibc_3024070101.1", "iberian_2024", "the year 3024 of its name is out of range"),
 ])
@@ -196,9 +196,9 @@ def test_a_file_name_that_does_not_fit_is_refused(tmp_path, name, preset, messag
 
 
 def test_a_session_four_is_read_by_the_seven_session_preset(tmp_path):
-    path = pibc(tmp_path, "marginalpibc_2018040204.1", day_lines("2018;04;02", range(5, 25)))
-    prices = only(read([path], "idm_7"), "price_idm4")
-    assert prices.index[0] == utc("2018-04-02 02:00") and prices.iloc[0] == 105.0  # 04:00 local, +02:00
+    path = pibc(tmp_path, "marginalpibc_2018040204.1", day_lines("2018;04;02", range(8, 25)))
+    prices = only(read([path], "tool_seven"), "price_idm4")
+    assert prices.index[0] == utc("2018-04-02 05:00") and prices.iloc[0] == 108.0  # 07:00 local, +02:00
 
 
 def test_files_of_another_day_or_zone_are_refused_by_name(tmp_path):
@@ -219,7 +219,7 @@ def test_files_of_another_day_or_zone_are_refused_by_name(tmp_path):
     with pytest.raises(DataImportError, match="zone='FR' is not an OMIE zone"):
         read([path], zone="FR")
     with pytest.raises(DataImportError, match="--sessions 'xbid' is not a preset of intraday sessions; choose "
-                                              "iberian_2024 or idm_7"):
+                                              "iberian_2024 or tool_seven"):
         read([path], "xbid")
 
 

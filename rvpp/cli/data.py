@@ -48,7 +48,7 @@ def add_data_commands(commands) -> None:
     intraday.add_argument("files", nargs="+", type=path_option, metavar="FILE")
     intraday.add_argument("--sessions", choices=INTRADAY_PRESETS, default=DEFAULT_INTRADAY_PRESET,
                           help="the sessions the files belong to: iberian_2024 (default: IDA1, IDA2, IDA3) or "
-                               "idm_7 (IDM1 to IDM7, the seed paper's tool)")
+                               "tool_seven (IDM1 to IDM7, the seed paper's tool)")
     intraday.add_argument("--zone", default="ES", help="OMIE price zone ES (default) or PT")
     intraday.add_argument("--start", type=date_option, metavar="YYYY-MM-DD",
                           help="first delivery day asked for; a file of an earlier day is refused")

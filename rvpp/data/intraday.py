@@ -7,10 +7,13 @@ day. Two layouts are built in:
 * ``iberian_2024``: the pan-European intraday auctions of the Iberian market since June
   2024: IDA1 (gate 15:00 on D-1, all of D), IDA2 (22:00 on D-1, all of D), IDA3 (10:00 on
   D, periods from 12:00);
-* ``tool_seven``: the seven Iberian intraday sessions before 2018, as the authors' tool has
-  them: IDM1 (18:45 D-1, all of D), IDM2 (21:45 D-1, all), IDM3 (01:45 D, from 04:00),
-  IDM4 (04:45, from 07:00), IDM5 (08:45, from 11:00), IDM6 (12:45, from 15:00), IDM7
-  (16:45, from 19:00).
+* ``tool_seven``: the seven intraday sessions of the Iberian market the authors' tool models
+  (IDM1 to IDM7), with the market's gate closures and horizons of 24, 24, 20, 17, 12, 8 and
+  4 hours: IDM1 (18:45 D-1, all of D), IDM2 (21:45 D-1, all), IDM3 (01:45 D, from 04:00),
+  IDM4 (04:45, from 07:00), IDM5 (08:45, from 12:00), IDM6 (12:45, from 16:00), IDM7
+  (16:45, from 20:00). The tool's code starts its windows at periods 1, 1, 1, 5, 8, 13 and
+  21: IDM3 over the whole day, which no gate on D allows, and IDM6 at 12:00; a case that
+  wants those lists its sessions (docs/intraday.md).
 
 A case may list its own sessions instead. The settings also hold the session budgets
 (``gamma_shrink``, or a ``gamma_factor`` per session), the lead-time error model and the
@@ -90,8 +93,8 @@ PRESET_SESSIONS: dict[str, tuple[Session, ...]] = {
     "iberian_2024": (_session("IDA1", "15:00", -1), _session("IDA2", "22:00", -1),
                      _session("IDA3", "10:00", 0, "12:00")),
     "tool_seven": (_session("IDM1", "18:45", -1), _session("IDM2", "21:45", -1), _session("IDM3", "01:45", 0, "04:00"),
-                   _session("IDM4", "04:45", 0, "07:00"), _session("IDM5", "08:45", 0, "11:00"),
-                   _session("IDM6", "12:45", 0, "15:00"), _session("IDM7", "16:45", 0, "19:00")),
+                   _session("IDM4", "04:45", 0, "07:00"), _session("IDM5", "08:45", 0, "12:00"),
+                   _session("IDM6", "12:45", 0, "16:00"), _session("IDM7", "16:45", 0, "20:00")),
 }
 
 

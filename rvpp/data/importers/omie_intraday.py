@@ -17,9 +17,8 @@ file may belong to come from a preset (:data:`PRESETS`):
 * ``iberian_2024``: the three pan-European intraday auctions of the Iberian market since
   14 June 2024, IDA1 (gate closure 15:00 on the day before, all periods of the day), IDA2
   (22:00 on the day before, all periods), IDA3 (10:00 on the day, periods from 12:00);
-* ``idm_7``: the seven intraday sessions of the seed paper's authors' tool, IDM1 to IDM7,
-  whose windows start at periods 1, 1, 1, 5, 8, 13 and 21 of the day (local hours 00:00,
-  00:00, 00:00, 04:00, 07:00, 12:00, 20:00).
+* ``tool_seven``: the seven intraday sessions the seed paper's authors' tool models, IDM1 to
+  IDM7, whose windows open at 00:00, 00:00, 04:00, 07:00, 12:00, 16:00 and 20:00 local.
 
 Quirks of the source, each handled here:
 
@@ -52,6 +51,7 @@ import pandas as pd
 
 from ...errors import DataImportError
 from ..files import excerpt
+from ..intraday import PRESET_SESSIONS, IntradaySettings
 from . import omie
 from .report import Imported, Rows, SourceFile, assemble, check_year, decode, fingerprint, read_bytes
 
@@ -78,12 +78,11 @@ class Session:
         return f"price_{self.name.lower()}"
 
 
+# The sessions of the case's presets (rvpp.data.intraday), each by the hour its window opens.
 PRESETS: dict[str, tuple[Session, ...]] = {
-    "iberian_2024": (Session("IDA1", 0), Session("IDA2", 0), Session("IDA3", 12)),
-    "idm_7": (Session("IDM1", 0), Session("IDM2", 0), Session("IDM3", 0), Session("IDM4", 4), Session("IDM5", 7),
-              Session("IDM6", 12), Session("IDM7", 20)),
-}
-DEFAULT_PRESET = "iberian_2024"
+    preset: tuple(Session(s.name, s.window_minutes // 60) for s in sessions)
+    for preset, sessions in PRESET_SESSIONS.items()}
+DEFAULT_PRESET = IntradaySettings().preset
 
 
 def sessions_of(preset: str) -> tuple[Session, ...]:
