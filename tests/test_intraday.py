@@ -191,6 +191,21 @@ def test_the_intraday_section_is_written_only_when_set_and_read_back(tmp_path):
 # ----------------------------------------------------------------------------- what a session knows
 
 
+def test_the_case_says_which_session_prices_and_forecasts_are_real_and_which_modelled():
+    case = _hand_case(sessions=[{"name": "IDA2", "gate_closure": "22:00", "gate_day": -1},
+                                {"name": "IDA3", "gate_closure": "10:00", "gate_day": 0, "window_from": "12:00"}])
+    said = ("Intraday sessions IDA2, IDA3: prices real for IDA2, modelled (the day-ahead price and a seeded "
+            "spread); forecasts real in wind_fc_ida2, otherwise modelled (the day-ahead error shrunk with the "
+            "lead time).")
+    assert case.intraday_summary() == said
+    assert case.provenance_summary() == said  # a case without history provenance still says it
+    bundled = rvpp.load_case(PAPER).replace(intraday={"enabled": True})
+    assert bundled.intraday_summary() == ("Intraday sessions IDA1, IDA2, IDA3: prices modelled (the day-ahead "
+                                          "price and a seeded spread); forecasts modelled (the day-ahead error "
+                                          "shrunk with the lead time).")
+    assert rvpp.load_case(PAPER).provenance_summary() is None  # sessions off: nothing to say
+
+
 def test_lead_time_factor_is_the_square_root_of_the_lead_time_ratio():
     periods = delivery_periods(DAY, "Europe/Madrid", 1.0)
     gate = pd.Timestamp("2025-03-17 22:00", tz="Europe/Madrid")

@@ -208,6 +208,8 @@ def run_backtest_command(args: argparse.Namespace) -> int:
     say(f"rvpp backtest: case {case.name}, {settings.first_day} to {settings.last_day}, "
         f"{len(settings.variants)} variant(s) ({', '.join(v.label for v in settings.variants)}), "
         f"scheduler {args.scheduler}")
+    if settings.intraday or case.intraday.enabled:
+        say(case.intraday_summary())
     bar = ProgressBar(not args.quiet, "backtest")
     stop_on_terminate()
     try:

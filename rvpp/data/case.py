@@ -28,6 +28,7 @@ from .files import CONTROL_CHARACTERS, excerpt, excerpt_names, refused_character
 from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .kinds import DISPATCHABLE_KINDS, KINDS, PAPER_KINDS, SHARED_CLASS_KINDS, UNIT_KINDS, UnitKind
 from .intraday import IntradaySettings
+from .intraday import forecast_column as intraday_forecast_column, price_column as intraday_price_column
 from .periods import ALLOWED_DT_H
 
 
@@ -772,12 +773,27 @@ class Case(_Frozen):
     def provenance_summary(self) -> str | None:
         """One line naming the history columns of each origin (``None`` if unlabelled)."""
         if not self.provenance:
-            return None
+            return self.intraday_summary() if self.intraday.enabled else None
         word = {"synthetic": "modelled"}  # the older cases' word for the same origin
         by_origin = {origin: [c for c, p in self.provenance if word.get(p.origin, p.origin) == origin]
                      for origin in ("real", "real-derived", "modelled")}
         parts = [f"{origin}: {', '.join(columns)}" for origin, columns in by_origin.items() if columns]
-        return "History columns — " + "; ".join(parts) + " (sources and fingerprints in the case's provenance)."
+        line = "History columns — " + "; ".join(parts) + " (sources and fingerprints in the case's provenance)."
+        return f"{line} {self.intraday_summary()}" if self.intraday.enabled else line
+
+    def intraday_summary(self) -> str:
+        """Where the intraday sessions' prices and forecasts come from: the history's per-session
+        columns (real) or the seeded models of docs/intraday.md (modelled)."""
+        sessions = [s.name for s in self.intraday.resolved]
+        columns = set(self.history.columns)
+        prices = [name for name in sessions if intraday_price_column(name) in columns]
+        bases = [unit.forecast_column for _, unit in self.uncertain_units() if unit.forecast_column]
+        forecasts = sorted({intraday_forecast_column(base, name) for base in bases for name in sessions} & columns)
+        said = f"Intraday sessions {', '.join(sessions)}: prices "
+        said += (f"real for {', '.join(prices)}, " if prices else "") + (
+            "modelled (the day-ahead price and a seeded spread)" if len(prices) < len(sessions) else "")
+        said += "; forecasts " + (f"real in {', '.join(forecasts)}, otherwise " if forecasts else "")
+        return said.replace(", ;", ";") + "modelled (the day-ahead error shrunk with the lead time)."
 
     @property
     def ndres(self) -> tuple[NdresUnit, ...]:

@@ -98,6 +98,16 @@ PRESET_SESSIONS: dict[str, tuple[Session, ...]] = {
 }
 
 
+def price_column(name: str) -> str:
+    """The history column of a session's real prices: ``price_ida2`` [EUR/MWh]."""
+    return f"price_{name.lower()}"
+
+
+def forecast_column(base: str, name: str) -> str:
+    """The history column of a unit's forecast at a session's gate closure: ``wind_fc_ida2``."""
+    return f"{base}_{name.lower()}"
+
+
 class IntradaySettings(_Frozen):
     """The ``intraday:`` section of a case (MODEL_SPEC §14; docs/intraday.md).
 

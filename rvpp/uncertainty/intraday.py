@@ -40,6 +40,7 @@ import pandas as pd
 
 from ..data.case import Case
 from ..data.intraday import SessionTime, reference_gate, session_gamma
+from ..data.intraday import forecast_column as session_forecast_column, price_column as session_price_column
 from ..errors import CaseError
 from .bands import realized_values
 from .forecast import band_specs
@@ -58,11 +59,11 @@ def lead_factor(periods: pd.DatetimeIndex, gate: pd.Timestamp, reference: pd.Tim
 
 
 def price_column(session: SessionTime) -> str:
-    return f"price_{session.name.lower()}"
+    return session_price_column(session.name)
 
 
 def forecast_column(base: str, session: SessionTime) -> str:
-    return f"{base}_{session.name.lower()}"
+    return session_forecast_column(base, session.name)
 
 
 def _day_column(case: Case, day, periods: pd.DatetimeIndex, column: str, scale: float = 1.0,
