@@ -15,7 +15,7 @@ BENCH ?= full
 BACKTEST_DAYS_full = 365
 BACKTEST_DAYS_quick = 28
 
-.PHONY: install axe run test bench bench-studies data reproduce clean
+.PHONY: install axe run test test-all bench bench-studies data reproduce clean
 
 # The project itself is installed editable, with the `rvpp` command: Dask workers started from
 # this venv import rvpp wherever they run (docs/backtest.md, Parallel runs).
@@ -38,9 +38,15 @@ run: install
 	RVPP_ALLOW_SERVER_FOLDERS=$(FOLDERS) $(BIN)/streamlit run app.py --server.port $(PORT) \
 		--server.address $(ADDRESS) --server.headless true
 
+# `make test` leaves out the tests marked slow (quarter-hour reference solves, end-to-end studies, the
+# longer browser walks: pyproject.toml's markers); `make test-all` runs every test.
 test: install axe
 	$(BIN)/lint-imports
-	$(BIN)/python -m pytest -n 2
+	$(BIN)/python -m pytest -n 2 --dist loadfile -m "not slow"
+
+test-all: install axe
+	$(BIN)/lint-imports
+	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 # Solver benchmarks, JSON in benchmarks/results/; `make bench BENCH=quick` takes under ten minutes.
 bench: install

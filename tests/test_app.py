@@ -511,6 +511,7 @@ def test_compare_names_the_plans_not_proven_optimal_until_solved_again(paper_cas
     assert solving.solver().result(case_key(balanced)).status == "optimal"
 
 
+@pytest.mark.slow
 def test_compare_gamma_slider_reuses_the_sweep_in_a_new_session(paper_case, paper_solve, solver_processes):
     at = open_app("compare")
     if "compare_sweep_gamma_24" not in [s.key for s in at.select_slider]:  # not swept yet
@@ -680,6 +681,7 @@ def test_a_solve_stopped_early_keeps_its_best_plan_and_its_time_says_nothing(pap
     assert job.key not in solver.seconds and solver.expected_s(slow) is None  # no time from a search cut short
 
 
+@pytest.mark.slow
 def test_the_server_process_never_imports_the_solver_stack():
     """A solve's reports (stages, the search) and its result reach the server as plain data: the server
     process, where every session runs, stays without Pyomo and HiGHS (1-2 s to import, and memory)."""

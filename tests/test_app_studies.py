@@ -28,6 +28,7 @@ def numeric(frame: pd.DataFrame) -> pd.DataFrame:
 # ----------------------------------------------------------------------------- Sensitivity
 
 
+@pytest.mark.slow
 def test_sensitivity_page_matches_the_study_and_comes_back_without_a_click(paper_case, paper_solve):
     at = open_app("sensitivity")
     assert "press **Run**" in infos(at)
@@ -98,6 +99,7 @@ def test_sensitivity_page_sweeps_one_source_at_a_time(paper_case):
 # ----------------------------------------------------------------------------- Market sets
 
 
+@pytest.mark.slow
 def test_market_sets_page_matches_the_study(paper_case, paper_solve):
     at = open_app("market_sets")
     at.multiselect(key="market_sets_strategies").set_value(["deterministic", "pessimistic"])
@@ -139,6 +141,7 @@ def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list()
 # ----------------------------------------------------------------------------- Out-of-sample
 
 
+@pytest.mark.slow
 def test_out_of_sample_page_matches_the_studies_on_the_same_days(paper_case):
     at = open_app("out_of_sample")
     at.number_input(key="out_of_sample_test_days").set_value(2)

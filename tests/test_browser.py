@@ -169,6 +169,7 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         page.screenshot(path=ARTIFACTS / "results.png", full_page=True)
 
 
+@pytest.mark.slow
 def test_a_first_plan_finds_the_code_of_its_elements_loaded_ahead(tmp_path):
     """Home has its browser load the code of cards, text fields and tables while idle, so a
     server's first plan on Results fetches none of it, nor the markdown's emoji code."""
@@ -194,6 +195,7 @@ def test_a_first_plan_finds_the_code_of_its_elements_loaded_ahead(tmp_path):
         assert re.search(r"at \d\d:\d\d:\d\d\.\d{3} \(server clock\)", clock), clock
 
 
+@pytest.mark.slow
 def test_the_learn_gamma_slider_moves_by_keyboard_to_the_plan_of_each_gamma(app_url, paper_case, paper_solve):
     with chromium_page() as page:
         page.goto(app_url)
@@ -219,6 +221,7 @@ def test_the_learn_gamma_slider_moves_by_keyboard_to_the_plan_of_each_gamma(app_
         page.screenshot(path=ARTIFACTS / "learn-gamma-slider.png", full_page=True)
 
 
+@pytest.mark.slow
 def test_a_link_straight_to_a_page_on_a_fresh_server_opens_that_page():
     # Until a session has opened the app, Streamlit runs a page linked directly (a
     # bookmark, a tab reconnecting after a restart) without app.py; the page must
@@ -235,6 +238,7 @@ def test_a_link_straight_to_a_page_on_a_fresh_server_opens_that_page():
         page.screenshot(path=ARTIFACTS / "deep-link.png", full_page=True)
 
 
+@pytest.mark.slow
 def test_a_study_page_runs_its_study_with_progress_and_downloads_its_table(app_url, paper_solve):
     # The study runs in a study process spawned under the real server; its table must
     # carry the same numbers as a plain solve (Γ = 0 everywhere is the deterministic plan).
@@ -276,6 +280,7 @@ def test_homes_first_screen_holds_the_question_the_solve_button_and_the_case():
             assert box["x"] + box["width"] <= 1280, (name, box)
 
 
+@pytest.mark.slow
 def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_path):
     """Started on the page, the backtest appears there without a reload and its progress is
     redrawn as days settle, until it says finished."""
@@ -362,6 +367,7 @@ def saved_labels(page) -> list[str]:
     return table.locator("[id^=glide-cell-1-]").all_inner_texts()
 
 
+@pytest.mark.slow
 def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the_plan(tmp_path, paper_case,
                                                                                        paper_solve):
     require_browser()

@@ -422,6 +422,7 @@ def test_an_imported_table_replaces_the_one_written_before(tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir()] == ["prices.csv"]  # no temporary left
 
 
+@pytest.mark.slow
 def test_ctrl_c_during_a_solve_writes_the_best_plan_found_so_far(tmp_path):
     """6 April, 15 minutes, balanced: HiGHS has plans within a second, the optimum after 15-30 s."""
     out = tmp_path / "plan"

@@ -60,6 +60,7 @@ def test_a_rebuild_moves_the_start_even_when_the_old_model_is_collected_meanwhil
     assert len(kept._start) > 0, "the previous plan's integer values start the next solve"
 
 
+@pytest.mark.slow
 def test_another_tie_rule_rebuilds_the_model(paper_case):
     """Under ``ties: earliest`` the storage's charging limit is tightened in the earliest tied periods,
     which the other rule may leave at their nominal field: a kept model must not be re-solved

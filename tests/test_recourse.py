@@ -304,6 +304,7 @@ def test_the_stochastic_start_is_a_complete_feasible_point_worth_its_settlements
     assert pyo.value(m.expected_net_cost) == pytest.approx(np.mean(settled), rel=1e-3)
 
 
+@pytest.mark.slow
 def test_the_chain_of_starts_keeps_the_stochastic_optimum(paper):
     """Seven scenarios start from the benchmark over the first two (a chain 2 → 7); the
     optimum matches the same model solved by HiGHS without any start, and the expected

@@ -148,7 +148,11 @@ def solved(paper_case):
     return run
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+# The quarter-hour day's reference solve alone takes minutes: it runs with the slow tests (make test-all).
+NAMES = [pytest.param(name, marks=pytest.mark.slow) if CONFIGS[name].get("dt_h") == 0.25 else name for name in CONFIGS]
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_optimum_matches_reference(solved, name):
     case, result = solved(name)
     assert result.status == "optimal", result.message
@@ -156,14 +160,15 @@ def test_optimum_matches_reference(solved, name):
     assert relative_difference(result.objective_eur, reference) <= REL_TOL, (result.objective_eur, reference)
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", NAMES)
 def test_bid_is_worth_its_objective_in_reference(solved, name):
     case, result = solved(name)
     best_for_bid = reference_optimum(reference_case(name), market=result.market)
     assert relative_difference(result.objective_eur, best_for_bid) <= REL_TOL, (result.objective_eur, best_for_bid)
 
 
-@pytest.mark.parametrize("name", ["balanced", "25-hour day", "15 min", "forecast bands"])
+@pytest.mark.parametrize("name", ["balanced", "25-hour day", pytest.param("15 min", marks=pytest.mark.slow),
+                                  "forecast bands"])
 def test_plan_tables_carry_the_bands_the_reference_derives(solved, name):
     """rvpp's exported bands are those of MODEL_SPEC §6 as the reference computes them."""
     case, result = solved(name)

@@ -104,6 +104,7 @@ def test_cost_never_falls_as_the_budget_grows(case):
     assert (np.diff(table["cost_keur"]) >= -1e-3).all()
 
 
+@pytest.mark.slow
 def test_reproduce_runs_end_to_end(tmp_path, monkeypatch):
     monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "data"))
     monkeypatch.delenv("RVPP_STORE_URL", raising=False)
