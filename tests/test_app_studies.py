@@ -81,6 +81,7 @@ def test_sensitivity_page_refuses_bad_settings_and_keeps_working():
     assert not at.exception
 
 
+@pytest.mark.slow
 def test_sensitivity_page_sweeps_one_source_at_a_time(paper_case):
     at = open_app("sensitivity")
     at.text_input(key="sensitivity_gammas").input("0, 8")

@@ -40,7 +40,8 @@ def serial():
     return _run("serial")
 
 
-@pytest.mark.parametrize("scheduler", ["processes", "local"])
+# A Dask cluster takes half a minute to start: its run is among the slow tests (make test-all).
+@pytest.mark.parametrize("scheduler", ["processes", pytest.param("local", marks=pytest.mark.slow)])
 def test_parallel_runs_give_the_serial_numbers(serial, scheduler):
     summary, days = _run(scheduler)
     assert (days["status"] == "optimal").all()
