@@ -1,6 +1,6 @@
 """Intraday sessions: session solve times and the backtest with three sessions against day-ahead only.
 
-On the paper case, hourly, one process (serial), ``--days`` days from 2025-04-01 for the balanced
+On the paper case, hourly, one process (serial), ``--days`` days from ``--from`` (2025-04-01) for the balanced
 preset, each backtest in a fresh SQLite store:
 
 * ``day_ahead``: plan, settle and audit every day (no session);
@@ -38,9 +38,9 @@ FIRST_DAY = dt.date(2025, 4, 1)
 TARGET_SESSION_MEDIAN_S, TARGET_RATIO = 0.3, 3.0
 
 
-def measure(case, days: int, intraday: bool, folder: Path) -> tuple[float, list[dict]]:
+def measure(case, first: dt.date, days: int, intraday: bool, folder: Path) -> tuple[float, list[dict]]:
     store = BacktestStore(f"sqlite:///{folder / ('intraday' if intraday else 'day_ahead')}.sqlite3")
-    settings = BacktestSettings(FIRST_DAY, FIRST_DAY + dt.timedelta(days=days - 1),
+    settings = BacktestSettings(first, first + dt.timedelta(days=days - 1),
                                 variants_of(["balanced"], perfect=False), intraday=intraday)
     started = time.perf_counter()
     ident = run_backtest(case, settings, store)
@@ -49,15 +49,17 @@ def measure(case, days: int, intraday: bool, folder: Path) -> tuple[float, list[
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--days", type=Number(1, 365, whole=True), default=7, help="days from 2025-04-01 (default 7)")
+    parser.add_argument("--days", type=Number(1, 365, whole=True), default=7, help="days (default 7)")
+    parser.add_argument("--from", dest="first", type=dt.date.fromisoformat, default=FIRST_DAY,
+                        help=f"first day, YYYY-MM-DD (default {FIRST_DAY})")
     parser.add_argument("--out", type=Path, default=RESULTS, help="JSON file to write")
     args = parser.parse_args()
     case = with_options(load_case(CASE), threads=1)
-    report = header("intraday", f"{args.days} days")
+    report = header("intraday", f"{args.days} days from {args.first}")
     report.update(case=case.name, dt_h=case.dt_h, strategy="balanced", sessions=["IDA1", "IDA2", "IDA3"])
     with tempfile.TemporaryDirectory() as folder:
-        wall_da, records_da = measure(case, args.days, False, Path(folder))
-        wall_id, records_id = measure(case, args.days, True, Path(folder))
+        wall_da, records_da = measure(case, args.first, args.days, False, Path(folder))
+        wall_id, records_id = measure(case, args.first, args.days, True, Path(folder))
     sessions = [s for r in records_id for s in (r.get("intraday") or []) if s.get("solve_s") is not None]
     session_solve = [float(s["solve_s"]) for s in sessions]
     report["results"] = {
