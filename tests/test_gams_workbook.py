@@ -20,7 +20,7 @@ from rvpp.cli import main
 from rvpp.data.importers.gams_import import import_workbook
 from rvpp.data.importers.gams_workbook import WorkbookError, read_workbook
 from rvpp.errors import DataImportError
-from rvpp.settle.audit import audit_day, price_exposures, protection_exact
+from rvpp.settle.audit import audit_day, audit_result, price_exposures, protection_exact
 
 ROOT = Path(__file__).resolve().parents[1]
 WORKBOOK = Path(os.environ.get("RVPP_GAMS_WORKBOOK", ROOT.parent / "shared" / "data" / "gams-tool" / "RVPP_data.xlsx"))
@@ -255,18 +255,24 @@ def test_a_file_that_is_not_a_workbook_is_refused(tmp_path):
 def test_rvpp_solves_the_imported_case_and_its_terms_follow_from_the_named_differences(imported):
     """docs/gams-tool.md's reconciliation. The installed reserve base is 0.1 x (50 + 10 + 50 + 50 + 55)
     = 21.5 MW (the switched-off battery does not count); rvpp, like the tool, sells the whole down band
-    in every hour. rvpp's demand sits at its floor, the chosen profile plus its deviation in the Γ = 12
-    largest hours (1684 + 239.3 MWh), where the tool's may go 10 % below the profile (D23)."""
+    in every hour. With the tool's demand conventions (window, ramps, energy floor) rvpp's demand sits
+    at the foot of its window, 0.9 x the chosen profile plus its deviation in the Γ = 12 largest hours
+    (0.9 x 1684 + 239.3 = 1754.9 MWh), as the tool's does."""
     _, case, book = imported
+    (ed,) = case.ed
+    assert ed.profile_window and not ed.energy_net_of_up_band and (ed.ramp_up_mw_per_h, ed.ramp_dn_mw_per_h) == \
+        (180, 180) and (ed.flex_up, ed.flex_dn) == (0.1, 0.1)
     result = solve(case)
     assert result.status == "optimal"
+    assert audit_result(result) == []
     market = result.market
     np.testing.assert_allclose(market.r_sr_dn_mw, 21.5, atol=1e-6)
     np.testing.assert_allclose(book.result.market.r_dn_mw, 21.5, atol=1e-9)
     assert market.r_sr_up_mw.max() <= 21.5 + 1e-6
     (demand,) = book.demands
-    floor = demand.profiles["lp2"].sum() + np.sort(demand.deviations["lp2"].to_numpy())[::-1][:12].sum()
+    profile = demand.profiles["lp2"].to_numpy()
+    foot = 0.9 * profile.sum() + np.sort(demand.deviations["lp2"].to_numpy())[::-1][:12].sum()
     served = result.units.loc[result.units.unit == "U6", "p_mw"].sum() * case.dt_h
-    assert floor == pytest.approx(1923.3, abs=1e-9)
-    assert served == pytest.approx(floor, abs=1e-4)
+    assert profile.sum() == pytest.approx(1684, abs=1e-9) and foot == pytest.approx(1754.9, abs=1e-9)
+    assert served == pytest.approx(foot, abs=1e-4)
     assert book.result.units.loc["U6", "power_mw"].sum() == pytest.approx(1754.9, abs=1e-9)

@@ -378,9 +378,18 @@ class ElectricalDemand(_FollowsSeries):
     ramp_dn_mw_per_min: NonNegative
     flex_up: Fraction = 0.1
     flex_dn: Fraction = 0.1
+    # The authors' tool's conventions (docs/gams-tool.md D23-D26), off by default (MODEL_SPEC §9):
+    # a window around the profile, ramps between periods, an energy floor that counts the up band.
+    profile_window: bool = False
+    ramp_up_mw_per_h: NonNegative | None = None
+    ramp_dn_mw_per_h: NonNegative | None = None
+    energy_net_of_up_band: bool = True
     series: Text | None = None
     series_scale: Positive = 1.0
     forecast_series: Text | None = None
+
+    TOOL_DEFAULTS: ClassVar[dict[str, Any]] = {"profile_window": False, "ramp_up_mw_per_h": None,
+                                               "ramp_dn_mw_per_h": None, "energy_net_of_up_band": True}
 
     @property
     def series_range(self) -> tuple[float, float]:
@@ -389,6 +398,11 @@ class ElectricalDemand(_FollowsSeries):
     @property
     def demand_mw(self) -> float:
         return self.p_max_mw
+
+    @classmethod
+    def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
+        # the tool's conventions are written only when set: cases and their digests stay as they were
+        return {k: v for k, v in data.items() if k not in cls.TOOL_DEFAULTS or v != cls.TOOL_DEFAULTS[k]}
 
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":

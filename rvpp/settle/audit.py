@@ -597,15 +597,32 @@ def _audit_demands(a: _Auditor, day: AuditDay, by_unit: dict) -> None:
     for ed in day.case.ed:
         u, n = by_unit[ed.name], ed.name
         p, up, dn, bound = (u[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw", "bound_mw"))
-        a.leq("ed.required", bound, p, n)
+        if ed.profile_window:  # the tool's window around the nominal profile (bound = profile + deviation)
+            profile = day.sources[ed.name].nominal
+            a.leq("ed.window_low", bound - ed.flex_up * profile, p - up, n)
+            a.leq("ed.window_high", p + dn, bound + ed.flex_dn * profile, n)
+            a.leq("ed.flex_up", up, ed.flex_up * profile, n)
+            a.leq("ed.flex_dn", dn, ed.flex_dn * profile, n)
+        else:
+            a.leq("ed.required", bound, p, n)
+            a.leq("ed.flex_up", up, ed.flex_up * p, n)
+            a.leq("ed.flex_dn", dn, ed.flex_dn * p, n)
         a.leq("ed.floor", ed.p_min_mw, p - up, n)
         a.leq("ed.ceiling", p + dn, ed.p_max_mw, n)
-        a.leq("ed.flex_up", up, ed.flex_up * p, n)
-        a.leq("ed.flex_dn", dn, ed.flex_dn * p, n)
+        # ramps between periods: highest consumption of a period against the lowest of the one before
+        # and the reverse; the first period from p_init_mw when given
+        start = np.nan if ed.p_init_mw is None else ed.p_init_mw  # no bands before the day; nan: no limit
+        low, high = p - up, p + dn
+        low_before, high_before = np.concatenate([[start], low[:-1]]), np.concatenate([[start], high[:-1]])
+        if ed.ramp_up_mw_per_h is not None:
+            a.leq("ed.ramp_up", high - low_before, ed.ramp_up_mw_per_h * dt, n)
+        if ed.ramp_dn_mw_per_h is not None:
+            a.leq("ed.ramp_dn", high_before - low, ed.ramp_dn_mw_per_h * dt, n)
         a.leq("ed.reserve_up_cap", up, _reserve_cap(day, ed.ramp_up_mw_per_min), n)
         a.leq("ed.reserve_dn_cap", dn, _reserve_cap(day, ed.ramp_dn_mw_per_min), n)
         a.leq("ed.nonnegative", -np.minimum(up, dn), 0.0, n)
-        a.leq("ed.energy", ed.e_min_mwh, float(np.sum((p - up) * dt)), n, scale=ed.e_min_mwh)
+        served = p - up if ed.energy_net_of_up_band else p
+        a.leq("ed.energy", ed.e_min_mwh, float(np.sum(served * dt)), n, scale=ed.e_min_mwh)
     for td in day.case.td:
         u, n = by_unit[td.name], td.name
         h, bound = u["p_mw"].to_numpy(float), u["bound_mw"].to_numpy(float)

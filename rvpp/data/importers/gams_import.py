@@ -222,9 +222,11 @@ def _solar_thermal(book: Workbook, plant) -> dict[str, Any]:
 
 
 def _demand(demand) -> dict[str, Any]:
+    # rvpp's flex_up bounds the up band (a consumption decrease) and, with profile_window, the
+    # window below the profile: the tool's negative fluctuation; flex_dn its positive one
     flex = {}
-    for field, values, column in (("flex_dn", demand.flex_dn, "Negative fluctuation [pu]"),
-                                  ("flex_up", demand.flex_up, "Positive fluctuation [pu]")):
+    for field, values, column in (("flex_up", demand.flex_dn, "Negative fluctuation [pu]"),
+                                  ("flex_dn", demand.flex_up, "Positive fluctuation [pu]")):
         if values.nunique() != 1:
             raise WorkbookError("Demand", f'unit "{demand.name}" column "{column}"',
                                 "varies between periods; rvpp's demand has one flexibility share for the day")
@@ -236,7 +238,10 @@ def _demand(demand) -> dict[str, Any]:
     return {"name": demand.name, "p_min_mw": demand.p_min_mw, "p_max_mw": demand.p_max_mw,
             "e_min_mwh": demand.e_min_mwh, "p_init_mw": demand.p_init_mw,
             "ramp_up_mw_per_min": demand.sr_ramp_up_mw_per_min, "ramp_dn_mw_per_min": demand.sr_ramp_dn_mw_per_min,
-            **flex}
+            **flex,
+            # the tool's conventions (docs/gams-tool.md D23, D25, D26)
+            "profile_window": True, "ramp_up_mw_per_h": demand.ramp_up_mw_per_h,
+            "ramp_dn_mw_per_h": demand.ramp_dn_mw_per_h, "energy_net_of_up_band": False}
 
 
 def _production_band(forecast: pd.DataFrame, where: str) -> Band:
