@@ -138,3 +138,111 @@ def test_the_audit_finds_a_plan_outside_the_window_or_its_ramps():
     # 2.5 below hour 2's 8 and hour 4's 8 is 2.5 above it
     assert checks(r_up_mw=(3, 2.5)) == {"ed.window_low", "ed.flex_up", "ed.ramp_up", "ed.ramp_dn",
                                         "ed.reserve_up_cap"}
+
+
+# ----------------------------------------------------------------------------- solar thermal plant
+
+
+def plant(storage=None, power_block=None):
+    """A CSP online all day (no minimum times, no start-up heat): power block 10-100 MW_th at 50 %
+    (5-50 MW), a cyclic tank of 120 MWh_th with 100 MW_th each way and efficiencies 1, reserve share
+    0.5 x 50 = 25 MW."""
+    return {"name": "C", "om_eur_per_mwh": 0.0, "heat_efficiency": 1.0, "ramp_mw_per_min": 25, "reserve_share": 0.5,
+            "solar_field": {"p_max_mw_th": 100.0},
+            "storage": {"e_min_mwh_th": 0.0, "e_max_mwh_th": 120.0, "p_ch_max_mw_th": 100.0,
+                        "p_dis_max_mw_th": 100.0, "eta_ch": 1.0, "eta_dis": 1.0, **(storage or {})},
+            "power_block": {"p_in_max_mw_th": 100.0, "p_in_min_mw_th": 10.0, "p_el_max_mw": 50.0,
+                            "breakpoints": [[0, 0], [10, 0.5], [100, 0.5]], "initially_on": True,
+                            **(power_block or {})}}
+
+
+def solved_plant(case, field, **series):
+    problem = tiny_problem(case, C=(field, field, field), **series)
+    result = solve_problem(problem)
+    assert result.status == "optimal", result.message
+    assert audit_result(result, bands=problem.bands) == []
+    return result
+
+
+@pytest.mark.parametrize(("capped", "profit"), [
+    # Curve (0, 0), (10, 5), (100, 60): 60 MW at the full input of 100 MW_th, above p_el_max 50.
+    # At 100 EUR/MWh, with 100 MW_th from the field all day: capped, 50 MW: 24 x 50 x 100 = 120,000;
+    # uncapped (the tool's), 60 MW: 24 x 60 x 100 = 144,000 EUR. A windless 20 MW wind farm lifts the
+    # VPP's trading limit (its installed generation) from 50 to 70 MW.
+    (True, 120_000.0), (False, 144_000.0),
+], ids=["capped at p_el_max", "the curve's own top"])
+def test_the_power_block_output_capped_or_not(capped, profit):
+    unit = plant(power_block={"breakpoints": [[0, 0], [10, 0.5], [100, 0.6]], "output_capped": capped})
+    wind = {"name": "W", "kind": "wind", "p_max_mw": 20.0, "ramp_up_mw_per_min": 0.0, "ramp_dn_mw_per_min": 0.0}
+    result = solved_plant(tiny_case(wind_units=[wind], csp_units=[unit]), 100.0, W=(0.0, 0.0, 0.0),
+                          price_da=(100.0, 100.0, 100.0))
+    assert result.objective_eur == pytest.approx(profit, abs=1e-6)
+    np.testing.assert_allclose(result.csp["e_none_mw"], 50.0 if capped else 60.0, atol=1e-6)
+
+
+@pytest.mark.parametrize(("factor", "share_max", "profit"), [
+    # The field gives 10 MW_th, the power block's minimum (5 MW, at DAM price 0); the up band comes from
+    # the tank's discharge side and sells at 10 EUR/MW, 0.5 MW per MW_th (the curve's slope). The tank
+    # holds nothing back in the hour (its bands may reach 100 MW_th, the plant's share 25 MW = 50 MW_th,
+    # the VPP's 0.3 x 50 = 15 MW = 30 MW_th, so 24 x 30 = 720 MW_th·h in a day) but in the day:
+    # Σ r_ts_up ≤ k·σ·ΔE with the level e ≥ σ·ΔE, e ≤ 120 = ΔE, so σ ≤ 1 and σ ≤ share_max.
+    # k 1, σ ≤ 1 (default): 120 MW_th·h, 10 x 0.5 x 120 = 600 EUR; k 2, σ ≤ 1: 240, 1,200 EUR;
+    # k 2, σ ≤ 0.5 (the tool's): 120, 600 EUR; k 1, σ ≤ 0.5: 60, 300 EUR.
+    (1.0, 1.0, 600.0), (2.0, 1.0, 1_200.0), (2.0, 0.5, 600.0), (1.0, 0.5, 300.0),
+])
+def test_the_tanks_reserve_energy_factor_and_share_limit(factor, share_max, profit):
+    unit = plant(storage={"reserve_energy_factor": factor, "reserve_share_max": share_max})
+    result = solved_plant(tiny_case(csp_units=[unit], srm=True), 10.0, price_sr_up=(10.0, 10.0, 10.0))
+    assert result.objective_eur == pytest.approx(profit, abs=1e-6)
+    assert result.csp["ts_r_up_mw"].sum() == pytest.approx(profit / 5.0, abs=1e-6)
+
+
+@pytest.mark.parametrize(("band_max", "profit"), [
+    # As above with a tank of 2,400 MWh_th and κ = 1 (VPP cap 50 MW): the plant's share, 25 MW = 50 MW_th
+    # an hour, binds: 24 x 50 = 1,200 MW_th·h, 10 x 0.5 x 1,200 = 6,000 EUR. With each tank band at most
+    # 20 MW_th (the tool's per-band limit): 24 x 20 = 480, 2,400 EUR.
+    (None, 6_000.0), (20.0, 2_400.0),
+], ids=["no band limit", "20 MW_th a band"])
+def test_the_tanks_per_band_limit(band_max, profit):
+    unit = plant(storage={"e_max_mwh_th": 2400.0, "reserve_band_max_mw_th": band_max})
+    result = solved_plant(tiny_case(csp_units=[unit], srm=True, kappa=1.0), 10.0, price_sr_up=(10.0, 10.0, 10.0))
+    assert result.objective_eur == pytest.approx(profit, abs=1e-6)
+
+
+def test_the_audit_finds_a_tank_band_or_share_beyond_the_tools_limits():
+    unit = plant(storage={"reserve_band_max_mw_th": 20.0, "reserve_energy_factor": 2.0, "reserve_share_max": 0.5})
+    result = solved_plant(tiny_case(csp_units=[unit], srm=True), 10.0, price_sr_up=(10.0, 10.0, 10.0))
+    day = audit_day(result.case, result.problem.bands)
+
+    def checks(column, t, value):
+        csp = result.csp.copy()
+        if t is None:
+            csp[column] = value
+        else:
+            csp.loc[csp.t == t, column] = value
+        return {v.check for v in audit_tables(day, result.market, result.units, csp, result.summary(),
+                                              dispatch=result.dispatch)}
+
+    assert "csp.ts_band_max" in checks("ts_r_ch_dn_mw", 3, 20.5)
+    assert "csp.sigma_range" in checks("sigma_up", None, 0.6)
+    assert "csp.ts_band_max" not in checks("ts_r_ch_dn_mw", 3, 19.5)
+
+
+@pytest.mark.parametrize(("part", "extra", "message"), [
+    ("storage", {"reserve_band_max_mw_th": -1}, r'csp "C": storage.reserve_band_max_mw_th=-1 must be >= 0'),
+    ("storage", {"reserve_energy_factor": 0}, r'csp "C": storage.reserve_energy_factor=0 must be > 0'),
+    ("storage", {"reserve_share_max": 1.5}, r'csp "C": storage.reserve_share_max=1.5 must be <= 1'),
+    ("power_block", {"output_capped": "no way"}, r'csp "C": power_block.output_capped=\'no way\' must be true or false'),
+])
+def test_bad_plant_option_values_are_refused_by_name(part, extra, message):
+    with pytest.raises(CaseError, match=message):
+        tiny_case(csp_units=[plant(**{part: extra})])
+
+
+def test_the_plant_options_are_written_only_when_set():
+    written = tiny_case(csp_units=[plant()]).to_data()["units"]["csp"][0]
+    assert not {"reserve_band_max_mw_th", "reserve_energy_factor", "reserve_share_max"} & set(written["storage"])
+    assert "output_capped" not in written["power_block"]
+    written = tiny_case(csp_units=[plant(storage={"reserve_share_max": 0.5}),
+                                   ]).to_data()["units"]["csp"][0]
+    assert written["storage"]["reserve_share_max"] == 0.5

@@ -662,7 +662,8 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
         a.eq(f"csp.pb_curve[{s}]", e, expected, n)
         a.leq(f"csp.pb_input_range[{s}]", x, pb.p_in_max_mw_th * u, n)
         a.leq(f"csp.pb_input_range[{s}]", pb.p_in_min_mw_th * u, x, n)
-        a.leq(f"csp.turbine_cap[{s}]", e, pb.p_el_max_mw * u, n)
+        if pb.output_capped:  # otherwise the curve alone limits the output (the tool's convention)
+            a.leq(f"csp.turbine_cap[{s}]", e, pb.p_el_max_mw * u, n)
     # Electrical reserves (STU6-STU7) and the unit rows of units.csv.
     cap = _reserve_cap(day, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
     a.leq("csp.reserve_up_cap", col["e_up_mw"] - col["e_none_mw"], cap, n)
@@ -680,6 +681,9 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
     for name in ("ts_charge_mw", "ts_discharge_mw", "ts_r_ch_up_mw", "ts_r_ch_dn_mw", "ts_r_dis_up_mw",
                  "ts_r_dis_dn_mw"):
         a.leq(f"csp.{name}_nonnegative", -col[name], 0.0, n)
+    if ts.reserve_band_max_mw_th is not None:
+        for name in ("ts_r_ch_up_mw", "ts_r_ch_dn_mw", "ts_r_dis_up_mw", "ts_r_dis_dn_mw"):
+            a.leq("csp.ts_band_max", col[name], ts.reserve_band_max_mw_th, n)
     # Energy recursion, cyclic or from a fixed initial energy (TS7-TS8 as corrected).
     energy = col["ts_energy_mwh"]
     previous = np.roll(energy, 1)
@@ -692,9 +696,11 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
     # Reserve energy shares and margins (TS9-TS11, corrected).
     span = ts.e_max_mwh_th - ts.e_min_mwh_th
     sigma_up, sigma_dn = float(col["sigma_up"][0]), float(col["sigma_dn"][0])
-    a.leq("csp.sigma_range", np.array([-sigma_up, -sigma_dn, sigma_up - 1, sigma_dn - 1]), 0.0, n)
-    a.leq("csp.ts_reserve_energy_up", float(np.sum(r_up * dt / ts.eta_dis)), sigma_up * span, n, scale=span)
-    a.leq("csp.ts_reserve_energy_dn", float(np.sum(r_dn * ts.eta_ch * dt)), sigma_dn * span, n, scale=span)
+    top = ts.reserve_share_max
+    a.leq("csp.sigma_range", np.array([-sigma_up, -sigma_dn, sigma_up - top, sigma_dn - top]), 0.0, n)
+    held = ts.reserve_energy_factor * span
+    a.leq("csp.ts_reserve_energy_up", float(np.sum(r_up * dt / ts.eta_dis)), sigma_up * held, n, scale=span)
+    a.leq("csp.ts_reserve_energy_dn", float(np.sum(r_dn * ts.eta_ch * dt)), sigma_dn * held, n, scale=span)
     a.leq("csp.ts_margin_low", ts.e_min_mwh_th + sigma_up * span, energy, n, scale=span)
     a.leq("csp.ts_margin_high", energy, ts.e_max_mwh_th - sigma_dn * span, n, scale=span)
     _audit_commitment(a, day, unit, u, v_su, v_sd)
