@@ -69,6 +69,22 @@ def test_a_ramp_down_makes_the_demand_slow_down_before_the_dear_hours():
     np.testing.assert_allclose(consumption(result), expected, atol=1e-6)
 
 
+def test_the_ramps_between_periods_count_the_bands():
+    # Up and down bands sell at 10 EUR/MW (DAM price 0); a windless-reserve 100 MW wind farm makes the
+    # VPP's cap 0.3 x (100 - 50) = 15 MW. The demand (0-50 MW, flex 1 each way) was at 50 MW before the
+    # day and may fall 4 MW/h: the lowest consumption of a period (its up band called) at most 4 below
+    # the highest of the one before (its down band called). Summed over the day from 50:
+    # Σ r_up + Σ_{t<24} r_dn <= 24 x 4 - 50 + p_24, and r_dn_24 <= 50 - p_24, so the bands total at most
+    # 96 MW·h: 960 EUR (p = 50 and r_up = 4 every hour). Ramps of consumption alone would allow
+    # 15 MW of band every hour.
+    wind = {"name": "W", "kind": "wind", "p_max_mw": 100.0, "ramp_up_mw_per_min": 0.0, "ramp_dn_mw_per_min": 0.0}
+    case = tiny_case(wind_units=[wind], srm=True,
+                     ed_units=[demand(flex_up=1.0, flex_dn=1.0, p_init_mw=50.0, ramp_dn_mw_per_h=4.0)])
+    result = solved(case, 0.0, W=(100.0, 100.0, 100.0), price_sr_up=(10.0, 10.0, 10.0),
+                    price_sr_dn=(10.0, 10.0, 10.0))
+    assert result.objective_eur == pytest.approx(960.0, abs=1e-6)
+
+
 @pytest.mark.parametrize(("net", "profit"), [
     # Wind sells 100 MW at 50 EUR/MWh; the demand (profile 0, flex_up 0.5, e_min 240 MWh) offers the
     # only up band, at 10 EUR/MW. Tool's floor (sum of p >= 240): 10 MW each hour with a band of

@@ -68,18 +68,21 @@ def add_electrical_demand(m: pyo.ConcreteModel, ed: ElectricalDemand, problem: P
     b.r_up = pyo.Var(m.T, bounds=(0.0, reserve_cap(problem, ed.ramp_up_mw_per_min)))
     b.r_dn = pyo.Var(m.T, bounds=(0.0, reserve_cap(problem, ed.ramp_dn_mw_per_min)))
     b.bound = pyo.Expression(m.T, rule=lambda b, t: float(nominal[t - 1]))
+    # in the order they always had: a case without the options gives the solver the same model
     if ed.profile_window:  # bound = P̌ + y
         room_up, room_dn = ed.flex_up * nominal, ed.flex_dn * nominal
         b.window_low = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] - b.r_up[t] >= b.bound[t] - float(room_up[t - 1]))
         b.window_high = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] + b.r_dn[t] <= b.bound[t] + float(room_dn[t - 1]))
+    else:
+        b.required = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] >= b.bound[t])
+    b.floor = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] - b.r_up[t] >= ed.p_min_mw)
+    b.ceiling = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] + b.r_dn[t] <= ed.p_max_mw)
+    if ed.profile_window:
         b.flex_up = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= float(room_up[t - 1]))
         b.flex_dn = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= float(room_dn[t - 1]))
     else:
-        b.required = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] >= b.bound[t])
         b.flex_up = pyo.Constraint(m.T, rule=lambda b, t: b.r_up[t] <= ed.flex_up * b.p[t])
         b.flex_dn = pyo.Constraint(m.T, rule=lambda b, t: b.r_dn[t] <= ed.flex_dn * b.p[t])
-    b.floor = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] - b.r_up[t] >= ed.p_min_mw)
-    b.ceiling = pyo.Constraint(m.T, rule=lambda b, t: b.p[t] + b.r_dn[t] <= ed.p_max_mw)
     _add_demand_ramps(m, b, ed, dt)
     net = ed.energy_net_of_up_band
     b.energy = pyo.Constraint(expr=sum((b.p[t] - (b.r_up[t] if net else 0.0)) * dt for t in m.T) >= ed.e_min_mwh)
