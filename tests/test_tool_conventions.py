@@ -262,3 +262,21 @@ def test_the_plant_options_are_written_only_when_set():
     written = tiny_case(csp_units=[plant(storage={"reserve_share_max": 0.5}),
                                    ]).to_data()["units"]["csp"][0]
     assert written["storage"]["reserve_share_max"] == 0.5
+
+
+def test_the_options_survive_the_unit_tables_and_the_case_workbook():
+    from rvpp.outputs.workbook import case_workbook_bytes, read_case_workbook, unit_table, with_unit_table
+
+    set_ = tiny_case(ed_units=[demand(profile_window=True, p_init_mw=5.0, ramp_up_mw_per_h=3.0,
+                                      energy_net_of_up_band=False)],
+                     csp_units=[plant(storage={"reserve_band_max_mw_th": 30.0, "reserve_energy_factor": 2.0,
+                                               "reserve_share_max": 0.5},
+                                      power_block={"output_capped": False})])
+    plain = tiny_case(ed_units=[demand()], csp_units=[plant()])
+    for case in (set_, plain):
+        for kind in ("ed", "csp"):
+            assert with_unit_table(case, kind, unit_table(case, kind)).to_data() == case.to_data()
+        assert read_case_workbook(case_workbook_bytes(case)).to_data() == case.to_data()
+    row = unit_table(plain, "ed").iloc[0]  # a cell shows the default where the case leaves an option out
+    assert (row["profile_window"], row["energy_net_of_up_band"]) == (False, True)
+    assert unit_table(set_, "csp").iloc[0]["storage.reserve_share_max"] == 0.5
