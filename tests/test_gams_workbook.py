@@ -278,6 +278,14 @@ def test_rvpp_solves_the_imported_case_to_the_tools_optimum(imported):
     for term, value in STORED.items():
         assert terms[term] == pytest.approx(value, abs=0.01), term
     assert result.objective_eur == pytest.approx(book.result.profit_eur, abs=0.01)
+    # each unit's energy over the day and the tank's flows are the stored schedule's (the bands'
+    # split among the units is not: optimal plans tie there)
+    stored = book.result.units
+    ours = result.units.groupby("unit")["p_mw"].sum() * case.dt_h
+    for name in ("U1", "U2", "U3", "U4", "U5", "U6"):
+        assert ours[name] == pytest.approx(stored.loc[name, "power_mw"].sum(), abs=0.01), name
+    assert result.csp["ts_charge_mw"].sum() == pytest.approx(stored.loc["U9", "charge_mw"].sum(), abs=0.01)
+    assert result.csp["ts_discharge_mw"].sum() == pytest.approx(stored.loc["U9", "discharge_mw"].sum(), abs=0.01)
     market = result.market
     np.testing.assert_allclose(market.r_sr_dn_mw, 21.5, atol=1e-6)
     np.testing.assert_allclose(book.result.market.r_dn_mw, 21.5, atol=1e-9)
