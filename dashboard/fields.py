@@ -9,7 +9,8 @@ from rvpp import Case
 from rvpp.service import PRICE_COLUMNS, SERIES_FIELDS, field_words, label, new_unit_row, unit_columns
 
 TEXT_FIELDS = {"name"}
-BOOL_FIELDS = {"initially_on", "initial_online", "enabled"}
+BOOL_FIELDS = {"initially_on", "initial_online", "enabled", "profile_window", "energy_net_of_up_band",
+               "output_capped"}
 
 
 def column_config(case: Case, kind: str) -> dict:

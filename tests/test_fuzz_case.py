@@ -45,6 +45,13 @@ RAW_NEW_UNITS = {**RAW, "units": {**RAW["units"], "battery": [
                "ramp_mw_per_min": 10.0, "reserve_share": 0.5}],
     "biomass": [{"name": "BIO1", "enabled": False, "p_min_mw": 5.0, "p_max_mw": 15.0, "min_up_h": 4.0,
                  "min_down_h": 4.0, "ramp_mw_per_min": 1.0}]}}
+# The paper case with the authors' tool's conventions set (docs/gams-tool.md).
+RAW_TOOL = copy.deepcopy(RAW)
+RAW_TOOL["units"]["ed"][0].update({"profile_window": True, "ramp_up_mw_per_h": 40.0, "ramp_dn_mw_per_h": 40.0,
+                                   "energy_net_of_up_band": False})
+RAW_TOOL["units"]["csp"][0]["storage"].update({"reserve_band_max_mw_th": 30.0, "reserve_energy_factor": 2.0,
+                                               "reserve_share_max": 0.5})
+RAW_TOOL["units"]["csp"][0]["power_block"]["output_capped"] = False
 FAST = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 EXTREMES = [0, -1, 1, 0.5, 1e308, -1e308, 5e-324, math.nan, math.inf, -math.inf, 10 ** 30, -10 ** 30, 2 ** 63,
@@ -87,7 +94,7 @@ def _parent(data: Any, path: tuple) -> Any:
 
 @st.composite
 def mutated_cases(draw) -> dict:
-    data = copy.deepcopy(draw(st.sampled_from([RAW, RAW_NEW_UNITS])))
+    data = copy.deepcopy(draw(st.sampled_from([RAW, RAW_NEW_UNITS, RAW_TOOL])))
     for _ in range(draw(st.integers(1, 4))):
         where = paths(data)
         if not where:
@@ -119,7 +126,7 @@ def mutated_cases(draw) -> dict:
 # docs/case-format.md: no quantity above 1,000,000 in its unit; efficiencies, shares, flexibilities in [0, 1].
 LARGEST = 1e6
 FRACTIONS = {"kappa", "reserve_share", "flex_up", "flex_dn", "heat_efficiency", "eta_ch", "eta_dis",
-             "startup_fraction"}
+             "startup_fraction", "reserve_share_max"}
 
 
 def numbers(data: Any, where: str = "") -> list[tuple[str, float]]:
@@ -142,6 +149,8 @@ def assert_within_documented_bounds(case) -> None:
             assert 0.0 <= value <= 1.0, f"{where} = {value!r}"
     assert case.dt_h in (1.0, 0.5, 0.25)
     markets, uncertainty = data["markets"], data["uncertainty"]
+    for unit in data["csp"]:
+        assert 0 < unit["storage"]["reserve_energy_factor"] <= 100, unit["name"]
     assert len(markets["hpa_tariff_eur_per_mwh"]) == 24 and min(markets["hpa_tariff_eur_per_mwh"]) >= 0
     assert markets["reserve_duration_min"] > 0
     assert 1 <= uncertainty["window_days"] <= 366 and 0 < uncertainty["q_lo"] < 0.5 < uncertainty["q_hi"] < 1
@@ -209,6 +218,10 @@ def changed(path: tuple, value: Any) -> dict:
 @example(data=changed(("markets", "hpa_tariff_eur_per_mwh", 7), 2e6))
 @example(data=changed(("units", "csp", 0, "storage", "e_init_mwh_th"), 5000))
 @example(data=changed(("units", "csp", 0, "power_block", "min_up_h"), 2.5))
+@example(data=changed(("units", "csp", 0, "storage", "reserve_share_max"), 1.5))
+@example(data=changed(("units", "csp", 0, "storage", "reserve_energy_factor"), 0))
+@example(data=changed(("units", "ed", 0, "profile_window"), "sometimes"))
+@example(data=changed(("units", "ed", 0, "ramp_dn_mw_per_h"), -5))
 def test_a_mutated_case_loads_or_is_refused_by_rule(short_history, data):
     _check_mutation(data, short_history)
 

@@ -218,6 +218,15 @@ class ThermalStorage(_Frozen):
     # next day [EUR/MWh_th] (MODEL_SPEC §8 beyond the paper; 0: the paper's day, heat has no value
     # after midnight). Only a day from a fixed ``e_init`` has it; a cyclic day ends where it starts.
     end_value_eur_per_mwh_th: NonNegative = 0.0
+    # The authors' tool's conventions (docs/gams-tool.md D17, D19), off by default (MODEL_SPEC §8):
+    # each of the four bands (charge and discharge side, up and down) at most this [MW_th]; the
+    # reserve energy Σ r·dt/η ≤ factor·σ·ΔE with σ ≤ reserve_share_max.
+    reserve_band_max_mw_th: NonNegative | None = None
+    reserve_energy_factor: Annotated[Number, Field(gt=0.0, le=100.0)] = 1.0
+    reserve_share_max: Fraction = 1.0
+
+    TOOL_DEFAULTS: ClassVar[dict[str, Any]] = {"reserve_band_max_mw_th": None, "reserve_energy_factor": 1.0,
+                                               "reserve_share_max": 1.0}
 
     @property
     def cyclic(self) -> bool:
@@ -263,6 +272,11 @@ class PowerBlock(_Frozen):
     startup_duration_h: Positive | None = None
     initially_on: bool = False
     initial_status_h: NonNegative | None = None
+    # false: the output follows the curve up to p_in_max_mw_th, even above p_el_max_mw (the authors'
+    # tool, docs/gams-tool.md D16); p_el_max_mw still sizes the reserve share and the installed base
+    output_capped: bool = True
+
+    TOOL_DEFAULTS: ClassVar[dict[str, Any]] = {"output_capped": True}
 
     def initial_periods(self, dt_h: float) -> tuple[int, int]:
         """Periods ``(N_on, N_off)`` at the start of the day during which the turbine must stay
@@ -308,6 +322,9 @@ class CSP(_Unit):
     @classmethod
     def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
         data["power_block"]["breakpoints"] = [list(p) for p in data["power_block"]["breakpoints"]]
+        # the tool's conventions are written only when set: cases and their digests stay as they were
+        for part, model in (("storage", ThermalStorage), ("power_block", PowerBlock)):
+            data[part] = _without_defaults(data[part], model.TOOL_DEFAULTS)
         return data
 
     @property
@@ -380,9 +397,18 @@ class ElectricalDemand(_FollowsSeries):
     ramp_dn_mw_per_min: NonNegative
     flex_up: Fraction = 0.1
     flex_dn: Fraction = 0.1
+    # The authors' tool's conventions (docs/gams-tool.md D23-D26), off by default (MODEL_SPEC §9):
+    # a window around the profile, ramps between periods, an energy floor that counts the up band.
+    profile_window: bool = False
+    ramp_up_mw_per_h: NonNegative | None = None
+    ramp_dn_mw_per_h: NonNegative | None = None
+    energy_net_of_up_band: bool = True
     series: Text | None = None
     series_scale: Positive = 1.0
     forecast_series: Text | None = None
+
+    TOOL_DEFAULTS: ClassVar[dict[str, Any]] = {"profile_window": False, "ramp_up_mw_per_h": None,
+                                               "ramp_dn_mw_per_h": None, "energy_net_of_up_band": True}
 
     @property
     def series_range(self) -> tuple[float, float]:
@@ -391,6 +417,11 @@ class ElectricalDemand(_FollowsSeries):
     @property
     def demand_mw(self) -> float:
         return self.p_max_mw
+
+    @classmethod
+    def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
+        # the tool's conventions are written only when set: cases and their digests stay as they were
+        return _without_defaults(data, cls.TOOL_DEFAULTS)
 
     @model_validator(mode="after")
     def _limits(self) -> "ElectricalDemand":
@@ -1019,6 +1050,11 @@ def _unit_data(kind: str, unit: dict[str, Any]) -> dict[str, Any]:
     if kind in SHARED_CLASS_KINDS:
         unit = {k: v for k, v in unit.items() if k != "kind"}
     return UNIT_MODELS[kind].plain_data(unit)
+
+
+def _without_defaults(data: dict[str, Any], defaults: Mapping[str, Any]) -> dict[str, Any]:
+    """``data`` without the options ``defaults`` names where they hold their default."""
+    return {k: v for k, v in data.items() if k not in defaults or v != defaults[k]}
 
 
 def _is_multiple(hours: float, dt_h: float) -> bool:

@@ -67,8 +67,8 @@ FIELDS: dict[str, tuple[str, str, str]] = {
     "initially_on": ("On at midnight", "", "Turbine online at the start of the day"),
     "breakpoints": ("Power-block curve", "", "Thermal input and efficiency at each breakpoint"),
     "e_min_mwh": ("E min", "MWh", "A demand's least energy over the day; a battery's least stored energy"),
-    "p_init_mw": ("P start", "MW", "Power before the day starts: a demand's consumption (informative); a hydro or "
-                                   "biomass unit's output, from which its first period ramps (empty: no ramp limit)"),
+    "p_init_mw": ("P start", "MW", "Power before the day starts: a hydro or biomass unit's output, or a demand's "
+                                   "consumption, from which its first period ramps (empty: no ramp limit)"),
     "flex_up": ("Flex up", "-", "Up reserve (consumption decrease) as a fraction of consumption"),
     "flex_dn": ("Flex down", "-", "Down reserve (consumption increase) as a fraction of consumption"),
     "h_min_mw_th": ("H min", "MW_th", "Minimum heat"),
@@ -85,8 +85,17 @@ FIELDS: dict[str, tuple[str, str, str]] = {
     "marginal_cost_eur_per_mwh": ("Marginal cost", "EUR/MWh", "Cost per MWh produced (fuel, water value, O&M)"),
     "startup_cost_eur": ("Start-up cost", "EUR", "Cost of one start"),
     "shutdown_cost_eur": ("Shut-down cost", "EUR", "Cost of one stop"),
-    "ramp_up_mw_per_h": ("Ramp up", "MW/h", "Largest rise of output from one hour to the next; empty: no limit"),
-    "ramp_dn_mw_per_h": ("Ramp down", "MW/h", "Largest fall of output from one hour to the next; empty: no limit"),
+    "ramp_up_mw_per_h": ("Ramp up", "MW/h", "Largest rise of output (a demand's consumption, bands included) from "
+                                            "one hour to the next; empty: no limit"),
+    "ramp_dn_mw_per_h": ("Ramp down", "MW/h", "Largest fall of output (a demand's consumption, bands included) from "
+                                              "one hour to the next; empty: no limit"),
+    "profile_window": ("Window around profile", "", "The authors' tool's demand: consumption within flex of its "
+                                                    "profile, bands by the profile"),
+    "energy_net_of_up_band": ("E min net of up band", "", "Unticked: the authors' tool's floor, Σ consumption ≥ E min"),
+    "reserve_band_max_mw_th": ("TS band max", "MW_th", "Largest of each tank band (the authors' tool); empty: none"),
+    "reserve_energy_factor": ("TS reserve factor", "-", "k in Σ band energy ≤ k·σ·ΔE (1; the authors' tool 2)"),
+    "reserve_share_max": ("TS σ max", "-", "Largest share of the tank held for reserve (1; the authors' tool 0.5)"),
+    "output_capped": ("Turbine caps output", "", "Unticked: the curve alone limits the output (the authors' tool)"),
     "startup_ramp_mw_per_h": ("Start-up ramp", "MW/h", "Largest output in the period of a start; empty: P max"),
     "shutdown_ramp_mw_per_h": ("Shut-down ramp", "MW/h", "Largest output in the period before a stop; empty: "
                                                          "P max"),

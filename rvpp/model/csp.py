@@ -42,7 +42,9 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     ``e_init`` with ``e[NT] ≥ min(e_end_min, e_init)`` (``e[NT] ≥ e_init`` without an end
     target ``e_end_min``). Reserve energy shares (TS9-TS10)
     ``Σ r_ts↑·dt/η_dis ≤ σ↑·ΔE``, ``Σ r_ts↓·η_ch·dt ≤ σ↓·ΔE`` and margins (TS11, corrected)
-    ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``. From a fixed ``e_init`` the
+    ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``. The authors' tool's conventions
+    (off by default): each band ``≤ reserve_band_max_mw_th``; ``Σ r·dt/η ≤ k·σ·ΔE`` with
+    ``k = reserve_energy_factor``; ``σ ≤ reserve_share_max``. From a fixed ``e_init`` the
     heat kept past midnight is worth ``heat_kept_value = v_end·(e[NT] − e_init)`` [EUR], with
     ``v_end`` = ``end_value_eur_per_mwh_th`` (0 by default, the paper's day).
 
@@ -66,13 +68,16 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     b.p_ch = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th))
     b.p_dis = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th))
     b.e_ts = pyo.Var(m.T, bounds=(ts.e_min_mwh_th, ts.e_max_mwh_th))
-    b.r_ch_up = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th if srm else 0.0))
-    b.r_ch_dn = pyo.Var(m.T, bounds=(0.0, ts.p_ch_max_mw_th if srm else 0.0))
-    b.r_dis_up = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th if srm else 0.0))
-    b.r_dis_dn = pyo.Var(m.T, bounds=(0.0, ts.p_dis_max_mw_th if srm else 0.0))
+    band = float("inf") if ts.reserve_band_max_mw_th is None else ts.reserve_band_max_mw_th
+    ch_band, dis_band = (min(cap, band) if srm else 0.0 for cap in (ts.p_ch_max_mw_th, ts.p_dis_max_mw_th))
+    b.r_ch_up = pyo.Var(m.T, bounds=(0.0, ch_band))
+    b.r_ch_dn = pyo.Var(m.T, bounds=(0.0, ch_band))
+    b.r_dis_up = pyo.Var(m.T, bounds=(0.0, dis_band))
+    b.r_dis_dn = pyo.Var(m.T, bounds=(0.0, dis_band))
     source = problem.sources[csp.name]
     field = np.maximum(source.nominal - np.where(surely_deviating(problem, csp.name), source.deviation, 0.0), 0.0)
-    sigma_up_max, sigma_dn_max = reserve_share_limits(ts, float(field[0]), dt)
+    sigma_up_max, sigma_dn_max = (min(limit, ts.reserve_share_max)
+                                  for limit in reserve_share_limits(ts, float(field[0]), dt))
     b.sigma_up = pyo.Var(bounds=(0.0, sigma_up_max))
     b.sigma_dn = pyo.Var(bounds=(0.0, sigma_dn_max))
     for t in m.T:
@@ -111,10 +116,11 @@ def add_csp_storage(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None:
     kept = not ts.cyclic and ts.end_value_eur_per_mwh_th > 0.0
     b.heat_kept_value = pyo.Expression(
         expr=ts.end_value_eur_per_mwh_th * (b.e_ts[m.T.last()] - ts.e_init_mwh_th) if kept else 0.0)
+    held = ts.reserve_energy_factor * span  # the energy behind the bands per unit of σ [MWh_th]
     b.reserve_energy_up = pyo.Constraint(expr=sum(b.r_ts_up[t] * dt / ts.eta_dis for t in m.T)
-                                         <= b.sigma_up * span)
+                                         <= b.sigma_up * held)
     b.reserve_energy_dn = pyo.Constraint(expr=sum(b.r_ts_dn[t] * ts.eta_ch * dt for t in m.T)
-                                         <= b.sigma_dn * span)
+                                         <= b.sigma_dn * held)
     b.margin_low = pyo.Constraint(m.T, rule=lambda b, t: b.e_ts[t] >= ts.e_min_mwh_th + b.sigma_up * span)
     b.margin_high = pyo.Constraint(m.T, rule=lambda b, t: b.e_ts[t] <= ts.e_max_mwh_th - b.sigma_dn * span)
 
@@ -191,7 +197,8 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
     where a start draws ``K_su·P̄pb`` in its start-up period (or for ``startup_duration_h``);
     limits (STU3-STU4) ``p_pb + r_ts↑ ≤ P̄pb·u``, ``P̲pb·u ≤ p_pb − r_ts↓``; in every scenario
     the input ``x_s = p_pb + a_s(r_ts↑, r_ts↓)`` gives output ``e_s = f(x_s)`` on the
-    breakpoint curve, capped by the turbine nameplate ``e_s ≤ Pmax_θ·u``.
+    breakpoint curve, capped by the turbine nameplate ``e_s ≤ Pmax_θ·u`` (with ``output_capped:
+    false``, the authors' tool's convention, by the curve's own highest output).
     """
     b = m.csp[csp.name]
     pb = csp.power_block
@@ -199,7 +206,9 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
     startup_heat = pb.startup_fraction * pb.p_in_max_mw_th
     b.h = pyo.Var(m.T, domain=pyo.NonNegativeReals)
     b.p_pb = pyo.Var(m.T, bounds=(0.0, pb.p_in_max_mw_th))
-    b.e = pyo.Var(m.S, m.T, bounds=(0.0, pb.p_el_max_mw))
+    curve = on_curve(pb)
+    top = pb.p_el_max_mw if pb.output_capped else float(curve.outputs.max())  # the turbine's or the curve's
+    b.e = pyo.Var(m.S, m.T, bounds=(0.0, top))
 
     b.heat_split = pyo.Constraint(m.T, rule=lambda b, t: b.p_pb[t] == (
         b.p_sf[t] - b.h[t] / csp.heat_efficiency + b.p_dis[t] - b.p_ch[t]
@@ -212,10 +221,9 @@ def add_csp_power_block(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> Non
     b.injection = pyo.Expression(m.S, m.T, rule=lambda b, s, t: b.e[s, t])
     b.heat_supply = pyo.Expression(m.T, rule=lambda b, t: b.h[t])
     b.cost = pyo.Expression(expr=sum(csp.om_eur_per_mwh * (b.e[NONE, t] + b.h[t]) * problem.dt_h for t in m.T))
-    b.turbine_cap = pyo.Constraint(m.S, m.T, rule=lambda b, s, t: b.e[s, t] <= pb.p_el_max_mw * b.online[t])
+    b.turbine_cap = pyo.Constraint(m.S, m.T, rule=lambda b, s, t: b.e[s, t] <= top * b.online[t])
 
     index = [(s, t) for s in m.S for t in m.T]
-    curve = on_curve(pb)
     if problem.case.solver.pwl_encoding == "incremental":
         add_incremental(b, "pb", index, b.x, b.e, b.online, curve)
         if len(m.S) > 1:

@@ -40,7 +40,7 @@ import pandas as pd
 
 import openpyxl
 
-from ..data.case import Case, parse_case
+from ..data.case import Case, ElectricalDemand, PowerBlock, ThermalStorage, parse_case
 from ..data.kinds import KINDS, PAPER_KINDS, UNIT_KINDS, UnitKind
 from ..data.edits import flatten
 from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, read_file, unzip
@@ -98,6 +98,13 @@ UNIT_TEMPLATES: dict[str, dict[str, Any]] = {
                 "reserve_share": 0.2},
 }
 _DISPATCHABLE_OPTIONAL = ["startup_ramp_mw_per_h", "shutdown_ramp_mw_per_h", "initial_hours_in_status", "p_init_mw"]
+# The authors' tool's conventions (docs/gams-tool.md): last columns of their kind's table, each cell
+# showing its default where the case leaves the option out (case.yaml writes them only when set).
+TOOL_OPTIONS: dict[str, dict[str, Any]] = {
+    "ed": dict(ElectricalDemand.TOOL_DEFAULTS),
+    "csp": {**{f"storage.{k}": v for k, v in ThermalStorage.TOOL_DEFAULTS.items()},
+            **{f"power_block.{k}": v for k, v in PowerBlock.TOOL_DEFAULTS.items()}},
+}
 
 
 # ----------------------------------------------------------------------------- unit tables
@@ -112,7 +119,7 @@ def unit_table(case: Case, kind: str) -> pd.DataFrame:
     _check_kind(kind)
     rows = []
     for unit, data in zip(getattr(case, kind), case.to_data()["units"].get(kind, [])):
-        row = flatten(data)
+        row = {**TOOL_OPTIONS.get(kind, {}), **flatten(data)}
         row.pop(BREAKPOINTS, None)
         if KINDS[UnitKind(kind)].role is not None:
             row[SERIES_FIELDS[kind]] = unit.column
@@ -132,18 +139,19 @@ def unit_columns(kind: str) -> list[str]:
                 "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"],
                 "battery": ["e_init_mwh"], "hydro": _DISPATCHABLE_OPTIONAL,
                 "biomass": _DISPATCHABLE_OPTIONAL + ["energy_max_mwh"]}
+    tool = list(TOOL_OPTIONS.get(kind, {}))
     if KINDS[UnitKind(kind)].role is None:  # no series to follow
-        return columns + optional[kind]
+        return columns + optional[kind] + tool
     series = SERIES_FIELDS[kind]
     scale_at = columns.index(series.replace("series", "series_scale"))
     columns.insert(scale_at, series)
-    return columns + optional[kind]
+    return columns + optional[kind] + tool
 
 
 def new_unit_row(case: Case, kind: str) -> dict[str, Any]:
     """Values a new unit of ``kind`` starts from: a free name, the template and the series
     of the first unit of that kind (or its own name when there is none)."""
-    row = flatten(UNIT_TEMPLATES[kind])
+    row = {**flatten(UNIT_TEMPLATES[kind]), **TOOL_OPTIONS.get(kind, {})}
     row.pop(BREAKPOINTS, None)
     existing = [u for k, u in case.units() if k == kind]
     row["name"] = next_unit_name(case, kind)

@@ -601,15 +601,32 @@ def _audit_demands(a: _Auditor, day: AuditDay, by_unit: dict) -> None:
     for ed in day.case.ed:
         u, n = by_unit[ed.name], ed.name
         p, up, dn, bound = (u[c].to_numpy(float) for c in ("p_mw", "r_up_mw", "r_dn_mw", "bound_mw"))
-        a.leq("ed.required", bound, p, n)
+        if ed.profile_window:  # the tool's window around the nominal profile (bound = profile + deviation)
+            profile = day.sources[ed.name].nominal
+            a.leq("ed.window_low", bound - ed.flex_up * profile, p - up, n)
+            a.leq("ed.window_high", p + dn, bound + ed.flex_dn * profile, n)
+            a.leq("ed.flex_up", up, ed.flex_up * profile, n)
+            a.leq("ed.flex_dn", dn, ed.flex_dn * profile, n)
+        else:
+            a.leq("ed.required", bound, p, n)
+            a.leq("ed.flex_up", up, ed.flex_up * p, n)
+            a.leq("ed.flex_dn", dn, ed.flex_dn * p, n)
         a.leq("ed.floor", ed.p_min_mw, p - up, n)
         a.leq("ed.ceiling", p + dn, ed.p_max_mw, n)
-        a.leq("ed.flex_up", up, ed.flex_up * p, n)
-        a.leq("ed.flex_dn", dn, ed.flex_dn * p, n)
+        # ramps between periods: highest consumption of a period against the lowest of the one before
+        # and the reverse; the first period from p_init_mw when given
+        start = np.nan if ed.p_init_mw is None else ed.p_init_mw  # no bands before the day; nan: no limit
+        low, high = p - up, p + dn
+        low_before, high_before = np.concatenate([[start], low[:-1]]), np.concatenate([[start], high[:-1]])
+        if ed.ramp_up_mw_per_h is not None:
+            a.leq("ed.ramp_up", high - low_before, ed.ramp_up_mw_per_h * dt, n)
+        if ed.ramp_dn_mw_per_h is not None:
+            a.leq("ed.ramp_dn", high_before - low, ed.ramp_dn_mw_per_h * dt, n)
         a.leq("ed.reserve_up_cap", up, _reserve_cap(day, ed.ramp_up_mw_per_min), n)
         a.leq("ed.reserve_dn_cap", dn, _reserve_cap(day, ed.ramp_dn_mw_per_min), n)
         a.leq("ed.nonnegative", -np.minimum(up, dn), 0.0, n)
-        a.leq("ed.energy", ed.e_min_mwh, float(np.sum((p - up) * dt)), n, scale=ed.e_min_mwh)
+        served = p - up if ed.energy_net_of_up_band else p
+        a.leq("ed.energy", ed.e_min_mwh, float(np.sum(served * dt)), n, scale=ed.e_min_mwh)
     for td in day.case.td:
         u, n = by_unit[td.name], td.name
         h, bound = u["p_mw"].to_numpy(float), u["bound_mw"].to_numpy(float)
@@ -649,7 +666,8 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
         a.eq(f"csp.pb_curve[{s}]", e, expected, n)
         a.leq(f"csp.pb_input_range[{s}]", x, pb.p_in_max_mw_th * u, n)
         a.leq(f"csp.pb_input_range[{s}]", pb.p_in_min_mw_th * u, x, n)
-        a.leq(f"csp.turbine_cap[{s}]", e, pb.p_el_max_mw * u, n)
+        if pb.output_capped:  # otherwise the curve alone limits the output (the tool's convention)
+            a.leq(f"csp.turbine_cap[{s}]", e, pb.p_el_max_mw * u, n)
     # Electrical reserves (STU6-STU7) and the unit rows of units.csv.
     cap = _reserve_cap(day, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
     a.leq("csp.reserve_up_cap", col["e_up_mw"] - col["e_none_mw"], cap, n)
@@ -667,6 +685,9 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
     for name in ("ts_charge_mw", "ts_discharge_mw", "ts_r_ch_up_mw", "ts_r_ch_dn_mw", "ts_r_dis_up_mw",
                  "ts_r_dis_dn_mw"):
         a.leq(f"csp.{name}_nonnegative", -col[name], 0.0, n)
+    if ts.reserve_band_max_mw_th is not None:
+        for name in ("ts_r_ch_up_mw", "ts_r_ch_dn_mw", "ts_r_dis_up_mw", "ts_r_dis_dn_mw"):
+            a.leq("csp.ts_band_max", col[name], ts.reserve_band_max_mw_th, n)
     # Energy recursion, cyclic or from a fixed initial energy (TS7-TS8 as corrected).
     energy = col["ts_energy_mwh"]
     previous = np.roll(energy, 1)
@@ -679,9 +700,11 @@ def _audit_csp(a: _Auditor, day: AuditDay, unit, rows: pd.DataFrame, c: pd.DataF
     # Reserve energy shares and margins (TS9-TS11, corrected).
     span = ts.e_max_mwh_th - ts.e_min_mwh_th
     sigma_up, sigma_dn = float(col["sigma_up"][0]), float(col["sigma_dn"][0])
-    a.leq("csp.sigma_range", np.array([-sigma_up, -sigma_dn, sigma_up - 1, sigma_dn - 1]), 0.0, n)
-    a.leq("csp.ts_reserve_energy_up", float(np.sum(r_up * dt / ts.eta_dis)), sigma_up * span, n, scale=span)
-    a.leq("csp.ts_reserve_energy_dn", float(np.sum(r_dn * ts.eta_ch * dt)), sigma_dn * span, n, scale=span)
+    top = ts.reserve_share_max
+    a.leq("csp.sigma_range", np.array([-sigma_up, -sigma_dn, sigma_up - top, sigma_dn - top]), 0.0, n)
+    held = ts.reserve_energy_factor * span
+    a.leq("csp.ts_reserve_energy_up", float(np.sum(r_up * dt / ts.eta_dis)), sigma_up * held, n, scale=span)
+    a.leq("csp.ts_reserve_energy_dn", float(np.sum(r_dn * ts.eta_ch * dt)), sigma_dn * held, n, scale=span)
     a.leq("csp.ts_margin_low", ts.e_min_mwh_th + sigma_up * span, energy, n, scale=span)
     a.leq("csp.ts_margin_high", energy, ts.e_max_mwh_th - sigma_dn * span, n, scale=span)
     _audit_commitment(a, day, unit, u, v_su, v_sd)

@@ -53,6 +53,7 @@ WRITTEN = (CASE_FILE, HISTORY_FILE)
 WINDOW_DAYS = 6  # lo, lo, mid, mid, hi, hi per hour
 Q_LO, Q_HI = 0.2, 0.8  # on six values: exactly the 2nd and the 5th
 TIMEZONE = "UTC"  # the workbook names no place; UTC has no clock change, so every day has 24 hours
+SOLVER_REL_GAP = 1e-9  # the imported case is solved to optimality (docs/gams-tool.md)
 CSV_DIGITS = 6  # significant digits History.to_csv keeps
 SOURCE = "the authors' RVPP tool workbook"
 DISPATCHABLE = (UnitKind.HYDRO.value, UnitKind.BIOMASS.value)
@@ -142,6 +143,8 @@ def workbook_case(book: Workbook, date: dt.date) -> WorkbookImport:
                                                    "price_sr_up": book.budgets.price_sr_up,
                                                    "price_sr_dn": book.budgets.price_sr_dn,
                                                    **book.budgets.units}},
+        # solved to optimality, not to the default 0.01 % gap (about 1 EUR here): the stored result is optimal
+        "solver": {"rel_gap": SOLVER_REL_GAP},
         "units": units,
         "provenance": {column: {"origin": "synthetic", "source": SOURCE,
                                 "note": "constructed window: each hour holds lo, lo, mid, mid, hi, hi of the "
@@ -196,6 +199,13 @@ def _solar_thermal(book: Workbook, plant) -> dict[str, Any]:
     tank = next((s for s in book.storages if s.name == plant.storage), None)
     if tank is None:
         raise WorkbookError("VPP_Units", "columns H:I", f'solar thermal plant "{plant.name}" has no tank (TES)')
+    if tank.sr_ramp_up_mw_per_min != tank.sr_ramp_dn_mw_per_min:
+        raise WorkbookError("ESS", f'unit "{tank.name}" columns "SR ramp up/down [MW/min]"',
+                            "differ; rvpp has one band limit for the tank's four bands")
+    if book.settings.reserve_call_fraction <= 0:
+        raise WorkbookError("Global_params", "sFraction_Time_SR",
+                            f"{book.settings.reserve_call_fraction:g} must be above 0 (the share of an hour a "
+                            "band is called)")
     share = book.settings.reserve_share_solar_thermal
     curve = [list(point) for point in plant.breakpoints]
     first_output = next((p for p, eta in plant.breakpoints if p * eta > 0), None)
@@ -212,8 +222,14 @@ def _solar_thermal(book: Workbook, plant) -> dict[str, Any]:
         "solar_field": {"p_max_mw_th": float(plant.forecast.available_mw.max())},
         "storage": {"e_min_mwh_th": tank.e_min_mwh, "e_max_mwh_th": tank.e_max_mwh,
                     "p_ch_max_mw_th": tank.p_ch_max_mw, "p_dis_max_mw_th": tank.p_dis_max_mw,
-                    "eta_ch": tank.eta_ch, "eta_dis": tank.eta_dis},  # no e_init: the tool's day is cyclic
+                    "eta_ch": tank.eta_ch, "eta_dis": tank.eta_dis,  # no e_init: the tool's day is cyclic
+                    # the tool's conventions (docs/gams-tool.md D17, D19): each band within the reserve
+                    # duration at the SR ramp; sFraction_Time_SR x the energy behind the bands <= 2 σ ΔE, σ <= 0.5
+                    "reserve_band_max_mw_th": book.settings.reserve_duration_min * tank.sr_ramp_up_mw_per_min,
+                    "reserve_energy_factor": 2.0 / book.settings.reserve_call_fraction,
+                    "reserve_share_max": 0.5},
         "power_block": {"p_in_max_mw_th": plant.p_in_max_mw_th, "p_in_min_mw_th": first_output,
+                        "output_capped": False,  # the tool's curve is not capped at p_el_max (D16)
                         "p_el_max_mw": plant.p_el_max_mw, "breakpoints": curve, "min_up_h": plant.min_up_h,
                         "min_down_h": plant.min_down_h, "startup_fraction": book.settings.startup_heat_fraction,
                         "initially_on": plant.initially_on,
@@ -222,9 +238,11 @@ def _solar_thermal(book: Workbook, plant) -> dict[str, Any]:
 
 
 def _demand(demand) -> dict[str, Any]:
+    # rvpp's flex_up bounds the up band (a consumption decrease) and, with profile_window, the
+    # window below the profile: the tool's negative fluctuation; flex_dn its positive one
     flex = {}
-    for field, values, column in (("flex_dn", demand.flex_dn, "Negative fluctuation [pu]"),
-                                  ("flex_up", demand.flex_up, "Positive fluctuation [pu]")):
+    for field, values, column in (("flex_up", demand.flex_dn, "Negative fluctuation [pu]"),
+                                  ("flex_dn", demand.flex_up, "Positive fluctuation [pu]")):
         if values.nunique() != 1:
             raise WorkbookError("Demand", f'unit "{demand.name}" column "{column}"',
                                 "varies between periods; rvpp's demand has one flexibility share for the day")
@@ -236,7 +254,10 @@ def _demand(demand) -> dict[str, Any]:
     return {"name": demand.name, "p_min_mw": demand.p_min_mw, "p_max_mw": demand.p_max_mw,
             "e_min_mwh": demand.e_min_mwh, "p_init_mw": demand.p_init_mw,
             "ramp_up_mw_per_min": demand.sr_ramp_up_mw_per_min, "ramp_dn_mw_per_min": demand.sr_ramp_dn_mw_per_min,
-            **flex}
+            **flex,
+            # the tool's conventions (docs/gams-tool.md D23, D25, D26)
+            "profile_window": True, "ramp_up_mw_per_h": demand.ramp_up_mw_per_h,
+            "ramp_dn_mw_per_h": demand.ramp_dn_mw_per_h, "energy_net_of_up_band": False}
 
 
 def _production_band(forecast: pd.DataFrame, where: str) -> Band:
