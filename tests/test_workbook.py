@@ -31,6 +31,22 @@ def test_unit_table_round_trips(case, kind):
     assert workbook.with_unit_table(case, kind, table) == case
 
 
+def test_a_csps_start_status_and_end_of_day_storage_survive_the_table_and_the_workbook(case):
+    """Fields a table leaves out are lost on the first edit: every field of the CSP is a column."""
+    csp = case.csp[0]
+    kept = case.replace(csp=[csp.model_copy(update={
+        "storage": csp.storage.model_copy(update={"e_end_min_mwh_th": 300.0, "end_value_eur_per_mwh_th": 66.5}),
+        "power_block": csp.power_block.model_copy(update={"initial_status_h": 2.0})})])
+    table = workbook.unit_table(kept, "csp")
+    assert (table.loc[0, "storage.e_end_min_mwh_th"], table.loc[0, "storage.end_value_eur_per_mwh_th"],
+            table.loc[0, "power_block.initial_status_h"]) == (300.0, 66.5, 2.0)
+    table.loc[0, "om_eur_per_mwh"] = 30.0  # an edit of another cell
+    edited = workbook.with_unit_table(kept, "csp", table).csp[0]
+    assert (edited.om_eur_per_mwh, edited.storage.e_end_min_mwh_th, edited.storage.end_value_eur_per_mwh_th,
+            edited.power_block.initial_status_h) == (30.0, 300.0, 66.5, 2.0)
+    assert workbook.read_case_workbook(workbook.case_workbook_bytes(kept)) == kept
+
+
 def test_unit_table_shows_the_history_column_of_each_unit(case):
     renamed = workbook.unit_table(case, "wind")
     assert list(renamed["series"]) == ["WF1", "WF2"]

@@ -57,6 +57,12 @@ FIELDS: dict[str, tuple[str, str, str]] = {
     "eta_ch": ("η charge", "-", "Charging efficiency (0-1]"),
     "eta_dis": ("η discharge", "-", "Discharging efficiency (0-1]"),
     "e_init_mwh_th": ("TS E start", "MWh_th", "Energy at the start of the day; empty: cyclic day"),
+    "e_end_min_mwh_th": ("TS E end min", "MWh_th", "Least energy at the end of the day (up to TS E start); "
+                         "empty: TS E start"),
+    "end_value_eur_per_mwh_th": ("TS heat value", "EUR/MWh_th", "Value of the heat left in the tank at the end "
+                                 "of the day over its start"),
+    "initial_status_h": ("Hours in status", "h", "Hours the turbine has been on (or off) at midnight; empty: "
+                         "no minimum time carried in"),
     "p_in_max_mw_th": ("PB input max", "MW_th", "Largest power-block thermal input"),
     "p_in_min_mw_th": ("PB input min", "MW_th", "Smallest thermal input while the turbine runs"),
     "p_el_max_mw": ("Turbine max", "MW", "Turbine nameplate, caps the output in every scenario"),

@@ -135,7 +135,8 @@ def unit_columns(kind: str) -> list[str]:
     _check_kind(kind)
     columns = ["name", *(c for c in flatten(UNIT_TEMPLATES[kind]) if c != BREAKPOINTS)]
     optional = {"wind": ["forecast_series"], "pv": ["forecast_series"],
-                "csp": ["storage.e_init_mwh_th", "solar_field.forecast_series"],
+                "csp": ["storage.e_init_mwh_th", "storage.e_end_min_mwh_th", "storage.end_value_eur_per_mwh_th",
+                        "power_block.initial_status_h", "solar_field.forecast_series"],
                 "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"],
                 "battery": ["e_init_mwh"], "hydro": _DISPATCHABLE_OPTIONAL,
                 "biomass": _DISPATCHABLE_OPTIONAL + ["energy_max_mwh"]}
