@@ -33,6 +33,7 @@ from __future__ import annotations
 import datetime as dt
 import io
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pandas as pd
@@ -129,21 +130,7 @@ def _read_text(text: str, name: str, zone: str, rows: Rows, days: dict[dt.date, 
     if not lines or not looks_like(lines[0]):
         raise DataImportError(f'{name}: line 1 must be "MARGINALPDBC;" (an OMIE marginalpdbc file)')
     column = ZONES[zone]
-    ended = False
-    for number, raw in enumerate(lines[1:], start=2):
-        line = raw.strip()
-        if not line:
-            continue
-        if line == "*":
-            ended = True
-            continue
-        if ended:
-            raise DataImportError(f"{name} line {number}: data after the closing '*'")
-        fields = (line[:-1] if line.endswith(";") else line).split(";")  # one closing ";" per line
-        if len(fields) < 6:
-            raise DataImportError(f"{name} line {number}: expected YEAR;MONTH;DAY;PERIOD;PRICE_PT;PRICE_ES; "
-                                  f"but found {len(fields)} fields")
-        where = f"{name} line {number}"
+    for where, fields in data_lines(lines, name):
         day = date_of(fields[:3], where)
         period = whole(fields[3], "PERIOD", where)
         step = _step(day)
@@ -154,6 +141,28 @@ def _read_text(text: str, name: str, zone: str, rows: Rows, days: dict[dt.date, 
         start = period_start(day, period, step)
         rows.add(start, start + step, {"price_da": price(fields[column], where)}, where)
         days.setdefault(day, set()).add(period)
+
+
+def data_lines(lines: list[str], name: str) -> Iterator[tuple[str, list[str]]]:
+    """The data lines of an OMIE price file after its header line (day-ahead or intraday): ``(where,
+    fields)`` per line, empty lines skipped, each with the six fields
+    ``YEAR;MONTH;DAY;PERIOD;PRICE_PT;PRICE_ES``; the closing ``*`` is required and nothing may follow it."""
+    ended = False
+    for number, raw in enumerate(lines[1:], start=2):
+        line = raw.strip()
+        if not line:
+            continue
+        if line == "*":
+            ended = True
+            continue
+        where = f"{name} line {number}"
+        if ended:
+            raise DataImportError(f"{where}: data after the closing '*'")
+        fields = line.removesuffix(";").split(";")  # one closing ";" per line
+        if len(fields) < 6:
+            raise DataImportError(f"{where}: expected YEAR;MONTH;DAY;PERIOD;PRICE_PT;PRICE_ES; but found "
+                                  f"{len(fields)} fields")
+        yield where, fields
     if not ended:
         raise DataImportError(f"{name}: the closing line '*' is missing; the file may be cut short")
 

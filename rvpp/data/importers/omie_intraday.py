@@ -208,21 +208,8 @@ def _read_text(text: str, name: str, day: dt.date, session: Session, zone: str, 
     step = _step(day)
     count = int(round(omie.day_hours(day) * pd.Timedelta(hours=1) / step))
     opens = window_start(day, session)
-    ended, periods, priced = False, [], 0
-    for number, raw in enumerate(lines[1:], start=2):
-        line = raw.strip()
-        if not line:
-            continue
-        if line == "*":
-            ended = True
-            continue
-        if ended:
-            raise DataImportError(f"{name} line {number}: data after the closing '*'")
-        fields = line.removesuffix(";").split(";")  # one closing ";" per line
-        where = f"{name} line {number}"
-        if len(fields) < 6:
-            raise DataImportError(f"{where}: expected YEAR;MONTH;DAY;PERIOD;PRICE_PT;PRICE_ES; but found "
-                                  f"{len(fields)} fields")
+    periods, priced = [], 0
+    for where, fields in omie.data_lines(lines, name):
         dated = omie.date_of(fields[:3], where)
         if dated != day:
             raise DataImportError(f"{where}: the line is dated {dated} but the file's name is for {day}; "
@@ -240,8 +227,6 @@ def _read_text(text: str, name: str, day: dt.date, session: Session, zone: str, 
         priced += not math.isnan(price)
         rows.add(start, start + step, {session.column: price}, where)
         periods.append(period)
-    if not ended:
-        raise DataImportError(f"{name}: the closing line '*' is missing; the file may be cut short")
     if not periods:
         raise DataImportError(f"{name}: no data lines")
     if not priced:
