@@ -53,8 +53,6 @@ import datetime as dt
 import hashlib
 import math
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,7 +63,7 @@ import pandas as pd
 from ..errors import CaseError, DataImportError, RvppError
 from . import synth
 from .case import Case, CASE_FILE, parse_case
-from .case_yaml import load_case, save_case
+from .case_yaml import check_case_folder, load_case, write_case_folder
 from .history import History
 from .importers import ImportReport, fill_gaps, hourly_table, import_files, weather
 from .importers.report import hourly
@@ -782,26 +780,10 @@ def _check_out(out: Path, overwrite: bool) -> None:
     unless ``overwrite`` (--force), and a folder where one of the two files belongs even then."""
     if os.path.lexists(out / CASE_FILE) and not overwrite:
         raise RvppError(f"{out} already holds a case; choose another folder or overwrite it (--force)")
-    if out.exists() and not out.is_dir():
-        raise RvppError(f"{out} exists and is not a folder")
-    for name in WRITTEN:
-        target = out / name
-        if target.is_dir():
-            raise RvppError(f"{target} is a folder, where the case's {name} belongs; choose another folder")
-        if os.path.lexists(target) and not overwrite:
-            raise RvppError(f"{out} already holds {name}; choose another folder or overwrite it (--force)")
+    check_case_folder(out, WRITTEN, overwrite)
 
 
 def _write(case: Case, out: Path, overwrite: bool) -> None:
     """Write the case into a temporary folder beside ``out``, then move its two files into place
     (checking again that nothing has appeared there meanwhile that ``overwrite`` does not allow)."""
-    out.parent.mkdir(parents=True, exist_ok=True)
-    temp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
-    try:
-        save_case(case, temp, HISTORY_FILE)
-        out.mkdir(exist_ok=True)
-        _check_out(out, overwrite)
-        for name in WRITTEN:
-            os.replace(temp / name, out / name)
-    finally:
-        shutil.rmtree(temp, ignore_errors=True)
+    write_case_folder(case, out, HISTORY_FILE, WRITTEN, overwrite, _check_out)

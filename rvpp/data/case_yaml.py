@@ -7,13 +7,15 @@ depth and value count, no key written twice) before the case model validates it.
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 import yaml
 
-from ..errors import CaseError, CaseFileError, CasePathError, require
+from ..errors import CaseError, CaseFileError, CasePathError, RvppError, require
 from .case import CASE_FILE, Case, in_file_order, parse_case, settings_of
 from .case_messages import kind_of
 from .files import MIB, decode_text, excerpt, inside_folder, read_file, relative_path
@@ -239,3 +241,35 @@ def save_case(case: Case, folder: str | Path, history_file: str = "history.csv")
     (folder / CASE_FILE).write_text(text, encoding="utf-8")
     case.history.to_csv(folder / history_file, case.timezone)
     return folder
+
+
+def check_case_folder(out: Path, written: tuple[str, ...], overwrite: bool,
+                      error: type[RvppError] = RvppError) -> None:
+    """Refuse, with ``error``, a path ``out`` that is not a folder, a folder where one of the
+    ``written`` files belongs, and (unless ``overwrite``, the command's --force) a file there
+    already."""
+    if out.exists() and not out.is_dir():
+        raise error(f"{out} exists and is not a folder")
+    for name in written:
+        target = out / name
+        if target.is_dir():
+            raise error(f"{target} is a folder, where the case's {name} belongs; choose another folder")
+        if os.path.lexists(target) and not overwrite:
+            raise error(f"{out} already holds {name}; choose another folder or overwrite it (--force)")
+
+
+def write_case_folder(case: Case, out: Path, history_file: str, written: tuple[str, ...], overwrite: bool,
+                      check) -> None:
+    """Write ``case`` into a temporary folder beside ``out``, then move its ``written`` files into
+    place in that order, calling ``check(out, overwrite)`` just before (so nothing that appeared in
+    ``out`` meanwhile is replaced unless ``overwrite`` allows it)."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    temp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
+    try:
+        save_case(case, temp, history_file)
+        out.mkdir(exist_ok=True)
+        check(out, overwrite)
+        for name in written:
+            os.replace(temp / name, out / name)
+    finally:
+        shutil.rmtree(temp, ignore_errors=True)

@@ -31,9 +31,6 @@ from __future__ import annotations
 
 import datetime as dt
 import math
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -43,7 +40,7 @@ import pandas as pd
 
 from ...errors import CaseError, DataImportError
 from ..case import CASE_FILE, Case, parse_case
-from ..case_yaml import save_case
+from ..case_yaml import check_case_folder, write_case_folder
 from ..history import History
 from ..kinds import UnitKind
 from .gams_workbook import Workbook, WorkbookError, read_workbook
@@ -310,25 +307,9 @@ def _window(series: dict[str, Band], date: dt.date) -> History:
 
 def _check_out(out: Path, overwrite: bool) -> None:
     """Refuse a folder that already holds a case (unless ``overwrite``) and a path that is not a folder."""
-    if out.exists() and not out.is_dir():
-        raise DataImportError(f"{out} exists and is not a folder")
-    for name in WRITTEN:
-        target = out / name
-        if target.is_dir():
-            raise DataImportError(f"{target} is a folder, where the case's {name} belongs; choose another folder")
-        if os.path.lexists(target) and not overwrite:
-            raise DataImportError(f"{out} already holds {name}; choose another folder or overwrite it (--force)")
+    check_case_folder(out, WRITTEN, overwrite, DataImportError)
 
 
 def _write(case: Case, out: Path, overwrite: bool) -> None:
     """Write the case into a temporary folder beside ``out``, then move its files into place."""
-    out.parent.mkdir(parents=True, exist_ok=True)
-    temp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
-    try:
-        save_case(case, temp, HISTORY_FILE)
-        out.mkdir(exist_ok=True)
-        _check_out(out, overwrite)
-        for name in WRITTEN:
-            os.replace(temp / name, out / name)
-    finally:
-        shutil.rmtree(temp, ignore_errors=True)
+    write_case_folder(case, out, HISTORY_FILE, WRITTEN, overwrite, _check_out)
