@@ -1,12 +1,14 @@
 """Code the browser loads ahead of need, while it has nothing else to do.
 
 Streamlit's page code comes in pieces: the code of a kind of element (a metric card, a
-text field, a table) is fetched and compiled the first time a page shows one. A plan is
-usually the first thing a session shows with cards, the run label's text field and the
-flexibility table, so their code would be loaded while the plan's charts wait for it.
-Every page therefore asks the browser, once, to import those pieces when it is
-idle after the page's first chart is drawn (or after :data:`WAIT_MS`, on a page without
-charts), so that a session's first plan finds them ready.
+text field, a table, a Plotly chart) is fetched and compiled the first time a page shows
+one. Home's first chart is drawn without Plotly (:mod:`dashboard.svg`), so a session's
+first plan is usually the first thing it shows with Plotly charts, cards, the run label's
+text field and the flexibility table, and their code would be loaded while the plan's
+charts wait for it (Plotly's alone is 4.7 MB, 2.5-3.5 s of compiling and running on a
+two-core machine). Every page therefore asks the browser, once, to import those pieces
+when it is idle after the page's first chart is drawn (or after :data:`WAIT_MS`, on a
+page without charts), so that a session's first plan finds them ready.
 
 The pieces are files of the installed Streamlit (``static/js/<Element>.<hash>.js``),
 found by name once per server process; a name that matches no file, or several, is
@@ -22,7 +24,9 @@ from pathlib import Path
 
 import streamlit as st
 
-ELEMENTS = ("Metric", "TextInput", "DataFrame")  # what a plan shows that earlier pages may not have
+from .svg import CHART_CLASS
+
+ELEMENTS = ("PlotlyChart", "Metric", "TextInput", "DataFrame")  # what a plan shows that earlier pages may not have
 WAIT_MS = 5000  # a page without a chart starts loading after this long [ms]
 POLL_MS = 250   # how often a page looks for its first drawn chart [ms]
 SCRIPT_DIR = Path(st.__file__).parent / "static" / "static" / "js"
@@ -38,7 +42,7 @@ _LOADER = """<script>
   const load = () => files.forEach(file => import(new URL(file, index.src).href).catch(() => {}));
   const idle = () => window.requestIdleCallback ? requestIdleCallback(load, {timeout: 2000}) : setTimeout(load, 0);
   const wait = () => {
-    const drawn = document.querySelector('[data-testid="stPlotlyChart"] .main-svg');
+    const drawn = document.querySelector('[data-testid="stPlotlyChart"] .main-svg, svg.CHART_CLASS');
     if (drawn || Date.now() - started > WAIT_MS) idle(); else setTimeout(wait, POLL_MS);
   };
   wait();
@@ -62,7 +66,7 @@ def loader() -> str | None:
     if not files:
         return None
     return (_LOADER.replace("FILES", json.dumps(files)).replace("WAIT_MS", str(WAIT_MS))
-            .replace("POLL_MS", str(POLL_MS)))
+            .replace("POLL_MS", str(POLL_MS)).replace("CHART_CLASS", CHART_CLASS))
 
 
 def preload() -> None:

@@ -16,7 +16,7 @@ import pandas as pd
 import plotly.graph_objects as go
 import streamlit as st
 
-from rvpp import Problem, Result
+from rvpp import Result
 from rvpp.service import GREY, plots, waterfall_figure
 
 from .state import case_key
@@ -69,13 +69,6 @@ def sweep_curve(sweep: str, gamma: int, _gammas: Sequence[int], _points: Sequenc
     figure.add_vline(x=gamma, line_dash="dot", line_color=GREY)
     figure.update_layout(title_text=f"Price of robustness · plan shown: Γ = {gamma}")
     return figure
-
-
-@st.cache_resource(show_spinner=False, max_entries=KEPT, hash_funcs={Problem: lambda p: case_key(p.case)})
-def band_figure(problem: Problem, source: str) -> go.Figure:
-    """The forecast band of ``source`` on the prepared day (``plots.bands_figure``), built once
-    per case: Home draws the DAM price band on every first visit."""
-    return plots.bands_figure(problem, source)
 
 
 def heat_bought(result: Result) -> bool:

@@ -5,8 +5,7 @@ from collections import Counter
 import streamlit as st
 
 import rvpp
-from dashboard import solving, state, widgets
-from dashboard.figures import band_figure
+from dashboard import solving, state, svg, widgets
 from rvpp.service import Variant, read_case_files, trades_figure
 
 state.through_app("pages/home.py")
@@ -78,7 +77,7 @@ with ask:
     if not requested:
         problem = solving.prepare(state.run_case())
         if problem is not None:
-            st.plotly_chart(band_figure(problem, "price_da"), key="home_price_band")
+            svg.draw(svg.price_band_svg(problem, "home-price-band"))  # drawn with the page: no chart code to load
 with about:
     st.subheader("The case")
     st.markdown(f"**{widgets.literal(case.name)}** · {case.delivery_date:%a %d %b %Y} · "

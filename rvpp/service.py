@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .outputs.plots import (SOURCE_TITLES, TRADE_NAMES, band_overlays, bands_figure, compare_trades_figure,
                                 curve_figure, deviating_periods, exposure_figure, idle_trades, tariff_figure,
                                 thin_clock_ticks, trades_figure)
-    from .outputs.style import GREY, KIND_LABELS
+    from .outputs.style import GREY, KIND_LABELS, SERIES_COLORS
     from .outputs.workbook import SERIES_FIELDS, case_workbook_bytes, new_unit_row, unit_columns
     from .settle.audit import price_exposures, protection_exact
     from .settle.recourse import Penalties
@@ -140,6 +140,7 @@ _WHERE = {
     "trades_figure": ".outputs.plots",
     "GREY": ".outputs.style",
     "KIND_LABELS": ".outputs.style",
+    "SERIES_COLORS": ".outputs.style",
     "SERIES_FIELDS": ".outputs.workbook",
     "case_workbook_bytes": ".outputs.workbook",
     "new_unit_row": ".outputs.workbook",
@@ -191,7 +192,7 @@ __all__ = [
     "CRITERION_NAMES", "EXCERPT_CHARS", "FIELDS", "FRACTION", "GREY", "HPA_FLAT_PRICES", "KIND_LABELS", "KINDS",
     "LABEL_LENGTH", "MARKET_SETS", "MARKET_SETS_WITHOUT_CSP", "MIN_TEST_DAYS", "MIN_TRAIN_DAYS", "Outcome", "Penalties",
     "PERFECT", "PERIOD_NAMES", "PRESET", "PRICE_COLUMNS", "PRICE_MODELS", "RecordKey", "RunInfo", "RunLibrary",
-    "SavedRun", "SERIES_FIELDS", "SOURCE_TITLES", "SourceKind", "STORE_ERRORS", "StoredRecommendation", "STRATEGIES",
+    "SavedRun", "SERIES_COLORS", "SERIES_FIELDS", "SOURCE_TITLES", "SourceKind", "STORE_ERRORS", "StoredRecommendation", "STRATEGIES",
     "STRATEGY_BUDGETS_H", "STUDIES", "StudyOutput", "StudySettings", "TRADE_NAMES", "UNIT_KINDS", "UnitKind", "Variant",
     "Verdict", "band_overlays", "band_specs", "bands_figure", "beats_presets_on_training", "case_data",
     "case_workbook_bytes", "case_zip_bytes", "compare_trades_figure", "cost_table", "cumulative_figure", "curve_figure",

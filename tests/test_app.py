@@ -104,8 +104,10 @@ def test_home_lands_on_the_default_case(paper_case):
     at = open_app()
     assert at.title[0].value.startswith("Robust day-ahead bids")
     assert case_of(at) == paper_case
-    summary = at.table[0].value
-    assert list(summary["Units"]) == [2, 3, 1, 3, 2]
+    (summary,) = [c.value for c in at.caption if c.value.startswith("| Kind | Units | Names | Installed |")]
+    rows = [[cell.strip() for cell in line.strip("|").split("|")] for line in summary.splitlines()[2:]]
+    assert [int(row[1]) for row in rows] == [2, 3, 1, 3, 2]
+    assert rows[2] == ["CSP plants", "1", "CSP1", r"55 MW, TS 1,100 MWh\_th"]  # markdown: the _ shown as typed
     assert {link.proto.page for link in at.get("page_link")} >= {"portfolio", "results", "compare", "learn"}
 
 
@@ -367,11 +369,11 @@ def test_the_clock_of_a_solvers_answer_shows_in_markdown_without_an_emoji_name()
 
 def test_every_page_loads_the_code_of_a_plans_elements_ahead_once():
     at = open_app()
-    scripts = [e.proto.body for e in at.get("html")]
+    scripts = [e.proto.body for e in at.get("html") if "__rvppPreloaded" in e.proto.body]
     assert len(scripts) == 1
     static = Path(st.__file__).parent / "static" / "static" / "js"
     files = json.loads(re.search(r"const files = (\[.*?\]);", scripts[0]).group(1))
-    assert sorted(name.split(".")[0] for name in files) == ["DataFrame", "Metric", "TextInput"]
+    assert sorted(name.split(".")[0] for name in files) == ["DataFrame", "Metric", "PlotlyChart", "TextInput"]
     assert all((static / name).is_file() for name in files)
     assert "window.__rvppPreloaded" in scripts[0]
 

@@ -150,6 +150,14 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         page.get_by_role("heading", name="Robust day-ahead bids").wait_for()
         page.get_by_role("button", name="Solve the balanced strategy").wait_for()
         page.get_by_role("table").first.wait_for()
+        # Home's first chart, drawn on the server as SVG: it must reach the page whole (an
+        # element that kept only HTML would drop it) and be one image named by its title.
+        band = page.get_by_role("img", name="Day-ahead price: forecast band", exact=True)
+        band.wait_for()
+        assert len(band.locator("polyline.median").get_attribute("points").split()) == 24
+        assert "Day-ahead price on Mon 05 May 2025, 24 periods of 60 minutes." in band.evaluate(
+            "svg => document.getElementById(svg.getAttribute('aria-describedby')).textContent")
+        assert band.bounding_box()["width"] > 300
         page.screenshot(path=ARTIFACTS / "home.png", full_page=True)
 
         page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()
@@ -171,13 +179,13 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
 
 @pytest.mark.slow
 def test_a_first_plan_finds_the_code_of_its_elements_loaded_ahead(tmp_path):
-    """Home has its browser load the code of cards, text fields and tables while idle, so a
-    server's first plan on Results fetches none of it, nor the markdown's emoji code."""
+    """Home has its browser load the code of Plotly charts, cards, text fields and tables while
+    idle, so a server's first plan on Results fetches none of it, nor the markdown's emoji code."""
     require_browser()
-    wanted = ("Metric.", "TextInput.", "DataFrame.")
+    wanted = ("PlotlyChart.", "Metric.", "TextInput.", "DataFrame.")
     with streamlit_server("streamlit-first-plan.log", tmp_path) as url, chromium_page() as page:
         page.goto(url)
-        page.get_by_test_id("stPlotlyChart").first.locator(".main-svg").first.wait_for()
+        page.locator("svg.rvpp-chart").first.wait_for()
         page.wait_for_function("(names) => names.every(n => performance.getEntriesByType('resource')"
                                ".some(e => e.name.split('/').pop().startsWith(n) && e.name.endsWith('.js')))",
                                arg=list(wanted))
@@ -269,7 +277,7 @@ def test_homes_first_screen_holds_the_question_the_solve_button_and_the_case():
         page.goto(url)
         question = page.get_by_role("heading", name="What should I bid tomorrow?")
         solve = page.get_by_role("button", name="Solve the balanced strategy")
-        case = page.get_by_test_id("stTable").first
+        case = page.get_by_role("table").filter(has=page.get_by_role("columnheader", name="Installed")).first
         for element in (question, solve, case):
             element.wait_for()
         settle(page)
