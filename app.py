@@ -52,6 +52,7 @@ def main() -> None:
     page.run()
     with summary.container():  # drawn again after the page: the case as the page's edits left it
         widgets.sidebar(state.case())
+    solving.start_fork_server()  # once the page is sent (a solve started earlier starts it itself)
 
 
 if __name__ == "__main__":

@@ -346,10 +346,21 @@ def periods_of(case: Case) -> int:
 
 @st.cache_resource(show_spinner=False)
 def solver() -> Solver:
-    """The server's solver, its fork server started in the background (imports done there)."""
+    """The server's solver; its fork server starts with :func:`start_fork_server`, or with the
+    first solve if no run has got that far."""
     CONTEXT.set_forkserver_preload(PRELOAD)
-    threading.Thread(target=_start_fork_server, name="rvpp-fork-server", daemon=True).start()
     return Solver(WORKERS)
+
+
+@st.cache_resource(show_spinner=False)
+def start_fork_server() -> threading.Thread:
+    """Start the fork server in the background, once per server process. ``app.py`` calls it
+    once the page has been sent: its imports take about 3 s of processor time, which on a
+    two-core server competed with the first session's script and browser for its first page."""
+    solver()  # the preload is set before the fork server starts
+    thread = threading.Thread(target=_start_fork_server, name="rvpp-fork-server", daemon=True)
+    thread.start()
+    return thread
 
 
 def _start_fork_server() -> None:
