@@ -67,7 +67,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import rvpp  # noqa: E402
-from benchmarks.common import header, load_average, write_result  # noqa: E402
+from benchmarks.common import header, write_result  # noqa: E402
 from rvpp.data.case import STRATEGIES  # noqa: E402
 
 CHROMIUM = Path("/usr/bin/chromium")
