@@ -3,12 +3,12 @@
 Streamlit draws a Plotly chart with Plotly's whole bundle (4.7 MB), which the browser fetches
 when the first chart arrives and then compiles and runs for 2.5-3.5 s on a two-core machine
 before the chart appears. An SVG built here arrives drawn, with the page's own text
-(:func:`draw`). It has what every chart of the project has: a
-title, axis titles with units and the clock of each period's start on x. It is one image to
-assistive technology (``role="img"``), named by its title and described in words
-(``<desc>``); each period carries its values in a tooltip (``<title>``), as Plotly's hover
-does. The data take their colour from rvpp's palette; text and axes take the page's text
-colour, so the chart follows the light and the dark theme.
+(:func:`draw`). It has what every chart of the project has: a title, axis titles with units
+and the clock of each period's start on x. It is one image to assistive technology
+(``role="img"``), named by its title and described in words (``<desc>``); each period
+carries its values in a tooltip (``<title>``), as Plotly's hover does. The data take their
+colour from rvpp's palette; text and axes take the page's text colour, so the chart follows
+the light and the dark theme.
 """
 
 from __future__ import annotations
