@@ -11,7 +11,6 @@ import datetime as dt
 
 import numpy as np
 import pandas as pd
-from scipy.interpolate import PchipInterpolator
 
 ALLOWED_DT_H = (1.0, 0.5, 0.25)
 
@@ -63,6 +62,9 @@ def hourly_to_periods(values: np.ndarray, per_hour: int, low: float | None = Non
     if n == 1:
         fine = np.repeat(values, per_hour)
     else:
+        # heavy: SciPy's interpolation takes seconds to import, and only quarter-hour cases need it
+        from scipy.interpolate import PchipInterpolator
+
         cumulative = np.concatenate([[0.0], np.cumsum(values - base)])
         spline = PchipInterpolator(np.arange(n + 1.0), cumulative)
         at = spline(np.arange(n * per_hour + 1) / per_hour)

@@ -26,7 +26,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.interpolate import PchipInterpolator
 
 from ..data.case import STRATEGY_BUDGETS_H, Case
 from ..data.kinds import KINDS, NDRES_KINDS, Role, UnitKind
@@ -189,6 +188,9 @@ def finer_series(hourly: np.ndarray, steps: int, low: float | None, high) -> np.
     shift = 0.0 if low is None else low
     energy = np.concatenate([[0.0], np.cumsum(hourly - shift)])
     if n > 1:
+        # heavy: SciPy's interpolation takes seconds to import, and only quarter-hour audits need it
+        from scipy.interpolate import PchipInterpolator
+
         curve = PchipInterpolator(np.arange(n + 1), energy)(np.linspace(0.0, n, n * steps + 1))
     else:
         curve = np.linspace(0.0, energy[-1], steps + 1)
