@@ -206,3 +206,63 @@ def test_the_state_of_charge_chart_draws_the_battery_plan():
     assert list(charge.y[:3]) == pytest.approx([9.0, 0.0, 0.0])  # charged in hour 1, emptied in hour 2
     with pytest.raises(ValueError, match="unknown battery 'X'"):
         battery_figure(result, "X")
+
+
+# ----------------------------------------------------------------------------- settlement
+
+
+def settled(case, plan, price_da):
+    """Settle ``plan`` against realized DAM prices ``price_da`` (reserve prices 0)."""
+    import pandas as pd
+
+    from rvpp.settle.recourse import Realization, evaluate, first_stage
+    values = pd.DataFrame({"price_da": price_da, "price_sr_up": 0.0, "price_sr_dn": 0.0},
+                          index=pd.RangeIndex(1, NT + 1, name="t"))
+    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values))
+    assert record["status"] == "optimal"
+    return record
+
+
+def test_the_settlement_keeps_a_unit_online_where_the_plan_committed_it():
+    # Biomass 5-10 MW at 30 EUR/MWh, price 50 all day: the plan runs 10 MW every hour and sells it.
+    # Realized, hour 12 pays 0, where a deficit costs π_def = 0 + (2 - 1) x 0 = 0. The unit stays
+    # committed, so it delivers at least 5 MW (5 x 30 = 150 EUR) and is 5 MW short, at no penalty.
+    # Revenue 23 x 50 x 10 = 11,500; opex 23 x 10 x 30 + 150 = 7,050; net cost -4,450 EUR.
+    # Re-committed (stopped in hour 12) it would settle at 6,900 - 11,500 = -4,600 EUR.
+    case = tiny_case(biomass_units=[biomass()])
+    plan = solved(case, np.full(NT, 50.0))
+    assert plan.dispatch["online"].tolist() == [1] * NT
+    record = settled(case, plan, np.where(HOURS == 12, 0.0, 50.0))
+    assert record["revenue_dam_eur"] == pytest.approx(11500.0, abs=1e-6)
+    assert record["cost_opex_eur"] == pytest.approx(7050.0, abs=1e-6)
+    assert record["deficit_mwh"] == pytest.approx(5.0, abs=1e-6)
+    assert record["penalty_eur"] == pytest.approx(0.0, abs=1e-6)
+    assert record["net_cost_eur"] == pytest.approx(-4450.0, abs=1e-6)
+
+
+def test_the_settlement_keeps_a_unit_offline_where_the_plan_left_it_off():
+    # Hydro 5-30 MW at 5 EUR/MWh; planned at 50 EUR/MWh in hours 1-12 (30 MW each) and 0 after (off:
+    # 5 MW would lose 25 EUR an hour). Realized, hour 18 pays 100: a start would sell 30 MW of surplus
+    # at π_sur = 100 - 0.5 x 100 = 50 for a gain of 30 x (50 - 5) = 1,350 EUR, but the plan has the unit
+    # off there. Net cost = 12 x 30 x 5 - 12 x 50 x 30 = 1,800 - 18,000 = -16,200 EUR (-17,550 if restarted).
+    case = tiny_case(hydro_units=[dispatchable("HY", p_min_mw=5.0, marginal_cost_eur_per_mwh=5.0)])
+    plan = solved(case, np.where(HOURS <= 12, 50.0, 0.0))
+    assert plan.dispatch["online"].tolist() == [1] * 12 + [0] * 12
+    record = settled(case, plan, np.where(HOURS == 18, 100.0, np.where(HOURS <= 12, 50.0, 0.0)))
+    assert record["surplus_mwh"] == pytest.approx(0.0, abs=1e-6)
+    assert record["cost_opex_eur"] == pytest.approx(1800.0, abs=1e-6)
+    assert record["net_cost_eur"] == pytest.approx(-16200.0, abs=1e-6)
+
+
+def test_a_commitment_for_a_unit_the_case_lacks_is_refused():
+    from rvpp.errors import SettlementError
+    from rvpp.settle.recourse import FirstStage, Realization, evaluate, nominal_realization
+    case = tiny_case(biomass_units=[biomass()])
+    plan = solved(case, np.full(NT, 50.0))
+    zero = np.zeros(NT)
+    real = nominal_realization(plan.problem)
+    for committed, words in (({"HY": np.ones(NT)}, "not a hydro or biomass unit"),
+                             ({"BIO": np.full(NT, 0.5)}, "0 or 1"), ({"BIO": np.ones(3)}, "0 or 1")):
+        with pytest.raises(SettlementError, match=words):
+            evaluate(case, FirstStage(zero, zero, zero, zero, committed=committed),
+                     Realization(day=real.day, values=real.values))
