@@ -124,6 +124,34 @@ def test_a_down_time_begun_before_the_day_carries_over():
     assert result.dispatch.set_index("t")["online"].loc[[1, 2, 3, 4, 5]].tolist() == [0, 0, 0, 1, 0]
 
 
+def test_a_minimum_up_time_keeps_a_started_unit_online_at_a_loss():
+    # Hydro 5-30 MW at 5 EUR/MWh, 3 h minimum up time, price 100 in hour 10 and 0 elsewhere. One
+    # start: 30 MW in hour 10 earns 30 x 95 = 2,850 EUR, and the two other hours of the minimum run
+    # sell 5 MW at 0 for 2 x 5 x 5 = 50 EUR of cost: 2,800 EUR, online exactly 3 hours around hour 10.
+    prices = np.where(HOURS == 10, 100.0, 0.0)
+    unit = dispatchable("HY", p_min_mw=5.0, marginal_cost_eur_per_mwh=5.0, min_up_h=3.0)
+    result = solved(tiny_case(hydro_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(2800.0, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state["online"].sum() == 3 and state.loc[10, "online"] == 1 and state["startup"].sum() == 1
+    assert state.loc[10, "p_mw"] == pytest.approx(30.0)
+
+
+def test_each_start_is_paid_once_and_whole():
+    # Hydro 5-30 MW at 5 EUR/MWh, 100 EUR a start, no minimum times; price 100 in hours 5 and 20, 0
+    # elsewhere. Two starts: 2 x (30 x 95 - 100) = 5,500 EUR; staying on from hour 5 to 20 instead
+    # costs 14 x 5 x 5 = 350 EUR at price 0 for one start saved (100): 5,250. So two whole starts and
+    # two whole stops.
+    prices = np.where((HOURS == 5) | (HOURS == 20), 100.0, 0.0)
+    unit = dispatchable("HY", p_min_mw=5.0, marginal_cost_eur_per_mwh=5.0, startup_cost_eur=100.0)
+    result = solved(tiny_case(hydro_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(5500.0, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state["online"].tolist() == [1 if t in (5, 20) else 0 for t in HOURS]
+    assert state["startup"].tolist() == state["online"].tolist()
+    assert state["shutdown"].tolist() == [1 if t in (6, 21) else 0 for t in HOURS]
+
+
 def test_ramps_limit_a_start_and_the_rise_after_it():
     # 0-30 MW, start-up ramp 10 MW/h, ramp up 10 MW/h, price 50 in hours 1-3 and 0 after, cost 5:
     # from offline the unit reaches 10, 20, 30 MW: profit 45 x (10 + 20 + 30) = 2,700 EUR.
