@@ -124,6 +124,34 @@ def test_a_down_time_begun_before_the_day_carries_over():
     assert result.dispatch.set_index("t")["online"].loc[[1, 2, 3, 4, 5]].tolist() == [0, 0, 0, 1, 0]
 
 
+def test_a_minimum_up_time_keeps_a_started_unit_online_at_a_loss():
+    # Hydro 5-30 MW at 5 EUR/MWh, 3 h minimum up time, price 100 in hour 10 and 0 elsewhere. One
+    # start: 30 MW in hour 10 earns 30 x 95 = 2,850 EUR, and the two other hours of the minimum run
+    # sell 5 MW at 0 for 2 x 5 x 5 = 50 EUR of cost: 2,800 EUR, online exactly 3 hours around hour 10.
+    prices = np.where(HOURS == 10, 100.0, 0.0)
+    unit = dispatchable("HY", p_min_mw=5.0, marginal_cost_eur_per_mwh=5.0, min_up_h=3.0)
+    result = solved(tiny_case(hydro_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(2800.0, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state["online"].sum() == 3 and state.loc[10, "online"] == 1 and state["startup"].sum() == 1
+    assert state.loc[10, "p_mw"] == pytest.approx(30.0)
+
+
+def test_each_start_is_paid_once_and_whole():
+    # Hydro 5-30 MW at 5 EUR/MWh, 100 EUR a start, no minimum times; price 100 in hours 5 and 20, 0
+    # elsewhere. Two starts: 2 x (30 x 95 - 100) = 5,500 EUR; staying on from hour 5 to 20 instead
+    # costs 14 x 5 x 5 = 350 EUR at price 0 for one start saved (100): 5,250. So two whole starts and
+    # two whole stops.
+    prices = np.where((HOURS == 5) | (HOURS == 20), 100.0, 0.0)
+    unit = dispatchable("HY", p_min_mw=5.0, marginal_cost_eur_per_mwh=5.0, startup_cost_eur=100.0)
+    result = solved(tiny_case(hydro_units=[unit]), prices)
+    assert result.objective_eur == pytest.approx(5500.0, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state["online"].tolist() == [1 if t in (5, 20) else 0 for t in HOURS]
+    assert state["startup"].tolist() == state["online"].tolist()
+    assert state["shutdown"].tolist() == [1 if t in (6, 21) else 0 for t in HOURS]
+
+
 def test_ramps_limit_a_start_and_the_rise_after_it():
     # 0-30 MW, start-up ramp 10 MW/h, ramp up 10 MW/h, price 50 in hours 1-3 and 0 after, cost 5:
     # from offline the unit reaches 10, 20, 30 MW: profit 45 x (10 + 20 + 30) = 2,700 EUR.
@@ -206,3 +234,63 @@ def test_the_state_of_charge_chart_draws_the_battery_plan():
     assert list(charge.y[:3]) == pytest.approx([9.0, 0.0, 0.0])  # charged in hour 1, emptied in hour 2
     with pytest.raises(ValueError, match="unknown battery 'X'"):
         battery_figure(result, "X")
+
+
+# ----------------------------------------------------------------------------- settlement
+
+
+def settled(case, plan, price_da):
+    """Settle ``plan`` against realized DAM prices ``price_da`` (reserve prices 0)."""
+    import pandas as pd
+
+    from rvpp.settle.recourse import Realization, evaluate, first_stage
+    values = pd.DataFrame({"price_da": price_da, "price_sr_up": 0.0, "price_sr_dn": 0.0},
+                          index=pd.RangeIndex(1, NT + 1, name="t"))
+    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values))
+    assert record["status"] == "optimal"
+    return record
+
+
+def test_the_settlement_keeps_a_unit_online_where_the_plan_committed_it():
+    # Biomass 5-10 MW at 30 EUR/MWh, price 50 all day: the plan runs 10 MW every hour and sells it.
+    # Realized, hour 12 pays 0, where a deficit costs π_def = 0 + (2 - 1) x 0 = 0. The unit stays
+    # committed, so it delivers at least 5 MW (5 x 30 = 150 EUR) and is 5 MW short, at no penalty.
+    # Revenue 23 x 50 x 10 = 11,500; opex 23 x 10 x 30 + 150 = 7,050; net cost -4,450 EUR.
+    # Re-committed (stopped in hour 12) it would settle at 6,900 - 11,500 = -4,600 EUR.
+    case = tiny_case(biomass_units=[biomass()])
+    plan = solved(case, np.full(NT, 50.0))
+    assert plan.dispatch["online"].tolist() == [1] * NT
+    record = settled(case, plan, np.where(HOURS == 12, 0.0, 50.0))
+    assert record["revenue_dam_eur"] == pytest.approx(11500.0, abs=1e-6)
+    assert record["cost_opex_eur"] == pytest.approx(7050.0, abs=1e-6)
+    assert record["deficit_mwh"] == pytest.approx(5.0, abs=1e-6)
+    assert record["penalty_eur"] == pytest.approx(0.0, abs=1e-6)
+    assert record["net_cost_eur"] == pytest.approx(-4450.0, abs=1e-6)
+
+
+def test_the_settlement_keeps_a_unit_offline_where_the_plan_left_it_off():
+    # Hydro 5-30 MW at 5 EUR/MWh; planned at 50 EUR/MWh in hours 1-12 (30 MW each) and 0 after (off:
+    # 5 MW would lose 25 EUR an hour). Realized, hour 18 pays 100: a start would sell 30 MW of surplus
+    # at π_sur = 100 - 0.5 x 100 = 50 for a gain of 30 x (50 - 5) = 1,350 EUR, but the plan has the unit
+    # off there. Net cost = 12 x 30 x 5 - 12 x 50 x 30 = 1,800 - 18,000 = -16,200 EUR (-17,550 if restarted).
+    case = tiny_case(hydro_units=[dispatchable("HY", p_min_mw=5.0, marginal_cost_eur_per_mwh=5.0)])
+    plan = solved(case, np.where(HOURS <= 12, 50.0, 0.0))
+    assert plan.dispatch["online"].tolist() == [1] * 12 + [0] * 12
+    record = settled(case, plan, np.where(HOURS == 18, 100.0, np.where(HOURS <= 12, 50.0, 0.0)))
+    assert record["surplus_mwh"] == pytest.approx(0.0, abs=1e-6)
+    assert record["cost_opex_eur"] == pytest.approx(1800.0, abs=1e-6)
+    assert record["net_cost_eur"] == pytest.approx(-16200.0, abs=1e-6)
+
+
+def test_a_commitment_for_a_unit_the_case_lacks_is_refused():
+    from rvpp.errors import SettlementError
+    from rvpp.settle.recourse import FirstStage, Realization, evaluate, nominal_realization
+    case = tiny_case(biomass_units=[biomass()])
+    plan = solved(case, np.full(NT, 50.0))
+    zero = np.zeros(NT)
+    real = nominal_realization(plan.problem)
+    for committed, words in (({"HY": np.ones(NT)}, "not a hydro or biomass unit"),
+                             ({"BIO": np.full(NT, 0.5)}, "0 or 1"), ({"BIO": np.ones(3)}, "0 or 1")):
+        with pytest.raises(SettlementError, match=words):
+            evaluate(case, FirstStage(zero, zero, zero, zero, committed=committed),
+                     Realization(day=real.day, values=real.values))

@@ -30,7 +30,7 @@ from ..data.kinds import KINDS, Carrier, Role
 from ..errors import RvppError
 from ..model.session import Commitments
 from ..settle.audit import audit_session
-from ..settle.recourse import FirstStage, Penalties, Realization
+from ..settle.recourse import FirstStage, Penalties, Realization, unit_commitment
 from ..solving.intraday import solve_session
 from ..solving.results import Result
 from ..uncertainty.intraday import realized_price, session_problem
@@ -40,11 +40,13 @@ from ..uncertainty.problem import Problem
 def trade_sessions(case: Case, plan: Result, bids: FirstStage, real: Realization, penalties: Penalties,
                    audit: bool = True) -> tuple[FirstStage, list[dict[str, Any]]]:
     """Run every intraday session of ``case`` after the day-ahead ``plan``; the bids with the
-    trades attached and one record per session (keys of docs/intraday.md)."""
+    trades attached (and the hydro and biomass commitment of the last session with a plan, which
+    may re-commit them in its window) and one record per session (keys of docs/intraday.md)."""
     day_ahead = plan.problem
     nt, dt_h = day_ahead.nt, case.dt_h
     times = session_times(case.intraday, case.delivery_date, day_ahead.periods, case.timezone, dt_h)
     previous, schedule, units = day_ahead, plan.schedule, plan.units
+    committed = bids.committed
     traded, short = np.zeros(nt), np.zeros(nt)
     trades: list[tuple[np.ndarray, np.ndarray]] = []
     records = []
@@ -87,10 +89,11 @@ def trade_sessions(case: Case, plan: Result, bids: FirstStage, real: Realization
             record.update(audit_violations=len(violations), audit_first=str(violations[0]) if violations else "")
         if result.has_plan:
             previous, schedule, units = problem, result.schedule, result.units
+            committed = unit_commitment(result.dispatch)
             short = result.market["heat_short_mw"].to_numpy(float)
         record["wall_s"] = time.perf_counter() - started
         records.append(record)
-    return replace(bids, intraday=tuple(trades)), records
+    return replace(bids, intraday=tuple(trades), committed=committed), records
 
 
 def forecast_change(case: Case, problem: Problem, previous: Problem, first: int) -> dict[str, list[float]]:

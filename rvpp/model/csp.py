@@ -153,7 +153,7 @@ def add_csp_commitment(m: pyo.ConcreteModel, csp: CSP, problem: Problem) -> None
 
 
 def add_commitment(m: pyo.ConcreteModel, b: pyo.Block, min_up_h: float, min_down_h: float, initially_on: bool,
-                   initial_periods: tuple[int, int], problem: Problem) -> None:
+                   initial_periods: tuple[int, int], problem: Problem, continuous_transitions: bool = False) -> None:
     """Binaries ``online``, ``startup``, ``shutdown`` on block ``b`` with minimum up and down times
     (Appendix A, STU10-STU17; also the hydro and biomass units of MODEL_SPEC §13).
 
@@ -162,20 +162,31 @@ def add_commitment(m: pyo.ConcreteModel, b: pyo.Block, min_up_h: float, min_down
     ``Σ_{τ=t−DT+1..t} v_sd[τ] ≤ 1 − u[t]``. ``u[0]`` is the initial status. A minimum
     time begun before the day carries over (STU12, STU15): ``u[t] = u[0]`` for the first
     ``initial_periods = (N_on, N_off)`` periods that complete it.
+
+    ``continuous_transitions``: ``v_su, v_sd ∈ [0, 1]`` continuous, with windows of at least one
+    period (``UT, DT ≥ 1``, the same limit) and without ``v_su + v_sd ≤ 1``. Both are whole
+    wherever ``u`` is: with ``u[t] = u[t−1]`` the windows give ``v_su[t] ≤ u[t]`` and
+    ``v_sd[t] ≤ 1 − u[t]``, one of them 0, so the transition row makes both 0; with
+    ``u[t] ≠ u[t−1]`` the transition row and the bounds leave ``v_su = 1, v_sd = 0`` for a
+    start and the reverse for a stop. The optimum is that of the binary form, with fewer binaries to search.
     """
     up_periods = problem.periods_for_hours(min_up_h)
     down_periods = problem.periods_for_hours(min_down_h)
+    if continuous_transitions:
+        up_periods, down_periods = max(1, up_periods), max(1, down_periods)
     initial = 1.0 if initially_on else 0.0
     b.online = pyo.Var(m.T, domain=pyo.Binary)
-    b.startup = pyo.Var(m.T, domain=pyo.Binary)
-    b.shutdown = pyo.Var(m.T, domain=pyo.Binary)
+    transition = pyo.UnitInterval if continuous_transitions else pyo.Binary
+    b.startup = pyo.Var(m.T, domain=transition)
+    b.shutdown = pyo.Var(m.T, domain=transition)
 
     def previous(b, t):
         return initial if t == m.T.first() else b.online[m.T.prev(t)]
 
     b.transition = pyo.Constraint(m.T, rule=lambda b, t: (
         b.online[t] - previous(b, t) == b.startup[t] - b.shutdown[t]))
-    b.one_transition = pyo.Constraint(m.T, rule=lambda b, t: b.startup[t] + b.shutdown[t] <= 1)
+    if not continuous_transitions:
+        b.one_transition = pyo.Constraint(m.T, rule=lambda b, t: b.startup[t] + b.shutdown[t] <= 1)
     b.min_up = pyo.Constraint(m.T, rule=lambda b, t: (
         sum(b.startup[k] for k in _window(m, t, up_periods)) <= b.online[t]))
     b.min_down = pyo.Constraint(m.T, rule=lambda b, t: (

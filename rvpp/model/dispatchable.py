@@ -1,8 +1,9 @@
 """Dispatchable renewable units: hydro and biomass plants (MODEL_SPEC §13).
 
 One block per unit on the shared periods, with commitment as the CSP turbine's (§8):
-binaries ``online``, ``startup``, ``shutdown``, minimum up and down times carried over
-from the day before. Power in [MW], energy in [MWh], costs in [EUR].
+binary ``online``, ``startup`` and ``shutdown`` (continuous, whole wherever ``online`` is:
+:func:`~rvpp.model.csp.add_commitment`), minimum up and down times carried over from the
+day before. Power in [MW], energy in [MWh], costs in [EUR].
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ def add_dispatchable(m: pyo.ConcreteModel, unit: DispatchableUnit, problem: Prob
     b = getattr(m, "dispatchable")[unit.name]
     dt = problem.dt_h
     cap = reserve_cap(problem, unit.ramp_mw_per_min, unit.reserve_share * unit.p_max_mw)
-    add_commitment(m, b, unit.min_up_h, unit.min_down_h, unit.initial_online, unit.initial_periods(dt), problem)
+    add_commitment(m, b, unit.min_up_h, unit.min_down_h, unit.initial_online, unit.initial_periods(dt), problem,
+                   continuous_transitions=True)
     b.p = pyo.Var(m.T, bounds=(0.0, unit.p_max_mw))
     b.r_up = pyo.Var(m.T, bounds=(0.0, cap))
     b.r_dn = pyo.Var(m.T, bounds=(0.0, cap))

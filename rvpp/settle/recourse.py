@@ -39,7 +39,7 @@ import pandas as pd
 import pyomo.environ as pyo
 
 from ..data.case import Case
-from ..data.kinds import KINDS, UnitKind
+from ..data.kinds import DISPATCHABLE_KINDS, KINDS, UnitKind
 from ..errors import RvppError, SettlementError
 from ..data.history import MAX_QUANTITY, PRICE_COLUMNS
 from ..model import add_units
@@ -133,7 +133,9 @@ class Penalties:
 
 @dataclass(frozen=True, eq=False)
 class FirstStage:
-    """Market bids per period [MW], [MW_th]; optionally the CSP commitment to keep fixed and the
+    """Market bids per period [MW], [MW_th]; optionally the CSP commitment to keep fixed
+    (``online``), the commitment of the hydro and biomass units decided with the bids
+    (``committed``, 1 online / 0 offline per period, kept exactly: :func:`keep_commitment`) and the
     intraday trades: one ``(q_k, λ_k)`` pair per session, the trade [MW] (+ sell, − buy) and the
     realized intraday price it settles at [EUR/MWh] (MODEL_SPEC §14)."""
 
@@ -143,6 +145,7 @@ class FirstStage:
     h_hpa: np.ndarray
     online: dict[str, np.ndarray] = field(default_factory=dict)
     intraday: tuple[tuple[np.ndarray, np.ndarray], ...] = ()
+    committed: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def nt(self) -> int:
@@ -165,15 +168,26 @@ class FirstStage:
 
 
 def first_stage(result, fix_commitment: bool = False) -> FirstStage:
-    """The bids of a solved plan (``fix_commitment``: also its CSP turbine schedule, see
-    :func:`fix_commitment`)."""
+    """The bids of a solved plan with the commitment of its hydro and biomass units
+    (:func:`unit_commitment`); ``fix_commitment``: also its CSP turbine schedule, see
+    :func:`fix_commitment`."""
     if not result.has_plan:
         raise RvppError(f"the plan has no solution to evaluate ({result.status}: {result.message})")
     market = result.market
     online = {}
     if fix_commitment and not result.csp.empty:
         online = {name: part["online"].to_numpy(float) for name, part in result.csp.groupby("unit")}
-    return FirstStage(*(market[f"{name}_mw"].to_numpy(float) for name in FIRST_STAGE), online=online)
+    return FirstStage(*(market[f"{name}_mw"].to_numpy(float) for name in FIRST_STAGE), online=online,
+                      committed=unit_commitment(result.dispatch))
+
+
+def unit_commitment(dispatch: pd.DataFrame) -> dict[str, np.ndarray]:
+    """The status (1 online, 0 offline) per period of every hydro and biomass unit of a plan's
+    ``dispatch`` table (:attr:`rvpp.Result.dispatch`), by unit name."""
+    if dispatch is None or dispatch.empty:
+        return {}
+    rows = dispatch[[UnitKind(kind) in DISPATCHABLE_KINDS for kind in dispatch["kind"]]]
+    return {name: part.sort_values("t")["online"].to_numpy(float) for name, part in rows.groupby("unit")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -325,6 +339,7 @@ def add_scenario(m: pyo.ConcreteModel, b: pyo.Block, problem: Problem, penalties
     allow_trip(b, problem.case)
     if bids is not None:
         fix_commitment(b, bids)
+        keep_commitment(b, bids)
     add_slacks(m, b)
     add_recourse_electric_balance(m, b, problem)
     add_recourse_heat_balance(m, b, problem)
@@ -342,6 +357,26 @@ def fix_commitment(b: pyo.Block, bids: FirstStage) -> None:
         for t in b.T:
             if round(float(online[t - 1])) == 0:
                 b.csp[name].online[t].fix(0)
+
+
+def keep_commitment(b: pyo.Block, bids: FirstStage) -> None:
+    """Keep the plan's hydro and biomass commitment: ``u[t] = u_plan[t]`` (MODEL_SPEC §13).
+
+    The units start and stop as decided the day before, with the bids; only their output and
+    reserve are re-dispatched. Neither kind depends on the weather and the settlement has the
+    plan's physics and initial state, so the plan's own dispatch always fits the schedule.
+    """
+    units = b.dispatchable
+    for name, online in bids.committed.items():
+        if name not in units:
+            raise SettlementError(f"the plan commits unit {name!r}, which is not a hydro or biomass unit of the "
+                                  "case being settled; settle a plan with the case it was made for")
+        status = np.asarray(online, dtype=float)
+        if status.shape != (len(b.T),) or not np.isin(status, (0.0, 1.0)).all():
+            raise SettlementError(f"the commitment of {name!r} must hold one status, 0 or 1, for each of the "
+                                  f"day's {len(b.T)} periods")
+        for t in b.T:
+            units[name].online[t].fix(int(status[t - 1]))
 
 
 def allow_trip(b: pyo.Block, case: Case) -> None:
