@@ -16,6 +16,7 @@ import pytest
 
 from rvpp import load_case, solve, with_options
 from rvpp.cli import main
+from rvpp.data import synth
 from rvpp.data.build_case import BuildOptions, build_case
 from rvpp.errors import DataImportError, RvppError
 from rvpp.settle.audit import audit_result
@@ -200,6 +201,50 @@ def test_a_gap_in_the_system_load_leaves_the_demands_modelled_unless_filled(tmp_
     assert case.provenance_map["ED_industry"].origin == "real-derived"
     assert "interpolated" in case.provenance_map["ED_industry"].note
     assert np.allclose(case.history.frame["ED_industry"], 1.05 * 600 / 24)  # a flat load: the level itself
+
+
+def test_the_modelled_sky_and_demands_replace_those_columns_only(tmp_path):
+    source = write_table(tmp_path / "series.csv")
+    frame = pd.read_csv(source)
+    frame["load_actual"] = 30000.0
+    frame["load_forecast"] = 30300.0
+    frame.to_csv(source, index=False)
+    build_case([source], tmp_path / "real", template=PAPER)
+    build_case([source], tmp_path / "modelled", template=PAPER, options=BuildOptions(sky="modelled",
+                                                                                     demands="modelled"))
+    real, modelled = load_case(tmp_path / "real"), load_case(tmp_path / "modelled")
+    ours, theirs = modelled.history.frame, real.history.frame
+    made = synth.build_history(start="2021-05-01", end="2021-06-15")  # the paper's seed and field of 300 MW_th
+    columns = ["CSP1", "ED_industry", "ED_service", "ED_residential"]
+    assert np.allclose(ours[columns].to_numpy(), made[columns].to_numpy(), atol=1e-5)  # 6 digits in the file
+    assert not np.allclose(theirs["ED_industry"], ours["ED_industry"])  # the real ones differ: a flat load
+    assert {"CSP1_fc", "ED_industry_fc"} <= set(theirs.columns)
+    assert not {"CSP1_fc", "ED_industry_fc", "ED_service_fc", "ED_residential_fc"} & set(ours.columns)
+    kept = [c for c in theirs.columns if c in ours.columns and c not in columns]
+    assert {"price_da", "WF1", "WF1_fc", "PV1", "PV1_fc", "price_sr_up", "price_sr_dn", "TD_industry"} <= set(kept)
+    assert np.array_equal(ours[kept].to_numpy(), theirs[kept].to_numpy())
+    origins = modelled.provenance_map
+    assert all(origins[c].origin == "modelled" for c in columns) and origins["WF1"].origin == "real-derived"
+    assert modelled.csp[0].solar_field.forecast_series is None and modelled.ed[0].forecast_series is None
+    assert modelled.uncertainty.band_method("CSP1", "csp") == modelled.uncertainty.band_method(
+        "ED_industry", "ed") == "climatology"
+    assert real.uncertainty.band_method("CSP1", "csp") == "forecast"
+    assert "clear-sky index" not in modelled.description and "system load" not in modelled.description
+    for name, value in (("sky", "cloudy"), ("demands", "Modelled")):
+        with pytest.raises(RvppError, match=f"--{name} '{value}' must be real .* or modelled"):
+            BuildOptions(**{name: value})
+
+
+def test_command_line_builds_the_modelled_sky(tmp_path, capsys):
+    source = write_table(tmp_path / "series.csv")
+    code = main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "case"), "--sky", "modelled"])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    assert "CSP1: modelled" in printed.out and "CSP1_fc" not in printed.out
+    assert main(["data", "build-case", "--from", str(source), "--out", str(tmp_path / "other"), "--sky",
+                 "cloudy"]) == 1
+    assert "error: --sky: invalid choice: 'cloudy'" in capsys.readouterr().err
+    assert not (tmp_path / "other").exists()
 
 
 def test_gaps_are_refused_or_interpolated_on_request(tmp_path):

@@ -90,6 +90,12 @@ def add_data_commands(commands) -> None:
     build.add_argument("--bands", choices=("forecast", "climatology"), default="forecast",
                        help="forecast (default): wind, PV and DAM price on forecast-error bands; climatology: "
                             "every source on the paper's bands")
+    build.add_argument("--sky", choices=("real", "modelled"), default="real",
+                       help="the CSP's solar-field heat from the real sky (default: the solar series' clear-sky "
+                            "index) or the modelled one (synthetic DNI, climatology bands)")
+    build.add_argument("--demands", choices=("real", "modelled"), default="real",
+                       help="electrical demands from the system load (default, when the files give it) or the "
+                            "synthetic series")
     build.add_argument("--seed", type=Number(0, whole=True), help="seed of the synthetic series >= 0 "
                        "(default: the published one)")
     build.add_argument("--force", action="store_true",
@@ -200,7 +206,7 @@ def _run_build_case(args: argparse.Namespace) -> int:
     options = BuildOptions(errors_scale=args.errors_scale, start=args.start, end=args.end, date=args.date,
                            zone=args.zone, wind_capacity_mw=args.wind_capacity,
                            solar_capacity_mw=args.solar_capacity, seed=args.seed, fill_gaps_h=args.fill_gaps,
-                           bands=args.bands, **_weather_options(args))
+                           bands=args.bands, sky=args.sky, demands=args.demands, **_weather_options(args))
     built = build_case(args.sources, args.out, template=args.template, options=options, overwrite=args.force,
                        progress=lambda m: print(f"  {m}", file=sys.stderr))
     print("\n".join(built.lines()))

@@ -41,6 +41,12 @@ load), CSP (without a
 solar fleet)
 ========================  =====================================================================
 
+``sky="modelled"`` and ``demands="modelled"`` (``--sky modelled``, ``--demands modelled``)
+set the real sky and the system load aside: the CSP's field heat then comes from the
+modelled DNI (no forecast column, climatology bands) and the electrical demands from the
+synthetic series, labelled modelled, as when the files do not give them. They build the
+counterpart of a real case that differs from it in those columns only, for comparison.
+
 The case's ``provenance`` section records, per column, whether it is real (as published),
 real-derived (made from a public record by a stated model) or modelled (generated),
 from which files (with their fingerprints) and how it was made. The data files themselves
@@ -88,6 +94,7 @@ HEAT_BASE_SHARE = 0.5  # [-]
 TEMPERATURE = ("temperature", "temperature_forecast")  # the weather series [°C]
 PRICE_LAG_DAYS = 7  # naive price forecasts look back up to a week before the window
 HISTORY_FILE = "history.csv"
+ORIGINS = ("real", "modelled")  # where --sky and --demands take the field heat and the demands from
 WRITTEN = (HISTORY_FILE, CASE_FILE)  # the files a build writes into its folder, in this order
 
 
@@ -110,8 +117,14 @@ class BuildOptions:
     weather_timezone: str | None = None
     heating_base_c: float = HEATING_BASE_C
     heat_base_share: float = HEAT_BASE_SHARE
+    sky: str = "real"
+    demands: str = "real"
 
     def __post_init__(self) -> None:
+        for name in ("sky", "demands"):
+            if getattr(self, name) not in ORIGINS:
+                raise RvppError(f"--{name} {getattr(self, name)!r} must be real (from the files) or modelled "
+                                "(the synthetic series)")
         if not (math.isfinite(self.errors_scale) and self.errors_scale >= 0):
             raise RvppError(f"--errors-scale K={self.errors_scale:g} must be a finite number >= 0")
         for name in ("wind_capacity_mw", "solar_capacity_mw"):
@@ -177,7 +190,8 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
              if u.name + FORECAST_SUFFIX in base.unit_names()]
     if taken:
         raise RvppError(f"the template has a unit named {taken[0]!r}, the name of a forecast column; rename it")
-    load = tuple(c for c in LOAD if c in table.frame.columns) if base.ed and LOAD[0] in table.frame.columns else ()
+    load = tuple(c for c in LOAD if c in table.frame.columns) \
+        if base.ed and LOAD[0] in table.frame.columns and options.demands == "real" else ()
     needed = ["price_da"] + [c for pair in fleets.values() for c in pair if c]
     frame, first, last = _span(table.frame[needed], base.timezone, options)
     notes = list(table.notes)
@@ -246,11 +260,12 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
         if getattr(base, kind) and kind not in fleets:
             notes.append(f"{kind}: the files give no {FLEETS[kind][0]}; {kind} units are synthetic")
     say("generating the synthetic series")
+    field_from_sky = "pv" in fleets and options.sky == "real"
     synthetic, sources_text = _synthetic(base, frame.index, first, last, columns, fleets, capacities, frame, seed,
-                                         heat_from_weather=bool(temperature))
+                                         heat_from_weather=bool(temperature), field_from_sky=field_from_sky)
     columns.update(synthetic)
     provenance.update(sources_text)
-    if "pv" in fleets:
+    if field_from_sky:
         field, field_text = _field_heat(base, frame, fleets["pv"], capacities["pv"], options, table, made)
         columns.update(field)
         provenance.update(field_text)
@@ -270,7 +285,7 @@ def build_case(sources: list[str | Path], out: str | Path, *, template: str | Pa
     provenance.update(heat_text)
     history = History(pd.DataFrame({"timestamp": frame.index, **columns}), source=HISTORY_FILE)
     case = _case(base, out.name or "real", history, delivery, provenance, options, fleets, first, last, bool(load),
-                 bool(temperature))
+                 bool(temperature), field_from_sky)
     _write(case, out, overwrite)
     say(f"wrote {out}")
     reports = tuple(i.report for i in imports) + ((weather_report,) if weather_report else ())
@@ -676,9 +691,9 @@ def _real(column: str, reports: tuple[ImportReport, ...], how: str, origin: str 
 
 def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.date, real: dict[str, np.ndarray],
                fleets: dict, capacities: dict[str, float], frame: pd.DataFrame, seed: int,
-               heat_from_weather: bool = False):
-    """Reserve prices, demands (and wind, PV or, without a solar fleet, CSP solar-field heat the
-    data does not give) from :mod:`rvpp.data.synth` on the same hours."""
+               heat_from_weather: bool = False, field_from_sky: bool = False):
+    """Reserve prices, demands (and wind, PV or, unless ``field_from_sky``, CSP solar-field heat
+    the data does not give) from :mod:`rvpp.data.synth` on the same hours."""
     made = synth.build_history(seed, start=first.isoformat(), end=(last + dt.timedelta(days=1)).isoformat())
     stamps = pd.DatetimeIndex(made["timestamp"]).tz_convert("UTC")
     if not stamps.equals(index):
@@ -704,7 +719,7 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
     provenance["price_sr_dn"] = {"origin": "modelled", "source": label,
                                  "note": f"aFRR down band price model driven by the real day-ahead price and "
                                          f"{solar_text}"}
-    for unit in case.csp if "pv" not in fleets else ():
+    for unit in case.csp if not field_from_sky else ():
         scale = unit.solar_field.p_max_mw_th / SYNTHETIC_CSP_FIELD_MW_TH
         columns[unit.name] = made["CSP1"].to_numpy(float) * scale
         provenance[unit.name] = {"origin": "modelled", "source": label,
@@ -726,7 +741,8 @@ def _synthetic(case: Case, index: pd.DatetimeIndex, first: dt.date, last: dt.dat
 
 
 def _case(base: Case, name: str, history: History, delivery: dt.date, provenance: dict, options: BuildOptions,
-          fleets: dict, first: dt.date, last: dt.date, load: bool = False, heat: bool = False) -> Case:
+          fleets: dict, first: dt.date, last: dt.date, load: bool = False, heat: bool = False,
+          field_from_sky: bool = False) -> Case:
     data = base.to_data()
     data["name"] = name
     real = " and ".join({"wind": "wind", "pv": "PV"}[k] for k in fleets)
@@ -734,7 +750,7 @@ def _case(base: Case, name: str, history: History, delivery: dt.date, provenance
         f"Built from downloaded data ({first} to {last}): real day-ahead prices"
         + (f", {real} from the fleet's capacity factor (forecast errors scaled by {options.errors_scale:g})"
            if fleets else "")
-        + (", solar-field heat from the solar fleet's clear-sky index" if "pv" in fleets and data["units"]["csp"]
+        + (", solar-field heat from the solar fleet's clear-sky index" if field_from_sky and data["units"]["csp"]
            else "")
         + (", electrical demands from the system load" if load and data["units"]["ed"] else "")
         + (", thermal demands from the temperature (heating degree-hours)" if heat and data["units"]["td"] else "")
@@ -744,7 +760,7 @@ def _case(base: Case, name: str, history: History, delivery: dt.date, provenance
         for unit in data["units"][kind]:
             unit.update(series=None, series_scale=1.0,
                         forecast_series=unit["name"] + FORECAST_SUFFIX if forecast else None)
-    field_forecast = "pv" in fleets and fleets["pv"][1] is not None
+    field_forecast = field_from_sky and fleets["pv"][1] is not None
     for unit in data["units"]["csp"]:
         unit["solar_field"].update(series=None, series_scale=1.0,
                                    forecast_series=unit["name"] + FORECAST_SUFFIX if field_forecast else None)
