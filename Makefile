@@ -58,19 +58,37 @@ bench: install
 bench-studies: install
 	$(BIN)/python benchmarks/studies.py
 
-# The paper's studies, then the rolling backtest and recommended Γ: on a case built from the real
-# Spanish files when they are present (RVPP_SPAIN_DATA, or shared/data/spain beside the project;
-# trained on January-February 2018, tested on March 2018), else on the synthetic case (April/May
-# 2025). RVPP_BACKTEST_CASE=<case folder> chooses the case instead.
+# The paper's studies, then the rolling backtest and recommended Γ. With the real Spanish files
+# (RVPP_SPAIN_DATA, or shared/data/spain beside the project) the backtest runs on cases built from
+# them. REAL_SPAN=year (the default) builds 2017-2018 twice, on the real sky and on the modelled one
+# (--sky modelled --demands modelled), backtests every day of 2018 on both and recommends Γ on
+# January-June, tested on July-December: hours of CPU, resumed where it stopped when run again.
+# REAL_SPAN=quarter, the short version, builds November 2017-March 2018 on the real sky only, trains
+# on January-February and tests on March 2018. Without the files: the synthetic case (April/May
+# 2025). RVPP_BACKTEST_CASE=<case folder> chooses the case instead. WORKERS=N caps the processes.
 SPAIN_DATA ?= $(if $(RVPP_SPAIN_DATA),$(RVPP_SPAIN_DATA),../shared/data/spain)
+REAL_SPAN ?= year
+SPAIN_FILE = $(SPAIN_DATA)/entsoe_spain_2015_2018.csv
+BUILD_SPAIN = $(BIN)/python -m rvpp data build-case --from "$(SPAIN_FILE)" --fill-gaps 3 --force
 reproduce: install
-	@case_dir="$$RVPP_BACKTEST_CASE"; \
-	if [ -z "$$case_dir" ] && [ -f "$(SPAIN_DATA)/entsoe_spain_2015_2018.csv" ]; then \
-		case_dir=out/spain-2018; \
-		$(BIN)/python -m rvpp data build-case --from "$(SPAIN_DATA)/entsoe_spain_2015_2018.csv" \
-			--out "$$case_dir" --start 2017-11-01 --end 2018-03-31 --force || exit 1; \
+	@case_dir="$$RVPP_BACKTEST_CASE"; modelled=""; periods=""; \
+	if [ -z "$$case_dir" ] && [ -f "$(SPAIN_FILE)" ]; then \
+		if [ "$(REAL_SPAN)" = year ]; then \
+			case_dir=out/spain-2017-2018; modelled=out/spain-2017-2018-modelled-sky; \
+			periods="--backtest-train 2018-01-01:2018-06-30 --backtest-test 2018-07-01:2018-12-31"; \
+			$(BUILD_SPAIN) --out "$$case_dir" --start 2017-01-01 --end 2018-12-31 || exit 1; \
+			$(BUILD_SPAIN) --out "$$modelled" --start 2017-01-01 --end 2018-12-31 \
+				--sky modelled --demands modelled || exit 1; \
+		elif [ "$(REAL_SPAN)" = quarter ]; then \
+			case_dir=out/spain-2018; \
+			$(BUILD_SPAIN) --out "$$case_dir" --start 2017-11-01 --end 2018-03-31 || exit 1; \
+		else \
+			echo "REAL_SPAN=$(REAL_SPAN): choose year (2018 on both skies) or quarter (January-March 2018)" >&2; \
+			exit 1; \
+		fi; \
 	fi; \
-	RVPP_BACKTEST_CASE="$$case_dir" $(BIN)/python -m rvpp study reproduce --out out/reproduce
+	RVPP_BACKTEST_CASE="$$case_dir" RVPP_BACKTEST_MODELLED_CASE="$$modelled" $(BIN)/python -m rvpp study reproduce \
+		--out out/reproduce $$periods $(if $(WORKERS),--workers $(WORKERS))
 
 data: install
 	$(BIN)/python -m rvpp data build

@@ -31,7 +31,8 @@ REPORT_TABLES = {  # the tables shown in report.md; every table is in tables/ an
     "out_of_sample": ("table13_out_of_sample",),
     "stochastic": ("table14_stochastic",),
     "stress": ("stress",),
-    "backtest": ("backtest_aggregates", "backtest_comparison", "backtest_curve"),
+    "backtest": ("backtest_verdicts", "backtest_penalty_causes", "backtest_aggregates", "backtest_comparison",
+                 "backtest_curve", "backtest_comparison_modelled_sky", "backtest_curve_modelled_sky"),
 }
 REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
     "strategies": ["strategy", "variant", "status", "cost_keur", "sold_mwh", "bought_mwh", "heat_bought_mwh",
@@ -47,9 +48,19 @@ REPORT_COLUMNS = {  # keep report.md readable: the CSVs hold every column
     "backtest_aggregates": ["period", "label", "days_settled", "mean_market_cost_eur", "mean_penalty_eur",
                             "mean_net_cost_eur", "median_net_cost_eur", "cvar95_net_cost_eur", "penalty_share",
                             "mean_regret_eur", "audit_violations"],
+    "backtest_penalty_causes": ["case", "label", "days_settled", "mean_market_cost_eur", "mean_penalty_eur",
+                                "mean_penalty_deficit_eur", "mean_penalty_surplus_eur", "mean_penalty_reserve_eur",
+                                "mean_penalty_heat_eur", "mean_net_cost_eur", "cvar95_net_cost_eur",
+                                "mean_regret_eur"],
     "backtest_comparison": ["variant", "train_mean_net_cost_eur", "train_cvar95_net_cost_eur",
                             "test_mean_market_cost_eur", "test_mean_penalty_eur", "test_mean_net_cost_eur",
                             "test_cvar95_net_cost_eur", "test_mean_regret_eur"],
+    "backtest_comparison_modelled_sky": ["variant", "train_mean_net_cost_eur", "train_cvar95_net_cost_eur",
+                                         "test_mean_market_cost_eur", "test_mean_penalty_eur",
+                                         "test_mean_net_cost_eur", "test_cvar95_net_cost_eur",
+                                         "test_mean_regret_eur"],
+    "backtest_curve_modelled_sky": ["fraction", "period", "days_settled", "mean_market_cost_eur", "mean_penalty_eur",
+                                    "mean_net_cost_eur", "cvar95_net_cost_eur"],
     "backtest_curve": ["fraction", "period", "days_settled", "mean_market_cost_eur", "mean_penalty_eur",
                        "mean_net_cost_eur", "cvar95_net_cost_eur"],
 }
@@ -201,14 +212,17 @@ def write_report(outputs: Sequence[StudyOutput], folder: Path, case: Case, setti
 
 
 def backtest_checks(facts: dict[str, Any]) -> list[str]:
-    """The backtest's reconciliation, as lines of report.md."""
-    return ["", "## Consistency of the backtest settlements", "",
-            f"- {facts['records']} stored days (day x variant) of backtest `{facts['backtest_id']}`; "
-            f"{facts['reconcile_problems']} do not reconcile or were not settled "
-            f"(`tables/backtest_problems.csv`).",
-            f"- Largest |net cost − (market cost + penalty)|: "
-            f"{facts['max_abs_net_minus_cost_plus_penalty_eur']:.2e} EUR.",
-            f"- Plans audited: {facts['audited']}; rules broken: {facts['audit_violations']}."]
+    """The backtest's reconciliation (and its modelled-sky counterpart's), as lines of report.md."""
+    lines = ["", "## Consistency of the backtest settlements", ""]
+    for checks, suffix in ((facts, ""), (facts.get("modelled_sky"), "_modelled_sky")):
+        if checks:
+            lines += [f"- {checks['records']} stored days (day x variant) of backtest `{checks['backtest_id']}`; "
+                      f"{checks['reconcile_problems']} do not reconcile or were not settled "
+                      f"(`tables/backtest_problems{suffix}.csv`).",
+                      f"- Largest |net cost − (market cost + penalty)|: "
+                      f"{checks['max_abs_net_minus_cost_plus_penalty_eur']:.2e} EUR.",
+                      f"- Plans audited: {checks['audited']}; rules broken: {checks['audit_violations']}."]
+    return lines
 
 
 def write_run_info(folder: Path, case: Case, settings: StudySettings, outputs: Sequence[StudyOutput],
