@@ -79,6 +79,7 @@ def test_both_skies_side_by_side_with_the_penalty_split_recomputed_from_the_reco
         assert len(rows) == 5  # the four presets and the perfect-information plan, no Γ fraction
         perfect = rows.drop(list(PRESETS))
         assert len(perfect) == 1 and "perfect" in perfect.index[0]
+        assert list(rows.index) == [*PRESETS, perfect.index[0]]
         for name, row in zip((*PRESETS, "perfect"), [rows.loc[p] for p in PRESETS] + [perfect.iloc[0]]):
             mine = expected[name]
             assert row["days_settled"] == mine["days"] == 2
@@ -114,7 +115,7 @@ def test_two_days_of_2018_on_both_skies_of_the_real_files(tmp_path, monkeypatch)
     source = SPAIN / "entsoe_spain_2015_2018.csv"
     for name, options in (("real", {}), ("modelled", {"sky": "modelled", "demands": "modelled"})):
         build_case([source], tmp_path / name, template=PAPER,
-                   options=BuildOptions(start="2017-12-01", end="2018-01-03", fill_gaps_h=3, **options))
+                   options=BuildOptions(start="2017-11-20", end="2018-01-03", fill_gaps_h=3, **options))
     monkeypatch.setenv("RVPP_DATA_DIR", str(tmp_path / "data"))
     monkeypatch.delenv("RVPP_STORE_URL", raising=False)
     monkeypatch.setenv("RVPP_BACKTEST_CASE", str(tmp_path / "real"))

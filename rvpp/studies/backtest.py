@@ -73,9 +73,12 @@ def modelled_sky_case() -> Case | None:
 def penalty_causes(records: pd.DataFrame) -> pd.DataFrame:
     """The four presets and the perfect-information plan over the settled days of ``records``:
     mean daily market cost, penalty and its parts by cause (deficit, surplus, reserve
-    shortfall, unserved heat), net cost, its CVaR 95 % and the mean regret [EUR/day]."""
+    shortfall, unserved heat), net cost, its CVaR 95 % and the mean regret [EUR/day], presets
+    in the order of :data:`~rvpp.data.case.STRATEGIES`, the perfect plan last."""
     table = metrics.aggregates(records)
-    table = table[(table["gamma"] == PRESET) | (table["strategy"] == PERFECT)].reset_index(drop=True)
+    table = table[(table["gamma"] == PRESET) | (table["strategy"] == PERFECT)]
+    rank = table["strategy"].map({name: i for i, name in enumerate((*STRATEGIES, PERFECT))})
+    table = table.iloc[rank.to_numpy().argsort(kind="stable")].reset_index(drop=True)
     out = table[["label", "days_settled", "mean_market_cost_eur", "mean_penalty_eur"]].copy()
     for part in metrics.PENALTY_PARTS:
         out[f"mean_{part}"] = table[f"total_{part}"] / table["days_settled"]
