@@ -12,8 +12,8 @@ import pandas as pd
 import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
-from rvpp.service import (EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, case_workbook_bytes, case_zip_bytes,
-                          describe_edits, economics, excerpt, explanation, plain_message, plan_workbook_bytes)
+from rvpp import service
+from rvpp.service import EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, excerpt, plain_message
 
 from . import library, state
 
@@ -102,7 +102,7 @@ def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
                             delta_color="off", delta_arrow="off")
             column.metric(name, value, help=help_text, border=True, **sign)
     if result.has_plan:
-        st.caption(":material/info: " + explanation(economics(result)) + " Hover a card's question mark for the "
+        st.caption(":material/info: " + service.explanation(service.economics(result)) + " Hover a card's question mark for the "
                    "exact amount in EUR.")
 
 
@@ -295,7 +295,7 @@ def changes(before: Case, after: Case) -> list[str]:
     switches = [f"{what} {b} (was {a})" for what, a, b in (
         ("strategy", before.budgets.label, after.budgets.label), ("markets", before.markets.label, after.markets.label))
         if a != b]
-    new, old = describe_edits(before, after), describe_edits(after, before)
+    new, old = service.describe_edits(before, after), service.describe_edits(after, before)
     if len(new) != len(old):
         return switches + new or ["the case"]
     return switches + [n if o == n else f"{n} (was {_was(o, n)})" for n, o in zip(new, old)] or ["the case"]
@@ -391,7 +391,7 @@ def plan_downloads(result: Result, case: Case, key: str) -> None:
                        file_name=f"{stem}_bids.csv", mime="text/csv", on_click="ignore", key=f"{key}_bids",
                        icon=":material/download:", help="market.csv: one row per period with the DAM, SR "
                                                        "and HPA bids and the price bands")
-    c2.download_button("Full plan (Excel)", lambda: plan_workbook_bytes(result), file_name=f"{stem}_plan.xlsx",
+    c2.download_button("Full plan (Excel)", lambda: service.plan_workbook_bytes(result), file_name=f"{stem}_plan.xlsx",
                        mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
                        on_click="ignore", key=f"{key}_plan", icon=":material/download:",
                        help="summary, market, units, csp and flexibility sheets")
@@ -401,10 +401,10 @@ def plan_downloads(result: Result, case: Case, key: str) -> None:
 def case_downloads(case: Case, key: str, columns=None) -> None:
     """The case as edited: a zip (case.yaml + history.csv) and an Excel case workbook."""
     first, second = columns or st.columns(2)
-    first.download_button("Case as edited (zip)", lambda: case_zip_bytes(case), file_name=f"{case.name}.zip",
+    first.download_button("Case as edited (zip)", lambda: service.case_zip_bytes(case), file_name=f"{case.name}.zip",
                           mime="application/zip", on_click="ignore", key=f"{key}_case_zip",
                           icon=":material/folder_zip:", help="case.yaml and history.csv; load it again on Home")
-    second.download_button("Case as edited (Excel)", lambda: case_workbook_bytes(case),
+    second.download_button("Case as edited (Excel)", lambda: service.case_workbook_bytes(case),
                            file_name=f"{case.name}_case.xlsx",
                            mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
                            on_click="ignore", key=f"{key}_case_xlsx", icon=":material/table:",

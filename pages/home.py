@@ -6,7 +6,8 @@ import streamlit as st
 
 import rvpp
 from dashboard import solving, state, svg, widgets
-from rvpp.service import Variant, read_case_files, trades_figure
+from rvpp import service
+from rvpp.service import Variant
 
 state.through_app("pages/home.py")
 
@@ -30,7 +31,7 @@ def load_upload() -> None:
         st.session_state["home_load_problems"] = twice
         return
     try:
-        case = read_case_files({f.name: f.getvalue() for f in files})
+        case = service.read_case_files({f.name: f.getvalue() for f in files})
     except rvpp.CaseError as err:
         st.session_state["home_load_problems"] = err.problems
         return
@@ -94,7 +95,7 @@ if requested:
             widgets.kpi_cards(result, only=HEADLINE)
             st.markdown("**Bids** (scroll for every period)")
             widgets.bids(result, key="home")
-            st.plotly_chart(trades_figure(result), key="home_trades")
+            st.plotly_chart(service.trades_figure(result), key="home_trades")
             st.markdown("The protection cost is what the balanced strategy sets aside against adverse prices. "
                         "**What does it cost to be safer?**")
             st.page_link("pages/compare.py", label="Compare the four strategies side by side",
