@@ -7,10 +7,13 @@ at 15 minutes for such ties (from the bands, no model built), then times ``rvpp.
 (default, exact tie semantics) on every tie pair and on ``--sample`` further days of the
 year spread evenly (every strategy), against the 5 s worst-day target, by wall time and by
 the process's CPU time (on a shared machine the closer measure of a quiet one). With ``--all`` it
-times every pair of the year (long). Prints the JSON it writes to
-``benchmarks/results/quarter_tail.json``.
+times every pair of the year (long); ``--part K/N`` times every N-th of those pairs from the
+K-th on, so N processes share the year, each with its own result file. Each timed pair is
+appended to a ``.jsonl`` beside the result as it finishes, and a run started again with the
+same options continues from there. Prints the JSON it writes to
+``benchmarks/results/quarter_tail[-partKofN].json``.
 
-Usage: ``python benchmarks/quarter_tail.py [--sample 12] [--all]``
+Usage: ``python benchmarks/quarter_tail.py [--sample 12] [--all] [--part K/N]``
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.common import CASE, STRATEGIES, header, load_average, summary, write_result  # noqa: E402
+from benchmarks.common import CASE, RESULTS, STRATEGIES, header, load_average, summary, write_result  # noqa: E402
 from benchmarks.solve_times import TARGETS, say, tie_days, timed_solve, year_pairs  # noqa: E402
 from rvpp import load_case, solve, with_options  # noqa: E402
 from rvpp.uncertainty.problem import prepare, tied_budgets  # noqa: E402
@@ -38,10 +41,36 @@ def spread_days(year: int, count: int) -> list[str]:
     return [(first + dt.timedelta(days=i * step)).isoformat() for i in range(count)]
 
 
-def run(sample: int, every: bool) -> dict:
+def part(text: str) -> tuple[int, int]:
+    """``"K/N"`` as (K, N), 1 <= K <= N."""
+    try:
+        k, n = (int(field) for field in text.split("/"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--part {text!r}: expected K/N, e.g. 1/2") from None
+    if not 1 <= k <= n:
+        raise argparse.ArgumentTypeError(f"--part {text!r}: K must lie between 1 and N")
+    return k, n
+
+
+def done_rows(progress: Path) -> dict:
+    """The pairs already timed by an earlier run with the same options, from its progress file
+    (a line cut short by a crash is dropped)."""
+    rows = {}
+    if progress.exists():
+        for line in progress.read_text(encoding="utf-8").splitlines():
+            try:
+                record = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            rows[record.pop("pair")] = record
+    return rows
+
+
+def run(sample: int, every: bool, share: tuple[int, int] = (1, 1), progress: Path | None = None) -> dict:
     base = load_case(CASE)
     solve(with_options(base, dt_h=DT_H))  # imports and first-call costs are not part of any measurement
-    document = header("quarter_tail", "all" if every else f"ties+{sample}")
+    document = header("quarter_tail", ("all" if every else f"ties+{sample}")
+                      + (f" part {share[0]}/{share[1]}" if share[1] > 1 else ""))
     target = TARGETS[DT_H]["max"]
     scanned = year_pairs()
     ties = tie_days(base, DT_H, scanned)
@@ -51,13 +80,24 @@ def run(sample: int, every: bool) -> dict:
     else:
         extra = [(day, strategy) for day in spread_days(2025, sample) for strategy in STRATEGIES]
         timed = list(dict.fromkeys([*ties, *extra]))
+    timed = timed[share[0] - 1::share[1]]
+    ties = [pair for pair in ties if pair in timed]
+    earlier = done_rows(progress) if progress is not None else {}
     rows = {}
     for day, strategy in timed:
+        key = f"{day} {strategy}"
+        if key in earlier:
+            rows[key] = earlier[key]
+            continue
         case = with_options(base, strategy=strategy, dt_h=DT_H, date=day)
         row = timed_solve(case)
         row["tied"] = tied_budgets(prepare(case))
-        rows[f"{day} {strategy}"] = row
+        row["load_average"] = load_average()
+        rows[key] = row
         say(f"15 min {day} {strategy:13s}", row)
+        if progress is not None:
+            with progress.open("a", encoding="utf-8") as log:
+                log.write(json.dumps({"pair": key, **row}) + "\n")
     over = {key: row for key, row in rows.items() if max(row["total_s"], row["cpu_s"]) > target}
     document.update(case=base.name, dt_h=DT_H, target_max_s=target, pairs_scanned=len(scanned),
                     tie_pairs=[f"{d} {s}" for d, s in ties], timed_pairs=len(rows),
@@ -75,9 +115,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sample", type=int, default=12, help="days of 2025 timed besides the tie pairs")
     parser.add_argument("--all", action="store_true", help="time every (day, strategy) pair of 2025")
+    parser.add_argument("--part", type=part, default=(1, 1), metavar="K/N",
+                        help="time only every N-th pair from the K-th on (N processes share the year)")
     args = parser.parse_args()
-    document = run(args.sample, args.all)
-    write_result(document)
+    suffix = f"-part{args.part[0]}of{args.part[1]}" if args.part[1] > 1 else ""
+    name = f"quarter_tail{suffix}"
+    progress = RESULTS / f"{name}-{'all' if args.all else f'ties+{args.sample}'}.jsonl"
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    document = run(args.sample, args.all, args.part, progress)
+    write_result(document, RESULTS / f"{name}.json")
     print(json.dumps({key: value for key, value in document.items() if key != "days"}, indent=1))
 
 
