@@ -9,24 +9,29 @@ module only speaks through ``RunLibrary``, so nothing here assumes SQLite.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import streamlit as st
 
-from rvpp import Case, Result
-from rvpp.service import RunInfo, RunLibrary, SavedRun, case_data, default_url
+from rvpp import service
 
 from . import state
+
+if TYPE_CHECKING:  # the store (and SQLAlchemy) loads on first use, not with the first page
+    from rvpp import Case, Result
+    from rvpp.service import RunInfo, RunLibrary, SavedRun
 
 LOADED_KEPT = 32  # reopened runs kept in memory (their plan and prepared day)
 
 
 @st.cache_resource(show_spinner=False)
 def _library(url: str) -> RunLibrary:
-    return RunLibrary(url)
+    return service.RunLibrary(url)
 
 
 def library() -> RunLibrary:
     """The run library of the store the environment names (one engine per store URL)."""
-    return _library(default_url())
+    return _library(service.default_url())
 
 
 def runs() -> list[RunInfo]:
@@ -37,23 +42,23 @@ def runs() -> list[RunInfo]:
 def save(label: str, case: Case, result: Result | None) -> RunInfo:
     """Save ``case`` (as edited, CSP parameters kept) with its plan, under ``label`` or
     ``label (2)`` if it is taken; the session's run switches and origin go with it."""
-    settings = {"csp": state.csp_on(), "origin": case_data(state.origin()), "source": state.source()}
+    settings = {"csp": state.csp_on(), "origin": service.case_data(state.origin()), "source": state.source()}
     return library().save(label, case, result, settings=settings)
 
 
 @st.cache_resource(show_spinner=False, max_entries=LOADED_KEPT)
 def _load(url: str, run_id: str) -> SavedRun:
-    return RunLibrary(engine=_library(url).engine).load(run_id)
+    return service.RunLibrary(engine=_library(url).engine).load(run_id)
 
 
 def load(run_id: str) -> SavedRun:
     """A saved run with its case and plan (reopened once per server, then kept)."""
-    return _load(default_url(), run_id)
+    return _load(service.default_url(), run_id)
 
 
 def forget(run_id: str) -> None:
     """Drop a deleted run from the reopened runs kept in memory."""
-    _load.clear(default_url(), run_id)
+    _load.clear(service.default_url(), run_id)
 
 
 def link(run_id: str) -> str:

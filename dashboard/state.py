@@ -13,12 +13,16 @@ import hashlib
 import json
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import streamlit as st
 
 import rvpp
 from rvpp import Case, CaseError
-from rvpp.service import CasePathError, SavedRun, excerpt, parse_case, run_label
+from rvpp.service import CasePathError, excerpt, parse_case, run_label
+
+if TYPE_CHECKING:  # the run store loads when a run is opened, not with the first page
+    from rvpp.service import SavedRun
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_CASE = ROOT / "data" / "cases" / "paper"

@@ -27,8 +27,8 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .backtest.trading_day import day_summary, intraday_days, session_table
     from .backtest.settings import CARRY, FRACTION, PERFECT, PRESET, BacktestSettings, BacktestVariant, variants_of
     from .data.case import PRICE_MODELS, STRATEGIES, parse_case
-    from .data.edits import (FIELDS, PERIOD_NAMES, describe_edits, field_words, follow_capacity, label, plain_message,
-                             run_label, table_message, with_period_length)
+    from .data.edits import (FIELDS, LABEL_LENGTH, PERIOD_NAMES, describe_edits, field_words, follow_capacity, label,
+                             plain_message, run_label, table_message, with_period_length)
     from .data.files import EXCERPT_CHARS, excerpt
     from .data.history import PRICE_COLUMNS
     from .data.kinds import KINDS, UNIT_KINDS, UnitKind, power_unit
@@ -54,7 +54,6 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
                         default_url)
     from .store.backtests import BacktestProgress
     from .store.codec import case_data
-    from .store.engine import LABEL_LENGTH
     from .studies import STUDIES, StudyOutput, StudySettings, figures, markets, sensitivity
     from .studies.evaluation import evaluation_days, realizations_used, training_days
     from .studies.report import table_csv, tables_workbook_bytes
@@ -162,7 +161,7 @@ _WHERE = {
     "default_url": ".store",
     "BacktestProgress": ".store.backtests",
     "case_data": ".store.codec",
-    "LABEL_LENGTH": ".store.engine",
+    "LABEL_LENGTH": ".data.edits",
     "STUDIES": ".studies",
     "StudyOutput": ".studies",
     "StudySettings": ".studies",

@@ -793,3 +793,18 @@ def test_a_sweep_counts_its_plans_and_a_cancelled_one_stops_at_once(paper_case, 
         assert point.objective_eur == pytest.approx(expected.objective_eur,
                                                     abs=1.0 + paper_case.solver.rel_gap * abs(expected.objective_eur))
     assert solver.expected_s(paper_case, [0, 12, 24])[1] == "the last sweep of this case"
+
+
+def test_the_first_page_loads_neither_the_store_nor_the_workbook_nor_the_solver():
+    """Home's first run in a fresh process imports no SQLAlchemy (run store), openpyxl (workbooks),
+    SciPy's interpolation, Pyomo or HiGHS: each is loaded by the page that uses it, so a fresh
+    server draws its first chart without paying for them (SQLAlchemy alone took 0.6 s)."""
+    code = "\n".join([
+        "import sys", "from streamlit.testing.v1 import AppTest",
+        "at = AppTest.from_file('app.py', default_timeout=120).run()",
+        "assert not at.exception, [e.value for e in at.exception]",
+        "assert any('What should I bid tomorrow' in m.value for m in at.subheader), 'no Home'",
+        "print(sorted(m for m in ('sqlalchemy', 'openpyxl', 'scipy.interpolate', 'pyomo', 'highspy') if m in sys.modules))"])
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[]"

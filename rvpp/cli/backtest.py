@@ -291,7 +291,7 @@ def run_export_command(args: argparse.Namespace) -> int:
 def run_list_command(args: argparse.Namespace) -> int:
     # heavy (the solver stack, the store or pvlib): loaded only when this command runs
     from ..store import BacktestStore
-    from ..store.engine import LABEL_LENGTH
+    from ..data.edits import LABEL_LENGTH
 
     store = BacktestStore(args.store, existing=args.store is not None)  # a typed path must hold a store
     for info in store.list():

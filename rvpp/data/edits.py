@@ -155,6 +155,7 @@ STUDY_FIELDS: dict[str, str] = {
     "threads": "Threads",
 }
 LABEL_LIMIT = 120  # characters of a default run label
+LABEL_LENGTH = 200  # characters a saved run's label may hold (the run store keeps none longer)
 # Period lengths [h] as the pages name them: plural, singular.
 PERIOD_NAMES = {1.0: "hours", 0.5: "half-hours", 0.25: "quarter-hours"}
 PERIOD_NAME = {1.0: "hour", 0.5: "half-hour", 0.25: "quarter-hour"}

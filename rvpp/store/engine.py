@@ -30,6 +30,7 @@ from pathlib import Path
 
 import sqlalchemy as sa
 
+from ..data.edits import LABEL_LENGTH
 from ..data.files import excerpt
 from ..errors import RvppError
 
@@ -39,7 +40,6 @@ BACKENDS = ("sqlite", "postgresql")  # the store's SQL is tested on these two
 DEFAULT_DIR = "rvpp-data"
 SQLITE_FILE = "rvpp.sqlite3"
 BUSY_TIMEOUT_MS = 30_000  # a writer waits this long for another writer's transaction [ms]
-LABEL_LENGTH = 200
 
 metadata = sa.MetaData()
 

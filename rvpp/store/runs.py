@@ -36,7 +36,8 @@ from ..data.files import BIDI_CONTROLS, CONTROL_CHARACTERS, excerpt, refused_cha
 from ..solving.outcome import Outcome
 from ..solving.results import Result
 from .codec import case_data, history_bytes, history_from, jsonable
-from .engine import (LABEL_LENGTH, StoreError, connect, decoding, drop_unused_blobs, get_blob, now, put_blob,
+from ..data.edits import LABEL_LENGTH
+from .engine import (StoreError, connect, decoding, drop_unused_blobs, get_blob, now, put_blob,
                      runs)
 from ..outputs.export import write_plan
 from ..uncertainty.problem import prepare
