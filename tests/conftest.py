@@ -2,10 +2,26 @@
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 
 from rvpp import load_case, solve, with_options
 from tests.factories import PAPER, cyclic_storage
+
+
+def _scan_component_packages_once() -> None:
+    """Every AppTest scans the metadata of every installed package for Streamlit components
+    (0.6-1.3 s each on this machine, for about a hundred AppTests); the packages do not change
+    during a test session, so the scan's answer is kept after the first."""
+    try:
+        from streamlit.components.v2 import manifest_scanner
+    except ImportError:  # a Streamlit without such components has no scan to keep
+        return
+    manifest_scanner.scan_component_manifests = functools.cache(manifest_scanner.scan_component_manifests)
+
+
+_scan_component_packages_once()
 
 
 @pytest.fixture(scope="session")
