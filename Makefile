@@ -35,7 +35,7 @@ axe:
 	npm ci --no-audit --no-fund --prefix tests/node
 
 run: install
-	RVPP_ALLOW_SERVER_FOLDERS=$(FOLDERS) $(BIN)/streamlit run app.py --server.port $(PORT) \
+	RVPP_ALLOW_SERVER_FOLDERS=$(FOLDERS) $(BIN)/python -m dashboard --server.port $(PORT) \
 		--server.address $(ADDRESS) --server.headless true
 
 # `make test` leaves out the tests marked slow (quarter-hour reference solves, end-to-end studies, the

@@ -14,6 +14,9 @@ process cost 0.7-0.9 s before its solve could start.
 def main() -> None:
     import streamlit as st  # here, not above: every solver process imports this file
 
+    from dashboard import serve
+
+    serve.wait()  # `python -m dashboard` imports the first page's modules while the server starts
     from dashboard import browser, solving, state, widgets
 
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",

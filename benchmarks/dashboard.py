@@ -310,7 +310,7 @@ def browser_timings(data_dir: Path, first_chart_only: bool = False) -> dict:
     url = f"http://127.0.0.1:{port}"
     env = {**os.environ, "RVPP_DATA_DIR": str(data_dir)}
     env.pop("RVPP_STORE_URL", None)
-    server = subprocess.Popen([sys.executable, "-m", "streamlit", "run", "app.py", "--server.headless", "true",
+    server = subprocess.Popen([sys.executable, "-m", "dashboard", "--server.headless", "true",  # as `make run` starts it
                                "--server.address", "127.0.0.1", "--server.port", str(port)],
                               cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     try:

@@ -1,5 +1,5 @@
 """The dashboard in a real browser: Debian's Chromium driven by Playwright against
-``streamlit run app.py`` on a free local port.
+``python -m dashboard`` (``make run``'s command) on a free local port.
 
 Skipped when Chromium is not installed at ``/usr/bin/chromium`` (``.ci/run`` installs
 it). Screenshots (1280×800, every page) and the server logs are written to
@@ -88,15 +88,15 @@ def require_browser() -> None:
 
 @contextlib.contextmanager
 def streamlit_server(log_name: str, data_dir: Path | None = None, port: int | None = None):
-    """A fresh ``streamlit run app.py`` on a free port (or ``port``) whose saved runs go to
-    ``data_dir``; yields its URL."""
+    """A fresh dashboard as ``make run`` starts it (``python -m dashboard``) on a free port (or
+    ``port``), whose saved runs go to ``data_dir``; yields its URL."""
     ARTIFACTS.mkdir(exist_ok=True)
     port = port or free_port()
     log = open(ARTIFACTS / log_name, "a")
     env = {**os.environ, "RVPP_DATA_DIR": str(data_dir or ARTIFACTS / "rvpp-data")}
     env.pop("RVPP_STORE_URL", None)
     server = subprocess.Popen(
-        [sys.executable, "-m", "streamlit", "run", "app.py", "--server.headless", "true",
+        [sys.executable, "-m", "dashboard", "--server.headless", "true",
          "--server.address", "127.0.0.1", "--server.port", str(port)],
         cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=env)
     url = f"http://127.0.0.1:{port}"
