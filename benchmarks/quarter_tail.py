@@ -13,7 +13,13 @@ appended to a ``.jsonl`` beside the result as it finishes, and a run started aga
 same options continues from there. Prints the JSON it writes to
 ``benchmarks/results/quarter_tail[-partKofN].json``.
 
-Usage: ``python benchmarks/quarter_tail.py [--sample 12] [--all] [--part K/N]``
+A year timed by processes sharing two cores with other work is slower than a quiet machine,
+so ``--retime-over S`` reads the progress files of every ``--all`` run (all parts) and times
+again, one after the other, each pair that took over ``S`` s of wall or CPU time there,
+writing ``quarter_tail-retimed.json``: the pairs still over the target, each with its cause
+(tied deviations or not; closed at the root or after how many nodes).
+
+Usage: ``python benchmarks/quarter_tail.py [--sample 12] [--all] [--part K/N] [--retime-over S]``
 """
 
 from __future__ import annotations
@@ -111,13 +117,64 @@ def run(sample: int, every: bool, share: tuple[int, int] = (1, 1), progress: Pat
     return document
 
 
+def cause(row: dict) -> str:
+    """Why a pair took long, in a phrase: tied deviations, then the search's size."""
+    where = "closed at the root" if (row["nodes"] or 0) <= 1 else f"{row['nodes']} nodes"
+    if row["status"] != "optimal":
+        where = f"{row['status']} after {row['nodes']} nodes"
+    ties = f"tied deviations ({', '.join(f'{k} {v}' for k, v in row['tied'].items())})" if row["tied"] else "no ties"
+    return f"{ties}; {where}; {row['lp_iterations'] or 0:,} LP iterations"
+
+
+def retime(over_s: float) -> dict:
+    """Time again, alone, the pairs of the ``--all`` runs' progress files over ``over_s``."""
+    earlier = {}
+    for progress in sorted(RESULTS.glob("quarter_tail*-all.jsonl")):
+        earlier.update(done_rows(progress))
+    if not earlier:
+        sys.exit("no year scan to re-time: run with --all first (benchmarks/results/quarter_tail*-all.jsonl)")
+    slow = sorted(key for key, row in earlier.items() if max(row["total_s"], row["cpu_s"]) > over_s)
+    print(f"{len(slow)} of {len(earlier)} pairs over {over_s:g} s in the scan", file=sys.stderr, flush=True)
+    base = load_case(CASE)
+    solve(with_options(base, dt_h=DT_H))
+    document = header("quarter_tail-retimed", f"over {over_s:g} s")
+    target = TARGETS[DT_H]["max"]
+    rows = {}
+    for key in slow:
+        day, strategy = key.split()
+        case = with_options(base, strategy=strategy, dt_h=DT_H, date=day)
+        row = timed_solve(case)
+        row["tied"] = tied_budgets(prepare(case))
+        row["load_average"] = load_average()
+        row["scan_total_s"], row["scan_cpu_s"] = earlier[key]["total_s"], earlier[key]["cpu_s"]
+        rows[key] = row
+        say(f"15 min {day} {strategy:13s}", row)
+    still = {key: row for key, row in rows.items() if max(row["total_s"], row["cpu_s"]) > target}
+    document.update(case=base.name, dt_h=DT_H, target_max_s=target, pairs_scanned=len(earlier), retime_over_s=over_s,
+                    pairs_retimed=len(rows), pairs_over_target=len(still),
+                    tied_over_target=sum(1 for row in still.values() if row["tied"]),
+                    over_target={key: {"total_s": row["total_s"], "cpu_s": row["cpu_s"], "cause": cause(row)}
+                                 for key, row in still.items()},
+                    days=rows)
+    return document
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sample", type=int, default=12, help="days of 2025 timed besides the tie pairs")
     parser.add_argument("--all", action="store_true", help="time every (day, strategy) pair of 2025")
     parser.add_argument("--part", type=part, default=(1, 1), metavar="K/N",
                         help="time only every N-th pair from the K-th on (N processes share the year)")
+    parser.add_argument("--retime-over", type=float, metavar="S",
+                        help="time again, one at a time, the pairs of the year scans that took over S seconds")
     args = parser.parse_args()
+    if args.retime_over is not None:
+        if not args.retime_over > 0:
+            parser.error(f"--retime-over {args.retime_over:g}: expected a number of seconds above 0")
+        document = retime(args.retime_over)
+        write_result(document, RESULTS / "quarter_tail-retimed.json")
+        print(json.dumps({key: value for key, value in document.items() if key not in ("days", "machine")}, indent=1))
+        return
     suffix = f"-part{args.part[0]}of{args.part[1]}" if args.part[1] > 1 else ""
     name = f"quarter_tail{suffix}"
     progress = RESULTS / f"{name}-{'all' if args.all else f'ties+{args.sample}'}.jsonl"
