@@ -122,7 +122,7 @@ def cause(row: dict) -> str:
     where = "closed at the root" if (row["nodes"] or 0) <= 1 else f"{row['nodes']} nodes"
     if row["status"] != "optimal":
         where = f"{row['status']} after {row['nodes']} nodes"
-    ties = f"tied deviations ({', '.join(f'{k} {v}' for k, v in row['tied'].items())})" if row["tied"] else "no ties"
+    ties = f"tied deviations ({'; '.join(row['tied'])})" if row["tied"] else "no ties"
     return f"{ties}; {where}; {row['lp_iterations'] or 0:,} LP iterations"
 
 
