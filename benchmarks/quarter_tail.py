@@ -73,6 +73,17 @@ def done_rows(progress: Path) -> dict:
     return rows
 
 
+def time_pair(base, day: str, strategy: str) -> dict:
+    """``rvpp.solve`` of ``base`` on ``day`` with ``strategy`` at 15 minutes, timed, with the
+    tied sources (if any) and the load average just after."""
+    case = with_options(base, strategy=strategy, dt_h=DT_H, date=day)
+    row = timed_solve(case)
+    row["tied"] = tied_budgets(prepare(case))
+    row["load_average"] = load_average()
+    say(f"15 min {day} {strategy:13s}", row)
+    return row
+
+
 def run(sample: int, every: bool, share: tuple[int, int] = (1, 1), progress: Path | None = None) -> dict:
     base = load_case(CASE)
     solve(with_options(base, dt_h=DT_H))  # imports and first-call costs are not part of any measurement
@@ -96,12 +107,7 @@ def run(sample: int, every: bool, share: tuple[int, int] = (1, 1), progress: Pat
         if key in earlier:
             rows[key] = earlier[key]
             continue
-        case = with_options(base, strategy=strategy, dt_h=DT_H, date=day)
-        row = timed_solve(case)
-        row["tied"] = tied_budgets(prepare(case))
-        row["load_average"] = load_average()
-        rows[key] = row
-        say(f"15 min {day} {strategy:13s}", row)
+        row = rows[key] = time_pair(base, day, strategy)
         if progress is not None:
             with progress.open("a", encoding="utf-8") as log:
                 log.write(json.dumps({"pair": key, **row}) + "\n")
@@ -143,13 +149,8 @@ def retime(over_s: float) -> dict:
     rows = {}
     for key in slow:
         day, strategy = key.split()
-        case = with_options(base, strategy=strategy, dt_h=DT_H, date=day)
-        row = timed_solve(case)
-        row["tied"] = tied_budgets(prepare(case))
-        row["load_average"] = load_average()
+        row = rows[key] = time_pair(base, day, strategy)
         row["scan_total_s"], row["scan_cpu_s"] = earlier[key]["total_s"], earlier[key]["cpu_s"]
-        rows[key] = row
-        say(f"15 min {day} {strategy:13s}", row)
     still = {key: row for key, row in rows.items() if max(row["total_s"], row["cpu_s"]) > target}
     document.update(case=base.name, dt_h=DT_H, target_max_s=target, pairs_scanned=len(earlier), retime_over_s=over_s,
                     pairs_retimed=len(rows), pairs_over_target=len(still),
