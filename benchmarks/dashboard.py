@@ -13,7 +13,13 @@
   non-zero size, not hidden). Home's first chart is the day's DAM price band, an SVG that
   arrives drawn. ``cold`` is the first session of a fresh server (timed from the moment
   the server answers its health check), ``warm`` a later one; ``first_chart_top_px`` is
-  where the chart begins in the page (below 800: on the first screen at 1280×800).
+  where the chart begins in the page (below 800: on the first screen at 1280×800). Each of
+  these sessions has a browser profile of its own, with nothing cached: a newcomer.
+  ``first_chart_same_browser_*`` are later sessions in one browser profile that has shown
+  Home before (Streamlit's scripts in its cache: a reload or a new tab). ``bare_page_*``
+  times the same first chart on a bare Streamlit page (``benchmarks/bare_page.py``: a title
+  and one SVG chart, drawn as Home draws its chart) on a server of its own: the time
+  Streamlit itself takes on this machine, under which no page of the dashboard can come.
 * ``solve_to_charts_*``: from clicking Solve on Results until all six charts are drawn;
   ``solve_*_s`` is the solve's own time as the page reports it (build + HiGHS + tables)
   and ``overhead_*_s`` the difference (process start, transfer, drawing).
@@ -77,6 +83,7 @@ RESULTS = ROOT / "benchmarks" / "results" / "dashboard.json"
 FIRST_CHART_RESULTS = RESULTS.with_name("dashboard-first-chart.json")
 FIRST_CHART = "[data-testid=stPlotlyChart] .main-svg, svg.rvpp-chart"  # a drawn chart, either kind
 FAILURE_SCREENSHOT = RESULTS.with_name("dashboard-failure.png")
+BARE_PAGE = ROOT / "benchmarks" / "bare_page.py"
 WAIT_MS = 180_000
 CHARTS_ON_RESULTS = 6
 LIBRARY_RUNS = 200
@@ -305,42 +312,96 @@ def nav(page, name: str) -> None:
     page.get_by_test_id("stSidebarNav").get_by_role("link", name=name, exact=True).click()
 
 
+def start_server(command: list[str], data_dir: Path, port: int) -> subprocess.Popen:
+    """Start a Streamlit server with ``command`` (its options added) and return once it answers
+    its health check."""
+    env = {**os.environ, "RVPP_DATA_DIR": str(data_dir)}
+    env.pop("RVPP_STORE_URL", None)
+    server = subprocess.Popen([sys.executable, *command, "--server.headless", "true", "--server.address", "127.0.0.1",
+                               "--server.port", str(port)],
+                              cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    while True:
+        try:
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/_stcore/health", timeout=1).close()
+            return server
+        except OSError:
+            if server.poll() is not None:
+                raise BenchmarkStepFailed(f"the server ({' '.join(command)}) ended with status {server.returncode}")
+            time.sleep(0.1)
+
+
+def stop_server(server: subprocess.Popen) -> None:
+    server.terminate()
+    server.wait()
+
+
+def open_first_chart(context, url: str) -> tuple[float, object]:
+    """Open ``url`` in a new page of ``context``: seconds until its first chart is on show, and the page."""
+    page = context.new_page()
+    page.set_default_timeout(WAIT_MS)
+    started = time.perf_counter()
+    page.goto(url)
+    chart = page.locator(FIRST_CHART).first
+    chart.wait_for(state="visible")
+    return time.perf_counter() - started, page
+
+
+def first_chart_sessions(browser, url: str, prefix: str) -> dict:
+    """The first chart of ``url``: a first session, then ``REPEAT`` later ones each in a new browser
+    profile and ``REPEAT`` more in one profile that has opened the page before (see the module's notes)."""
+    timings: dict = {}
+    fresh, same = [], []
+    for _ in range(REPEAT + 1):
+        context = browser.new_context(viewport={"width": 1280, "height": 2400})
+        seconds, page = open_first_chart(context, url)
+        fresh.append(seconds)
+        timings[f"{prefix}_top_px"] = round(page.locator(FIRST_CHART).first.bounding_box()["y"])
+        context.close()
+    returning = browser.new_context(viewport={"width": 1280, "height": 2400})
+    open_first_chart(returning, url)[1].close()  # this profile's first visit fills its cache
+    for _ in range(REPEAT):
+        seconds, page = open_first_chart(returning, url)
+        same.append(seconds)
+        page.close()
+    returning.close()
+    timings[f"{prefix}_cold_s"] = round(fresh[0], 2)
+    timings[f"{prefix}_warm_s"] = [round(v, 2) for v in fresh[1:]]
+    timings[f"{prefix}_warm_median_s"] = median(fresh[1:])
+    timings[f"{prefix}_same_browser_s"] = [round(v, 2) for v in same]
+    timings[f"{prefix}_same_browser_median_s"] = median(same)
+    return timings
+
+
+def bare_page_timings(data_dir: Path) -> dict:
+    """:func:`first_chart_sessions` of ``benchmarks/bare_page.py`` on a server of its own."""
+    port = free_port()  # the dashboard's server has stopped by now
+    server = start_server(["-m", "streamlit", "run", str(BARE_PAGE)], data_dir, port)
+    try:
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+            timings = first_chart_sessions(browser, f"http://127.0.0.1:{port}", "bare_page")
+            browser.close()
+        return timings
+    finally:
+        stop_server(server)
+
+
 def browser_timings(data_dir: Path, first_chart_only: bool = False) -> dict:
     port = free_port()
     url = f"http://127.0.0.1:{port}"
-    env = {**os.environ, "RVPP_DATA_DIR": str(data_dir)}
-    env.pop("RVPP_STORE_URL", None)
-    server = subprocess.Popen([sys.executable, "-m", "dashboard", "--server.headless", "true",  # as `make run` starts it
-                               "--server.address", "127.0.0.1", "--server.port", str(port)],
-                              cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    server = start_server(["-m", "dashboard"], data_dir, port)  # as `make run` starts it
     try:
-        while True:
-            try:
-                urllib.request.urlopen(f"{url}/_stcore/health", timeout=1).close()
-                break
-            except OSError:
-                time.sleep(0.1)
-        timings: dict = {}
-        first_chart, library_open, revisit = [], [], []
+        library_open, revisit = [], []
         with sync_playwright() as playwright:
             browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-            for i in range(REPEAT + 1):
-                page = browser.new_context(viewport={"width": 1280, "height": 2400}).new_page()
-                page.set_default_timeout(WAIT_MS)
-                started = time.perf_counter()
-                page.goto(url)
-                chart = page.locator(FIRST_CHART).first
-                chart.wait_for(state="visible")
-                first_chart.append(time.perf_counter() - started)
-                timings["first_chart_top_px"] = round(chart.bounding_box()["y"])
-                if i < REPEAT:
-                    page.close()
-            timings["first_chart_cold_s"] = round(first_chart[0], 2)
-            timings["first_chart_warm_s"] = [round(v, 2) for v in first_chart[1:]]
-            timings["first_chart_warm_median_s"] = median(first_chart[1:])
+            timings = first_chart_sessions(browser, url, "first_chart")
             if first_chart_only:
                 browser.close()
                 return timings
+            page = browser.new_context(viewport={"width": 1280, "height": 2400}).new_page()
+            page.set_default_timeout(WAIT_MS)
+            page.goto(url)
+            page.locator(FIRST_CHART).first.wait_for(state="visible")
             nav(page, "Results")
             page.get_by_role("button", name="Solve", exact=True).wait_for()
             page.wait_for_timeout(FIRST_CLICK_DELAY_MS)
@@ -390,8 +451,7 @@ def browser_timings(data_dir: Path, first_chart_only: bool = False) -> dict:
             browser.close()
         return timings
     finally:
-        server.terminate()
-        server.wait()
+        stop_server(server)
 
 
 # (label, key in the report, target [s] or None) of the short table.
@@ -401,6 +461,9 @@ TABLE = (("solver's answer -> six charts, a server's first solve", "drawn_after_
          ("Γ sweep behind the slider: button -> curve drawn", "gamma_sweep_warmup_s", None),
          ("Home's first chart, a fresh server", "first_chart_cold_s", 3.0),
          ("Home's first chart, a later session (median)", "first_chart_warm_median_s", 2.0),
+         ("Home's first chart, a later session in the same browser (median)", "first_chart_same_browser_median_s", None),
+         ("a bare Streamlit page's first chart, a later session (median)", "bare_page_warm_median_s", None),
+         ("a bare Streamlit page's first chart, same browser (median)", "bare_page_same_browser_median_s", None),
          ("back to Results after another page (median)", "revisit_median_s", None),
          (f"Saved runs with {LIBRARY_RUNS} runs: page -> table (median)", f"library_{LIBRARY_RUNS}_open_median_s", None))
 
@@ -426,6 +489,7 @@ def first_chart_main() -> None:
     report = header("dashboard-first-chart", "first chart")
     with tempfile.TemporaryDirectory(prefix="rvpp-bench-") as folder:
         report.update(browser_timings(Path(folder), first_chart_only=True))
+        report.update(bare_page_timings(Path(folder)))
     write_result(report, FIRST_CHART_RESULTS)
     print(json.dumps({key: value for key, value in report.items() if key != "machine"}, indent=2))
 
@@ -443,6 +507,7 @@ def main() -> None:
         report.update(fill_library(Path(folder), case))
         if CHROMIUM.exists():
             report.update(browser_timings(Path(folder)))
+            report.update(bare_page_timings(Path(folder)))
         else:
             report["browser"] = f"skipped: no Chromium at {CHROMIUM}"
     write_result(report, RESULTS)
