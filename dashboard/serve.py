@@ -2,9 +2,10 @@
 
 Streamlit's own ``streamlit run app.py``, with one difference: while the server starts and the
 first visitor's browser loads Streamlit's code (1-2 s), a background thread imports what Home's
-first run needs (pandas, NumPy, PyArrow, the case model, the dashboard's modules). Without it,
-the first visitor after a server start waits for these imports after the page has loaded
-(docs/dashboard.md, "Home's first chart").
+first run needs (pandas, NumPy, PyArrow, the case model, the dashboard's modules) and reads the
+shipped case into the sessions' shared cache. Without it, the first visitor after a server
+start waits for these imports and that read after the page has loaded (docs/dashboard.md,
+"Home's first chart").
 
 Streamlit is imported before the thread starts (its plotting setup looks into ``sys.modules``
 for pandas and must not find one half imported), and every script run waits for the thread
@@ -36,6 +37,10 @@ def _warm() -> None:
             importlib.import_module(name)
         except Exception:  # noqa: BLE001 - the page's own import reports it
             return
+    try:
+        importlib.import_module("dashboard.state").read_default_case()
+    except Exception:  # noqa: BLE001 - the first session's own load reports it
+        return
 
 
 def wait() -> None:

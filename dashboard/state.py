@@ -52,6 +52,12 @@ def _load(folder: str) -> Case:
     return _load_cached(folder, stamp)
 
 
+def read_default_case() -> None:
+    """Read the shipped case into the cache sessions share (``dashboard.serve``'s head start: the first
+    session after a server start then finds it read)."""
+    _load(str(DEFAULT_CASE))
+
+
 def _modified_ns(path: Path) -> int | None:
     """When the file at ``path`` last changed [ns since the epoch]; ``None`` for an entry that cannot be
     followed, such as a link to nothing (an editor's lock file: Emacs' ``.#case.yaml``): the case does

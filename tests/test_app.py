@@ -691,6 +691,19 @@ def fresh_process_output(code: str, timeout_s: int) -> list[str]:
     return done.stdout.strip().splitlines()
 
 
+def test_the_head_start_reads_the_shipped_case_for_the_first_session():
+    """``python -m dashboard``'s head start (``dashboard.serve``) leaves the shipped case in the cache
+    the sessions share: the first session after a server start reads no case file of its own."""
+    code = "\n".join([
+        "import rvpp", "from dashboard import serve, state",
+        "serve._warm()",
+        "read = []", "real = rvpp.load_case",
+        "rvpp.load_case = lambda folder: read.append(folder) or real(folder)",
+        "case = state._load(str(state.DEFAULT_CASE))",
+        "print(len(read), case.name)"])
+    assert fresh_process_output(code, timeout_s=300)[-1] == "0 paper"
+
+
 @pytest.mark.slow
 def test_the_server_process_never_imports_the_solver_stack():
     """A solve's reports (stages, the search) and its result reach the server as plain data: the server
