@@ -251,6 +251,50 @@ def settled(case, plan, price_da):
     return record
 
 
+def test_the_settlement_records_every_periods_battery_and_unit_dispatch_and_the_export_writes_it():
+    # The battery day of the first test: hour 1 at 10 EUR/MWh charges 10 MW to E max = 9 MWh, hour 2 at
+    # 100 delivers 9 x 0.9 = 8.1 MW, every other hour (45) idles. The biomass unit (5-10 MW at 30 EUR/MWh,
+    # no start cost) is off in hour 1 (10 < 30) and runs 10 MW from hour 2 on (100 and 45 > 30). Settled
+    # at the same prices, the dispatch is the plan's, and a backtest export writes it row by row.
+    import pandas as pd
+
+    from rvpp.backtest.export import dispatch_table
+    from rvpp.settle.recourse import Realization, evaluate, first_stage
+    prices = np.where(HOURS == 1, 10.0, np.where(HOURS == 2, 100.0, 45.0))
+    case = tiny_case(battery_units=[battery(degradation_eur_per_mwh=50.0)], biomass_units=[biomass()])
+    plan = solved(case, prices)
+    values = pd.DataFrame({"price_da": prices, "price_sr_up": 0.0, "price_sr_dn": 0.0},
+                          index=pd.RangeIndex(1, NT + 1, name="t"))
+    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values),
+                      with_end_state=True)
+    assert record["status"] == "optimal"
+    bat, bio = record["settled_units"]["B"], record["settled_units"]["BIO"]
+    assert (bat["kind"], bio["kind"]) == ("battery", "biomass")
+    charge, discharge, energy = (np.array(bat[key]) for key in ("charge_mw", "discharge_mw", "e_mwh"))
+    assert charge == pytest.approx([10.0] + [0.0] * 23, abs=1e-6)
+    assert discharge == pytest.approx([0.0, 8.1] + [0.0] * 22, abs=1e-6)
+    assert energy == pytest.approx([9.0] + [0.0] * 23, abs=1e-6)
+    # each period's energy follows from the one before it (a cyclic day: period 1 from period 24)
+    assert energy == pytest.approx(np.roll(energy, 1) + 0.9 * charge - discharge / 0.9, abs=1e-6)
+    assert record["end_state"]["B"]["e_mwh"] == pytest.approx(energy[-1], abs=1e-9)
+    assert bio["online"] == [0] + [1] * 23
+    assert bio["p_mw"] == pytest.approx([0.0] + [10.0] * 23, abs=1e-6)
+    unsettled = {"day": "2025-05-06", "strategy": "balanced", "gamma": "preset", "settled_csp": None}
+    table = dispatch_table(pd.DataFrame([{"day": "2025-05-05", "strategy": "balanced", "gamma": "preset",
+                                          "settled_csp": {}, "settled_units": record["settled_units"]},
+                                         unsettled]))
+    assert list(table.columns) == ["day", "strategy", "gamma", "unit", "t", "online", "e_mwh_th", "kind", "p_mw",
+                                   "charge_mw", "discharge_mw", "e_mwh"]
+    rows = table.set_index(["unit", "t"])
+    assert len(table) == 2 * NT and set(table["day"]) == {"2025-05-05"}
+    assert rows.loc["B", "kind"].eq("battery").all() and rows.loc["BIO", "kind"].eq("biomass").all()
+    assert rows.loc["B", "e_mwh"].to_numpy() == pytest.approx(energy)
+    assert rows.loc["B", "charge_mw"].to_numpy() == pytest.approx(charge)
+    assert rows.loc["BIO", "online"].tolist() == [0] + [1] * 23
+    assert rows.loc["BIO", "p_mw"].to_numpy() == pytest.approx([0.0] + [10.0] * 23, abs=1e-6)
+    assert rows.loc["B", "online"].isna().all() and rows.loc["BIO", "e_mwh"].isna().all()
+
+
 def test_the_settlement_keeps_a_unit_online_where_the_plan_committed_it():
     # Biomass 5-10 MW at 30 EUR/MWh, price 50 all day: the plan runs 10 MW every hour and sells it.
     # Realized, hour 12 pays 0, where a deficit costs π_def = 0 + (2 - 1) x 0 = 0. The unit stays

@@ -5,8 +5,9 @@
 * ``records.csv`` / ``.parquet``: one row per day and variant, every number of the day
   (budgets as ``gamma_<source>``, start and end state as ``start_<csp>_<field>``, ...);
 * ``bids.csv`` / ``.parquet``: the first-stage bids, one row per day, variant and period;
-* ``dispatch.csv`` / ``.parquet``: the settled turbine status and storage energy, one row
-  per day, variant, CSP and period;
+* ``dispatch.csv`` / ``.parquet``: the settled dispatch, one row per day, variant, unit and
+  period: a CSP's turbine status and storage energy, a battery's charge, discharge and energy, a
+  hydro or biomass unit's status and output;
 * ``aggregates.csv`` / ``.parquet`` and ``monthly.csv`` / ``.parquet`` (:mod:`.metrics`);
 * ``case/``: ``case.yaml`` and ``history.csv`` (full precision) exactly as stored with the
   backtest: ``rvpp.load_case`` on it gives the same history fingerprint;
@@ -45,7 +46,10 @@ from .settings import BacktestError
 from .. import __version__
 
 ROOT = Path(__file__).resolve().parents[2]
-NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp", "plan_integer_ones")
+NESTED = ("budgets", "start_state", "end_state", "bids", "settled_csp", "settled_units", "plan_integer_ones")
+# The settled dispatch: the columns of the CSPs first, as exported before batteries, hydro and biomass units
+DISPATCH_COLUMNS = ["day", "strategy", "gamma", "unit", "t", "online", "e_mwh_th", "kind", "p_mw", "charge_mw",
+                    "discharge_mw", "e_mwh"]
 MANIFEST = "manifest.json"
 MANIFEST_MAX_BYTES = 1024 ** 2  # an export's manifest holds settings and notes: a few kB; larger is not one
 
@@ -82,18 +86,26 @@ def bids_table(records: pd.DataFrame) -> pd.DataFrame:
 
 
 def dispatch_table(records: pd.DataFrame) -> pd.DataFrame:
-    """The settled turbine status and storage energy, one row per day, variant, CSP and period."""
+    """The settled dispatch, one row per day, variant, unit and period: a CSP's turbine status and
+    storage energy, a battery's charge, discharge and energy, a hydro or biomass unit's status and
+    output (:data:`DISPATCH_COLUMNS`; a column that does not apply to a unit's kind is empty)."""
     frames = []
     for record in records.to_dict("records"):
-        for unit, values in (record.get("settled_csp") or {}).items():
-            frame = pd.DataFrame({"t": range(1, len(values["online"]) + 1), "online": values["online"],
-                                  "e_mwh_th": values["e_mwh_th"]})
+        csps, others = (value if isinstance(value, dict) else {}  # a day without a settlement has none
+                        for value in (record.get("settled_csp"), record.get("settled_units")))
+        units = [(unit, {"kind": "csp", **values}) for unit, values in csps.items()] + list(others.items())
+        for unit, settled in units:
+            values = {key: value for key, value in settled.items() if key != "kind"}
+            periods = len(next(iter(values.values())))
+            frame = pd.DataFrame({"t": range(1, periods + 1), **values})
             for position, (key, value) in enumerate((("day", record["day"]), ("strategy", record["strategy"]),
                                                      ("gamma", record["gamma"]), ("unit", unit))):
                 frame.insert(position, key, value)
+            frame["kind"] = settled["kind"]
             frames.append(frame)
-    columns = ["day", "strategy", "gamma", "unit", "t", "online", "e_mwh_th"]
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=columns)
+    if not frames:
+        return pd.DataFrame(columns=DISPATCH_COLUMNS)
+    return pd.concat(frames, ignore_index=True).reindex(columns=DISPATCH_COLUMNS)
 
 
 def git_commit() -> str | None:

@@ -469,8 +469,9 @@ def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalti
     Keys: ``day``, ``fingerprint``, ``status``, ``solve_s``, the settlement in [EUR]
     (``market_cost_eur``, ``penalty_eur``, ``net_cost_eur`` and their parts), the
     slack energies [MWh] (``deficit_mwh``, ...) and, ``with_end_state``, the state at the
-    end of the day (``end_state``, see :func:`end_state`) and the settled turbine status and
-    storage energy (``settled_csp``, see :func:`csp_dispatch`). Values are ``None`` without a
+    end of the day (``end_state``, see :func:`end_state`), the settled turbine status and
+    storage energy (``settled_csp``, see :func:`csp_dispatch`) and the settled dispatch of batteries,
+    hydro and biomass units (``settled_units``, see :func:`unit_dispatch`). Values are ``None`` without a
     solution.
     """
     problem = realized_problem(case, real)
@@ -483,6 +484,7 @@ def evaluate(case: Case, bids: FirstStage, real: Realization, penalties: Penalti
         if with_end_state:
             record["end_state"] = end_state(m.scenario[0], case, problem.dt_h) if outcome.usable else None
             record["settled_csp"] = csp_dispatch(m.scenario[0], case) if outcome.usable else None
+            record["settled_units"] = unit_dispatch(m.scenario[0], case) if outcome.usable else None
         del m  # garbage from here: collected young as the block ends
     return record
 
@@ -491,6 +493,28 @@ def csp_dispatch(b: pyo.Block, case: Case) -> dict[str, dict[str, list]]:
     """Per CSP, the settled turbine status and storage energy of every period [-], [MWh_th]."""
     return {csp.name: {"online": [round(float(pyo.value(b.csp[csp.name].online[t]))) for t in b.T],
                        "e_mwh_th": [float(pyo.value(b.csp[csp.name].e_ts[t])) for t in b.T]} for csp in case.csp}
+
+
+def unit_dispatch(b: pyo.Block, case: Case) -> dict[str, dict[str, list]]:
+    """Per battery, hydro and biomass unit, its ``kind`` and the settled dispatch of every period
+    (MODEL_SPEC §13): a battery's ``charge_mw``, ``discharge_mw`` [MW] and ``e_mwh`` [MWh] at the
+    period's end; a hydro or biomass unit's ``online`` [-] and ``p_mw`` [MW]."""
+
+    def values(var) -> list[float]:
+        return [float(pyo.value(var[t])) for t in b.T]
+
+    settled = {}
+    for kind, unit in case.units():
+        if kind == UnitKind.BATTERY:
+            bat = b.battery[unit.name]
+            settled[unit.name] = {"kind": kind.value, "charge_mw": values(bat.p_ch), "discharge_mw": values(bat.p_dis),
+                                  "e_mwh": values(bat.e)}
+        elif kind in DISPATCHABLE_KINDS:
+            unit_block = b.dispatchable[unit.name]
+            settled[unit.name] = {"kind": kind.value,
+                                  "online": [round(value) for value in values(unit_block.online)],
+                                  "p_mw": values(unit_block.p)}
+    return settled
 
 
 def end_state(b: pyo.Block, case: Case, dt_h: float) -> dict[str, dict]:
