@@ -503,3 +503,41 @@ def test_only_days_of_hourly_periods_start_from_the_plan_of_the_day_before(paper
     quarter = day_case(paper_case.replace(dt_h=0.25), day, variant, state, "carry", start)
     assert hourly.solver.mip_start == start and quarter.solver.mip_start == ()
     assert day_case(paper_case, day, variant, state, "carry").solver.mip_start == ()
+
+
+def test_a_battery_and_a_hydro_unit_carry_their_settled_state_across_every_midnight(paper_case, tmp_path):
+    # Three days of the paper case with a battery and a hydro plant, checked from the exported files
+    # alone: each day's first period continues the day before's last one, by the battery's own energy
+    # balance (efficiencies, self-discharge) and the hydro plant's ramp limit.
+    keep, eta_ch, eta_dis, ramp_up, ramp_dn = 1 - 0.002, 0.93, 0.92, 12.0, 15.0
+    case = paper_case.replace(
+        battery=[{"name": "BAT", "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 20.0, "p_dis_max_mw": 20.0,
+                  "eta_ch": eta_ch, "eta_dis": eta_dis, "self_discharge_per_h": 0.002, "e_init_mwh": 12.0,
+                  "ramp_mw_per_min": 4.0}],
+        hydro=[{"name": "HY", "kind": "hydro", "p_min_mw": 6.0, "p_max_mw": 30.0, "marginal_cost_eur_per_mwh": 8.0,
+                "ramp_up_mw_per_h": ramp_up, "ramp_dn_mw_per_h": ramp_dn, "min_up_h": 3.0, "min_down_h": 2.0,
+                "initial_online": True, "initial_hours_in_status": 1.0, "p_init_mw": 8.0, "energy_max_mwh": 220.0,
+                "ramp_mw_per_min": 1.0}])
+    store = BacktestStore(f"sqlite:///{tmp_path / 'store.sqlite3'}")
+    days = (dt.date(2025, 5, 1), dt.date(2025, 5, 3))
+    ident = run_backtest(case, BacktestSettings(*days, variants_of(["deterministic"], [], perfect=False)), store)
+    export(store, ident, tmp_path / "export")
+    records = pd.read_csv(tmp_path / "export" / "records.csv").sort_values("day")
+    dispatch = pd.read_csv(tmp_path / "export" / "dispatch.csv")
+    assert (records["status"] == "optimal").all()
+    battery = dispatch[dispatch["unit"] == "BAT"].sort_values(["day", "t"])
+    hydro = dispatch[dispatch["unit"] == "HY"].sort_values(["day", "t"])
+    assert len(battery) == len(hydro) == 3 * 24 and set(battery["kind"]) == {"battery"}
+    energy = np.concatenate([[12.0], battery["e_mwh"].to_numpy()])
+    moved = eta_ch * battery["charge_mw"].to_numpy() - battery["discharge_mw"].to_numpy() / eta_dis
+    assert np.allclose(energy[1:], keep * energy[:-1] + moved, atol=1e-5)  # 71 steps, two of them midnights
+    assert (battery["e_mwh"] >= 12.0 - 1e-5).groupby(battery["day"]).last().all()  # each day ends at its start
+    ends = battery.groupby("day")["e_mwh"].last().to_numpy()
+    assert np.allclose(records["start_BAT_e_mwh"].to_numpy()[1:], ends[:-1], atol=1e-6)
+    output = np.concatenate([[8.0], hydro["p_mw"].to_numpy()])
+    online = np.concatenate([[1], hydro["online"].to_numpy()])
+    steps = np.diff(output)
+    # a running unit moves at most its ramp; a start or a stop is bounded by Pmax (no start-up ramp set)
+    running = (online[1:] == 1) & (online[:-1] == 1)
+    assert (steps[running] <= ramp_up + 1e-6).all() and (-steps[running] <= ramp_dn + 1e-6).all()
+    assert np.allclose(records["start_HY_p_mw"].to_numpy()[1:], hydro.groupby("day")["p_mw"].last().to_numpy()[:-1])
