@@ -99,6 +99,12 @@ BAD_INPUTS = {
     "minimum up time not a whole number of periods": (
         lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=2.5),
         'csp "CSP1": power_block.min_up_h=2.5 must be a multiple of dt_h=1'),
+    "a turbine minimum up time longer than the day": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=30),
+        'csp "CSP1": power_block.min_up_h=30 must be <= 24'),
+    "a turbine minimum down time longer than the day": (
+        lambda d: d["units"]["csp"][0]["power_block"].update(min_down_h=25),
+        'csp "CSP1": power_block.min_down_h=25 must be <= 24'),
     "a delivery date no history can reach": (
         lambda d: d.update(delivery_date="9999-12-31"),
         "delivery_date=9999-12-31 must lie between 1900-01-01 and 2199-12-31"),

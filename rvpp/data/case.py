@@ -266,8 +266,8 @@ class PowerBlock(_Frozen):
     p_in_min_mw_th: Positive
     p_el_max_mw: Positive
     breakpoints: tuple[tuple[Annotated[Number, Field(le=MAX_QUANTITY)], Number], ...]
-    min_up_h: NonNegative = 0.0
-    min_down_h: NonNegative = 0.0
+    min_up_h: Annotated[Number, Field(ge=0.0, le=HOURS_PER_DAY)] = 0.0
+    min_down_h: Annotated[Number, Field(ge=0.0, le=HOURS_PER_DAY)] = 0.0
     startup_fraction: NonNegative = 0.0
     startup_duration_h: Positive | None = None
     initially_on: bool = False
