@@ -173,6 +173,27 @@ def assert_within_documented_bounds(case) -> None:
         for field in ("min_up_h", "min_down_h"):
             periods = pb[field] / case.dt_h
             assert pb[field] >= 0 and periods == round(periods), (field, pb[field])
+        for field in ("min_up_h", "min_down_h"):
+            assert pb[field] <= 24, (field, pb[field])  # no minimum time longer than the day
+    for unit in data["battery"]:  # MODEL_SPEC §13
+        assert unit["e_min_mwh"] < unit["e_max_mwh"], unit
+        if unit["e_init_mwh"] is not None:
+            assert unit["e_min_mwh"] <= unit["e_init_mwh"] <= unit["e_max_mwh"], unit
+        assert 0 < unit["eta_ch"] <= 1 and 0 < unit["eta_dis"] <= 1, unit
+        assert 0 <= unit["self_discharge_per_h"] < 1 and unit["p_ch_max_mw"] > 0 and unit["p_dis_max_mw"] > 0, unit
+    for unit in data["hydro"] + data["biomass"]:
+        assert unit["p_min_mw"] <= unit["p_max_mw"], unit
+        for field in ("min_up_h", "min_down_h"):
+            periods = unit[field] / case.dt_h
+            assert 0 <= unit[field] <= 24 and periods == round(periods), (field, unit)
+        if unit["energy_max_mwh"] is not None:  # enough water or fuel for the least a start commits it to
+            assert unit["energy_max_mwh"] >= unit["p_min_mw"] * max(unit["min_up_h"], case.dt_h), unit
+        if unit["p_init_mw"] is not None:
+            low, high = (unit["p_min_mw"], unit["p_max_mw"]) if unit["initial_online"] else (0.0, 0.0)
+            assert low <= unit["p_init_mw"] <= high, unit
+    names = [unit["name"] for kind in ("wind", "pv", "csp", "ed", "td", "battery", "hydro", "biomass")
+             for unit in data[kind]]
+    assert len(names) == len(set(names)), names
     assert not [name for name, gamma in data["budgets"]["overrides"] if gamma < 0]
     frame = case.history.frame.select_dtypes("number")
     assert frame.notna().all().all() and (frame.abs() <= LARGEST).all().all()
@@ -201,10 +222,17 @@ def _check_text(text: bytes, csv: bytes):
     return load_or_refuse(lambda: read_case_files({"case.yaml": text, "history.csv": csv}))
 
 
-def changed(path: tuple, value: Any) -> dict:
-    """The default case with the value at ``path`` replaced."""
-    data = copy.deepcopy(RAW)
+def changed(path: tuple, value: Any, base: dict = RAW) -> dict:
+    """The default case (or ``base``) with the value at ``path`` replaced."""
+    data = copy.deepcopy(base)
     _parent(data, path)[path[-1]] = value
+    return data
+
+
+def changed_unit(kind: str, **values: Any) -> dict:
+    """The case with the new units, its first unit of ``kind`` (battery, hydro, biomass) given ``values``."""
+    data = copy.deepcopy(RAW_NEW_UNITS)
+    data["units"][kind][0].update(values)
     return data
 
 
@@ -222,6 +250,19 @@ def changed(path: tuple, value: Any) -> dict:
 @example(data=changed(("units", "csp", 0, "storage", "reserve_energy_factor"), 0))
 @example(data=changed(("units", "ed", 0, "profile_window"), "sometimes"))
 @example(data=changed(("units", "ed", 0, "ramp_dn_mw_per_h"), -5))
+# The bad batteries, hydro and biomass units of MODEL_SPEC §13, and minimum times longer than the day.
+@example(data=changed_unit("battery", e_min_mwh=50.0))
+@example(data=changed_unit("battery", e_init_mwh=45.0))
+@example(data=changed_unit("battery", e_init_mwh=2.0))
+@example(data=changed_unit("battery", eta_ch=0.0))
+@example(data=changed_unit("battery", eta_dis=95))
+@example(data=changed_unit("hydro", energy_max_mwh=8.0))
+@example(data=changed_unit("hydro", p_init_mw=40.0))
+@example(data=changed_unit("hydro", min_up_h=25.0))
+@example(data=changed_unit("biomass", min_down_h=30.0, enabled=True))
+@example(data=changed(("units", "csp", 0, "power_block", "min_up_h"), 30))
+@example(data=changed_unit("battery", name="HY1"))
+@example(data=changed_unit("biomass", name="WF1"))
 def test_a_mutated_case_loads_or_is_refused_by_rule(short_history, data):
     _check_mutation(data, short_history)
 
