@@ -213,6 +213,13 @@ def _dispatchable_renamed(book):
         book[sheet].cell(_row_of(book[sheet], column, "U1"), column).value = "U7"
 
 
+def _dispatchable_value(unit: str, header: str, value: float):
+    def change(book):
+        sheet = book["DRES"]
+        sheet.cell(_row_of(sheet, 6, unit), _header_column(sheet, header)).value = value
+    return change
+
+
 def _without_sheet(book):
     del book["Energy_Forecast"]
 
@@ -230,8 +237,15 @@ def _not_a_number(book):
     (_without_sheet, r'sheet "Energy_Forecast": is missing; the tool\'s workbook has it'),
     (_dispatchable_renamed, r'sheet "VPP_Units" unit "U7": the tool knows a dispatchable unit as hydro \(U1\)'),
     (_not_a_number, r'sheet "DRES" row \d+ column "Max energy \[MWh\]": \'lots\' is not a finite number'),
+    # biomass U2 runs at least 2 MW for its 3 h minimum up time: 6 MWh of fuel
+    (_dispatchable_value("U2", "Max energy [MWh]", 5), r'sheet "DRES" unit "U2" column "Max energy \[MWh\]": 5 is '
+     r"below Min power production x Min up time = 2 MW x 3 h = 6 MWh: once started, the unit could not run"),
+    (_dispatchable_value("U1", "Min down time [hour]", 30),
+     r'sheet "DRES" unit "U1" column "Min down time \[hour\]": 30 must lie in 0..24 h'),
+    (_dispatchable_value("U1", "Min power production [MW]", 60),
+     r'sheet "DRES" unit "U1": Min power production 60 MW must be <= Max power production 50 MW'),
 ], ids=["missing column", "unit named twice", "row named twice", "missing sheet", "unknown dispatchable",
-        "not a number"])
+        "not a number", "fuel short of the minimum run", "minimum time longer than the day", "minimum above maximum"])
 def test_a_bad_workbook_is_refused_by_name_and_nothing_is_written(small_copy, tmp_path, change, message):
     path = _copy(small_copy, tmp_path, change)
     out = tmp_path / "case"

@@ -539,6 +539,7 @@ def _dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bo
     for name in names:
         key = _row_of(table, name, "DRES", "dispatchable unit")
         v = [table.number(key, c) for c in columns]
+        _check_dispatchable(name, dict(zip(columns, v)))
         kind = DISPATCHABLE_KINDS.get(name, "dispatchable")
         switch = {"hydro": "sHydro_exists", "biomass": "sBiomass_exists"}.get(kind)
         enabled = switches["sDRES_exists"] and (switch is None or switches[switch])
@@ -549,6 +550,25 @@ def _dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bo
                                 sr_ramp_up_mw_per_min=v[11], sr_ramp_dn_mw_per_min=v[12], hours_on_before=v[13],
                                 hours_off_before=v[14], min_up_h=v[15], min_down_h=v[16], e_max_mwh=v[17]))
     return tuple(out)
+
+
+def _check_dispatchable(name: str, values: dict[str, float]) -> None:
+    """The rules of rvpp's case model for a hydro or biomass unit, in the words of sheet DRES."""
+    low, high = values["Min power production [MW]"], values["Max power production [MW]"]
+    if low > high:
+        raise WorkbookError("DRES", f'unit "{name}"', f"Min power production {low:g} MW must be <= Max power "
+                                                       f"production {high:g} MW")
+    for column in ("Min up time [hour]", "Min down time [hour]"):
+        if not 0 <= values[column] <= PERIODS:
+            raise WorkbookError("DRES", f'unit "{name}" column "{column}"',
+                                f"{values[column]:g} must lie in 0..{PERIODS} h: a minimum time is at most the day")
+    hours = max(values["Min up time [hour]"], 1.0)  # the workbook's periods are of 1 h (sDelta)
+    energy = values["Max energy [MWh]"]
+    if energy < low * hours:
+        raise WorkbookError("DRES", f'unit "{name}" column "Max energy [MWh]"',
+                            f"{energy:g} is below Min power production x Min up time = {low:g} MW x {hours:g} h = "
+                            f"{low * hours:g} MWh: once started, the unit could not run its minimum up time at its "
+                            "minimum output")
 
 
 def _binary(value: float, sheet: str, name: str, column: str) -> bool:
