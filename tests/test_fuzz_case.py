@@ -188,6 +188,7 @@ def assert_within_documented_bounds(case) -> None:
             assert 0 <= unit[field] <= 24 and periods == round(periods), (field, unit)
         if unit["energy_max_mwh"] is not None:  # enough water or fuel for the least a start commits it to
             assert unit["energy_max_mwh"] >= unit["p_min_mw"] * max(unit["min_up_h"], case.dt_h), unit
+            assert unit["energy_max_mwh"] >= least_run_mwh(unit, case.dt_h) - 1e-9, unit
         if unit["p_init_mw"] is not None:
             low, high = (unit["p_min_mw"], unit["p_max_mw"]) if unit["initial_online"] else (0.0, 0.0)
             assert low <= unit["p_init_mw"] <= high, unit
@@ -197,6 +198,24 @@ def assert_within_documented_bounds(case) -> None:
     assert not [name for name, gamma in data["budgets"]["overrides"] if gamma < 0]
     frame = case.history.frame.select_dtypes("number")
     assert frame.notna().all().all() and (frame.abs() <= LARGEST).all().all()
+
+
+def least_run_mwh(unit: dict, dt_h: float) -> float:
+    """What a hydro or biomass unit online before the day must produce before it may stop: the rest of
+    a minimum up time begun before the day, and from ``p_init_mw`` down at its ramp to where it may
+    stop (docs/case-format.md); whole 24-hour days here, where the case may have 23 hours."""
+    if not unit["initial_online"]:
+        return 0.0
+    done = unit["initial_hours_in_status"]
+    left = 0 if done is None else max(0, round((unit["min_up_h"] - done) / dt_h))
+    level, hours_on, energy = unit["p_init_mw"], 0, 0.0
+    down = math.inf if unit["ramp_dn_mw_per_h"] is None else unit["ramp_dn_mw_per_h"] * dt_h
+    stop = math.inf if unit["shutdown_ramp_mw_per_h"] is None else unit["shutdown_ramp_mw_per_h"] * dt_h
+    while hours_on < round(23 / dt_h) and (hours_on < left or (level is not None and level > min(stop, unit["p_max_mw"]))):
+        level = unit["p_min_mw"] if level is None else max(unit["p_min_mw"], level - down)
+        energy += level * dt_h
+        hours_on += 1
+    return energy
 
 
 def load_or_refuse(load):
@@ -259,6 +278,8 @@ def changed_unit(kind: str, **values: Any) -> dict:
 @example(data=changed_unit("hydro", energy_max_mwh=8.0))
 @example(data=changed_unit("hydro", p_init_mw=40.0))
 @example(data=changed_unit("hydro", min_up_h=25.0))
+@example(data=changed_unit("hydro", p_init_mw=30.0, ramp_dn_mw_per_h=5.0, energy_max_mwh=60.0, min_up_h=0.0,
+                           initial_hours_in_status=None))
 @example(data=changed_unit("biomass", min_down_h=30.0, enabled=True))
 @example(data=changed(("units", "csp", 0, "power_block", "min_up_h"), 30))
 @example(data=changed_unit("battery", name="HY1"))

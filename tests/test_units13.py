@@ -213,6 +213,17 @@ def test_the_audit_finds_a_restart_within_the_minimum_down_time():
     assert "dispatchable.min_down" in checks
 
 
+def test_the_least_run_a_unit_online_before_the_day_is_committed_to_fits_its_water_exactly():
+    # Online before the day at 30 MW, 5 MW/h down, a stop only from 10 MW or less, 5 MW minimum: the
+    # least it can produce is 25 + 20 + 15 + 10 = 70 MWh before it stops in hour 5. With exactly 70 MWh
+    # of water that run is the only plan (the case model refuses 69, tests/test_units13_hostile.py).
+    unit = dispatchable("HY", p_min_mw=5.0, initial_online=True, p_init_mw=30.0, ramp_dn_mw_per_h=5.0,
+                        shutdown_ramp_mw_per_h=10.0, energy_max_mwh=70.0, marginal_cost_eur_per_mwh=1.0)
+    result = solved(tiny_case(hydro_units=[unit]), np.full(NT, 40.0))
+    assert result.dispatch["p_mw"].to_numpy() == pytest.approx([25.0, 20.0, 15.0, 10.0] + [0.0] * 20, abs=1e-6)
+    assert result.dispatch["online"].tolist() == [1] * 4 + [0] * 20
+
+
 def test_state_carries_a_battery_energy_and_a_unit_status_to_the_next_day():
     from rvpp.backtest.state import initial_state, with_state
     case = tiny_case(battery_units=[battery(e_init_mwh=3.0)],

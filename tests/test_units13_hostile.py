@@ -33,6 +33,14 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     ({"hydro": [{**HY, "energy_max_mwh": 4.0}]},
      'hydro "H1": energy_max_mwh=4 is below one period at p_min_mw: 5 MW x dt_h=1 h = 5 MWh; the unit could '
      "never run"),
+    # online before the day at 30 MW, 5 MW/h down and a stop from 10 MW at most: 25 + 20 + 15 + 10 = 70 MWh
+    ({"hydro": [{**HY, "initial_online": True, "p_init_mw": 30.0, "ramp_dn_mw_per_h": 5.0,
+                 "shutdown_ramp_mw_per_h": 10.0, "energy_max_mwh": 69.0}]},
+     'hydro "H1": energy_max_mwh=69 is below the 70 MWh the day commits the unit to: online before the day '
+     "(p_init_mw=30, ramp_dn_mw_per_h=5, shutdown_ramp_mw_per_h=10), it must run 4 h at least before it may stop"),
+    # online 1 h of a 6 h minimum up time: 5 more hours at 5 MW = 25 MWh
+    ({"biomass": [{**HY, "initial_online": True, "initial_hours_in_status": 1.0, "min_up_h": 6.0,
+                   "energy_max_mwh": 31.0, "min_down_h": 0.0}]}, None),
     ({"biomass": [{**HY, "min_up_h": 25.0}]}, 'biomass "H1": min_up_h=25 must be <= 24'),
     ({"biomass": [{**HY, "min_down_h": 30.0}]}, 'biomass "H1": min_down_h=30 must be <= 24'),
     ({"hydro": [{**HY, "min_up_h": 1.5}]}, 'hydro "H1": min_up_h=1.5 must be a multiple of dt_h=1'),
@@ -43,6 +51,12 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
      'biomass "H1": name is used by more than one unit; names must be unique'),
 ])
 def test_bad_units_are_refused_by_name(units, message):
+    if message is None:  # a good unit beside the bad ones: it loads
+        base = tiny_case(battery_units=[{**BAT, "name": "OK"}])
+        data = base.to_data()
+        data["units"].update(units)
+        assert [u.name for _, u in parse_case(data, base.history).units()] == ["OK", "H1"]
+        return
     problems = refused(**units)
     assert any(p.startswith(message) for p in problems), problems
 

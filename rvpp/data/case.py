@@ -29,7 +29,7 @@ from .history import MAX_QUANTITY, PRICE_COLUMNS, History
 from .kinds import DISPATCHABLE_KINDS, KINDS, PAPER_KINDS, SHARED_CLASS_KINDS, UNIT_KINDS, UnitKind
 from .intraday import IntradaySettings
 from .intraday import forecast_column as intraday_forecast_column, price_column as intraday_price_column
-from .periods import ALLOWED_DT_H
+from .periods import ALLOWED_DT_H, delivery_periods
 
 
 def _not_true_false(kind: str) -> BeforeValidator:
@@ -558,6 +558,31 @@ class DispatchableUnit(_Unit):
         left = int(round(max(0.0, needed - self.initial_hours_in_status) / dt_h))
         return (left, 0) if self.initial_online else (0, left)
 
+    def committed_run(self, dt_h: float, periods: int) -> tuple[float, int]:
+        """The least energy [MWh] the day commits the unit to from its status before the day, and the
+        periods it must stay online for it (0, 0 when it may stay off or stop at once).
+
+        Online before the day, the unit stays on for the minimum up time begun before the day; from
+        ``p_init_mw`` its output falls by at most ``ramp_dn`` per period, never below ``p_min``, and it
+        may stop only once it is at or below the shutdown ramp (MODEL_SPEC §13): the cheapest run
+        steps down as fast as it may and stops at the first period it may (at the day's end at most).
+        """
+        if not self.initial_online:
+            return 0.0, 0
+        held, _ = self.initial_periods(dt_h)
+        if self.p_init_mw is None:  # the first period is free of ramp limits
+            run = min(held, periods)
+            return self.p_min_mw * run * dt_h, run
+        step_down = self.p_max_mw if self.ramp_dn_mw_per_h is None else min(self.ramp_dn_mw_per_h * dt_h, self.p_max_mw)
+        stop_from = (self.p_max_mw if self.shutdown_ramp_mw_per_h is None
+                     else min(self.shutdown_ramp_mw_per_h * dt_h, self.p_max_mw))
+        level, energy, run = self.p_init_mw, 0.0, 0
+        while run < periods and (run < held or level > stop_from):
+            level = max(self.p_min_mw, level - step_down)
+            energy += level * dt_h
+            run += 1
+        return energy, run
+
     @model_validator(mode="after")
     def _limits(self) -> "DispatchableUnit":
         _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
@@ -985,6 +1010,7 @@ class Case(_Frozen):
     def _dispatchable_problems(self) -> list[str]:
         """Hours of hydro and biomass units in whole periods, and a day's energy that allows one period."""
         problems = []
+        periods = len(delivery_periods(self.delivery_date, self.timezone, self.dt_h))
         for kind in DISPATCHABLE_KINDS:
             for unit in getattr(self, kind):
                 for field in ("min_up_h", "min_down_h", "initial_hours_in_status"):
@@ -997,6 +1023,10 @@ class Case(_Frozen):
                     problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below one '
                                     f"period at p_min_mw: {unit.p_min_mw:g} MW x dt_h={self.dt_h:g} h = {least:g} "
                                     "MWh; the unit could never run")
+                elif unit.energy_max_mwh is not None:
+                    committed, run = unit.committed_run(self.dt_h, periods)
+                    if unit.energy_max_mwh < committed - 1e-9:
+                        problems.append(_committed_problem(kind, unit, committed, run * self.dt_h))
         return problems
 
     def _band_problems(self, sources: set[str], columns: set[str]) -> list[str]:
@@ -1055,6 +1085,18 @@ def _unit_data(kind: str, unit: dict[str, Any]) -> dict[str, Any]:
 def _without_defaults(data: dict[str, Any], defaults: Mapping[str, Any]) -> dict[str, Any]:
     """``data`` without the options ``defaults`` names where they hold their default."""
     return {k: v for k, v in data.items() if k not in defaults or v != defaults[k]}
+
+
+def _committed_problem(kind: str, unit: DispatchableUnit, committed: float, hours: float) -> str:
+    """The day's water or fuel falls short of the run the status before the day commits the unit to."""
+    reasons = [f"p_init_mw={unit.p_init_mw:g}"] if unit.p_init_mw is not None else []
+    reasons += [f"{field}={getattr(unit, field):g}" for field in ("ramp_dn_mw_per_h", "shutdown_ramp_mw_per_h")
+                if unit.p_init_mw is not None and getattr(unit, field) is not None]
+    if unit.initial_periods(1.0)[0]:
+        reasons += [f"min_up_h={unit.min_up_h:g}", f"initial_hours_in_status={unit.initial_hours_in_status:g}"]
+    return (f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below the {committed:g} MWh the day '
+            f"commits the unit to: online before the day ({', '.join(reasons)}), it must run {hours:g} h at "
+            "least before it may stop")
 
 
 def _is_multiple(hours: float, dt_h: float) -> bool:
