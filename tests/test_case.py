@@ -99,6 +99,9 @@ BAD_INPUTS = {
     "minimum up time not a whole number of periods": (
         lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=2.5),
         'csp "CSP1": power_block.min_up_h=2.5 must be a multiple of dt_h=1'),
+    "a unit of another kind in a list": (
+        lambda d: unit(d, "wind", "WF2").update(kind="pv"),
+        "wind \"WF2\": kind='pv' must be 'wind' in the wind list"),
     "a turbine minimum up time longer than the day": (
         lambda d: d["units"]["csp"][0]["power_block"].update(min_up_h=30),
         'csp "CSP1": power_block.min_up_h=30 must be <= 24'),

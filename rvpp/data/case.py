@@ -959,7 +959,7 @@ class Case(_Frozen):
         for kind in SHARED_CLASS_KINDS:
             for unit in getattr(self, kind):
                 if unit.kind != kind:
-                    problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind!r} in the {kind} list')
+                    problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind.value!r} in the {kind} list')
         seen: set[str] = set()
         for kind, unit in self.all_units():
             if unit.name in seen:
