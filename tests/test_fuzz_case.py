@@ -226,6 +226,7 @@ def load_or_refuse(load):
     except RvppError as err:
         message = str(err)
         assert message.strip() and "Traceback" not in message
+        assert "UnitKind" not in message, message  # kinds as written in case.yaml, not as the code spells them
         if isinstance(err, CaseError):
             assert err.problems and all(isinstance(p, str) and p for p in err.problems)
         return None
@@ -248,10 +249,11 @@ def changed(path: tuple, value: Any, base: dict = RAW) -> dict:
     return data
 
 
-def changed_unit(kind: str, **values: Any) -> dict:
-    """The case with the new units, its first unit of ``kind`` (battery, hydro, biomass) given ``values``."""
+def changed_unit(listed_under: str, **values: Any) -> dict:
+    """The case with the new units, its first unit listed under ``listed_under`` (battery, hydro, biomass)
+    given ``values``."""
     data = copy.deepcopy(RAW_NEW_UNITS)
-    data["units"][kind][0].update(values)
+    data["units"][listed_under][0].update(values)
     return data
 
 
@@ -284,6 +286,7 @@ def changed_unit(kind: str, **values: Any) -> dict:
 @example(data=changed(("units", "csp", 0, "power_block", "min_up_h"), 30))
 @example(data=changed_unit("battery", name="HY1"))
 @example(data=changed_unit("biomass", name="WF1"))
+@example(data=changed_unit("hydro", kind="biomass"))
 def test_a_mutated_case_loads_or_is_refused_by_rule(short_history, data):
     _check_mutation(data, short_history)
 
