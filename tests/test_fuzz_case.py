@@ -211,7 +211,8 @@ def least_run_mwh(unit: dict, dt_h: float) -> float:
     level, hours_on, energy = unit["p_init_mw"], 0, 0.0
     down = math.inf if unit["ramp_dn_mw_per_h"] is None else unit["ramp_dn_mw_per_h"] * dt_h
     stop = math.inf if unit["shutdown_ramp_mw_per_h"] is None else unit["shutdown_ramp_mw_per_h"] * dt_h
-    while hours_on < round(23 / dt_h) and (hours_on < left or (level is not None and level > min(stop, unit["p_max_mw"]))):
+    while hours_on < round(23 / dt_h) and (hours_on < left
+                                           or (level is not None and level > min(stop, unit["p_max_mw"]))):
         level = unit["p_min_mw"] if level is None else max(unit["p_min_mw"], level - down)
         energy += level * dt_h
         hours_on += 1

@@ -573,7 +573,8 @@ class DispatchableUnit(_Unit):
         if self.p_init_mw is None:  # the first period is free of ramp limits
             run = min(held, periods)
             return self.p_min_mw * run * dt_h, run
-        step_down = self.p_max_mw if self.ramp_dn_mw_per_h is None else min(self.ramp_dn_mw_per_h * dt_h, self.p_max_mw)
+        step_down = (self.p_max_mw if self.ramp_dn_mw_per_h is None
+                     else min(self.ramp_dn_mw_per_h * dt_h, self.p_max_mw))
         stop_from = (self.p_max_mw if self.shutdown_ramp_mw_per_h is None
                      else min(self.shutdown_ramp_mw_per_h * dt_h, self.p_max_mw))
         level, energy, run = self.p_init_mw, 0.0, 0
@@ -959,7 +960,8 @@ class Case(_Frozen):
         for kind in SHARED_CLASS_KINDS:
             for unit in getattr(self, kind):
                 if unit.kind != kind:
-                    problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind.value!r} in the {kind} list')
+                    problems.append(f'{kind} "{unit.name}": kind={unit.kind!r} must be {kind.value!r} in the '
+                                    f"{kind} list")
         seen: set[str] = set()
         for kind, unit in self.all_units():
             if unit.name in seen:
@@ -1008,7 +1010,8 @@ class Case(_Frozen):
         return self
 
     def _dispatchable_problems(self) -> list[str]:
-        """Hours of hydro and biomass units in whole periods, and a day's energy that allows one period."""
+        """Hours of hydro and biomass units in whole periods, and a day's energy that allows one period and
+        the run a unit online before the day is committed to."""
         problems = []
         periods = len(delivery_periods(self.delivery_date, self.timezone, self.dt_h))
         for kind in DISPATCHABLE_KINDS:
@@ -1026,7 +1029,7 @@ class Case(_Frozen):
                 elif unit.energy_max_mwh is not None:
                     committed, run = unit.committed_run(self.dt_h, periods)
                     if unit.energy_max_mwh < committed - 1e-9:
-                        problems.append(_committed_problem(kind, unit, committed, run * self.dt_h))
+                        problems.append(_committed_problem(kind, unit, committed, run, self.dt_h))
         return problems
 
     def _band_problems(self, sources: set[str], columns: set[str]) -> list[str]:
@@ -1087,16 +1090,16 @@ def _without_defaults(data: dict[str, Any], defaults: Mapping[str, Any]) -> dict
     return {k: v for k, v in data.items() if k not in defaults or v != defaults[k]}
 
 
-def _committed_problem(kind: str, unit: DispatchableUnit, committed: float, hours: float) -> str:
+def _committed_problem(kind: str, unit: DispatchableUnit, committed: float, run: int, dt_h: float) -> str:
     """The day's water or fuel falls short of the run the status before the day commits the unit to."""
     reasons = [f"p_init_mw={unit.p_init_mw:g}"] if unit.p_init_mw is not None else []
     reasons += [f"{field}={getattr(unit, field):g}" for field in ("ramp_dn_mw_per_h", "shutdown_ramp_mw_per_h")
                 if unit.p_init_mw is not None and getattr(unit, field) is not None]
-    if unit.initial_periods(1.0)[0]:
+    if unit.initial_periods(dt_h)[0]:
         reasons += [f"min_up_h={unit.min_up_h:g}", f"initial_hours_in_status={unit.initial_hours_in_status:g}"]
     return (f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below the {committed:g} MWh the day '
-            f"commits the unit to: online before the day ({', '.join(reasons)}), it must run {hours:g} h at "
-            "least before it may stop")
+            f"commits the unit to: online before the day ({', '.join(reasons)}), it must run {run * dt_h:g} h "
+            "at least before it may stop")
 
 
 def _is_multiple(hours: float, dt_h: float) -> bool:
