@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyomo.environ as pyo
-import scipy.sparse
 from pyomo.core.base.enums import SortComponents
 from pyomo.core.base.expression import NamedExpressionData
 from pyomo.core.base.param import ParamData
@@ -48,11 +47,63 @@ class TrivialInfeasibility(Exception):
 
 
 @dataclass(frozen=True, eq=False)
+class ColumnMatrix:
+    """A sparse matrix stored column by column (compressed sparse columns, as HiGHS takes it): the
+    rows of column ``j`` are ``indices[indptr[j]:indptr[j + 1]]``, increasing, with the values
+    ``data`` there; no stored zeros.
+
+    NumPy alone: SciPy's sparse matrices would do, but a process that imports SciPy after Pyomo
+    has Pyomo import ``scipy.stats`` too (Pyomo's deferred import of SciPy), about a second more
+    for every command-line solve (docs/performance.md).
+    """
+
+    shape: tuple[int, int]
+    indptr: np.ndarray
+    indices: np.ndarray
+    data: np.ndarray
+
+    @classmethod
+    def from_rows(cls, data: list[float], columns: list[int], starts: list[int], n: int) -> ColumnMatrix:
+        """The matrix of ``len(starts) − 1`` rows given by their coefficients ``data`` in ``columns``,
+        row ``i`` at ``starts[i]:starts[i + 1]`` (zeros dropped), and ``n`` columns."""
+        rows = len(starts) - 1
+        values = np.asarray(data, dtype=float)
+        cols = np.asarray(columns, dtype=np.int64)
+        row_of = np.repeat(np.arange(rows, dtype=np.int32), np.diff(np.asarray(starts, dtype=np.int64)))
+        kept = values != 0.0
+        values, cols, row_of = values[kept], cols[kept], row_of[kept]
+        order = np.argsort(cols, kind="stable")  # a stable sort keeps each column's rows increasing
+        indptr = np.zeros(n + 1, dtype=np.int32)
+        np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
+        return cls(shape=(rows, n), indptr=indptr, indices=row_of[order], data=values[order])
+
+    def nonzero_columns(self) -> np.ndarray:
+        """Whether each column holds a value."""
+        return np.diff(self.indptr) > 0
+
+    def columns(self, keep: np.ndarray) -> ColumnMatrix:
+        """The columns ``keep`` (increasing positions), in that order."""
+        starts, ends = self.indptr[keep], self.indptr[keep + 1]
+        picked = np.concatenate([np.arange(a, b) for a, b in zip(starts, ends)]) if len(keep) else np.zeros(0, int)
+        indptr = np.zeros(len(keep) + 1, dtype=np.int32)
+        np.cumsum(ends - starts, out=indptr[1:])
+        return ColumnMatrix(shape=(self.shape[0], len(keep)), indptr=indptr, indices=self.indices[picked],
+                            data=self.data[picked])
+
+    def times(self, x: np.ndarray) -> np.ndarray:
+        """``self · x``, each row's terms added in column order."""
+        y = np.zeros(self.shape[0])
+        np.add.at(y, self.indices, self.data * np.repeat(x, np.diff(self.indptr)))
+        return y
+
+
+@dataclass(frozen=True, eq=False)
 class StandardForm:
-    """``rows`` of ``a · x (sense) rhs`` with sense 0 (=), 1 (≤) or −1 (≥); a ranged constraint is two rows."""
+    """``rows`` of ``a · x (sense) rhs`` with sense 0 (=), 1 (≤) or −1 (≥); a ranged constraint is two rows.
+    ``a`` is a :class:`ColumnMatrix` (or SciPy's, from Pyomo's compiler: the same attributes)."""
 
     columns: list[VarData]
-    a: scipy.sparse.csc_array
+    a: ColumnMatrix
     rhs: np.ndarray
     sense: np.ndarray
     cost: np.ndarray
@@ -226,28 +277,25 @@ def standard_form(m: pyo.Block) -> StandardForm:
             sense.append(row_sense)
     variables = columns.variables
     n = len(variables)
-    a = _by_column(data, indices, starts, len(rhs), n)
-    cost = _by_column(list(cost_terms.values()), list(cost_terms), [0, len(cost_terms)], 1, n)
-    used = (np.diff(a.indptr) > 0) | (np.diff(cost.indptr) > 0)
+    a = ColumnMatrix.from_rows(data, indices, starts, n)
+    cost = np.zeros(n)
+    cost[list(cost_terms)] = list(cost_terms.values())
+    used = a.nonzero_columns() | (cost != 0.0)
     constants = np.array(rhs, dtype=float)
     fixed = np.array([v.fixed for v in variables], dtype=bool) & used
     if fixed.any():  # fixed variables met as columns: their terms move to the constants
-        x = np.array([variables[j].value for j in np.flatnonzero(fixed)], dtype=float)
-        offset = offset + (cost[:, fixed] @ x)[0]
-        constants = constants - a[:, fixed] @ x
+        at = np.flatnonzero(fixed)
+        x = np.array([variables[j].value for j in at], dtype=float)
+        moved = 0.0
+        for coefficient, value_ in zip(cost[at], x):  # one by one, in column order
+            if coefficient != 0.0:
+                moved += coefficient * value_
+        offset = offset + moved
+        constants = constants - a.columns(at).times(x)
         used &= ~fixed
     keep = np.flatnonzero(used)
     if len(keep) < n:
-        a, cost = a[:, keep], cost[:, keep]
+        a, cost = a.columns(keep), cost[keep]
     maximize = bool(objectives) and objectives[0].sense == pyo.maximize
     return StandardForm(columns=[variables[j] for j in keep], a=a, rhs=constants, sense=np.array(sense, dtype=int),
-                        cost=cost.toarray().ravel(), offset=float(offset), maximize=maximize)
-
-
-def _by_column(data: list[float], indices: list[int], starts: list[int], rows: int, n: int) -> scipy.sparse.csc_array:
-    """Rows given by their coefficients, columns and starts, as a column-wise matrix without explicit zeros."""
-    by_row = scipy.sparse.csr_array((np.array(data, dtype=float), np.array(indices, dtype=np.int32),
-                                     np.array(starts, dtype=np.int32)), shape=(rows, n))
-    a = by_row.tocsc()
-    a.eliminate_zeros()
-    return a
+                        cost=cost, offset=float(offset), maximize=maximize)
