@@ -4,6 +4,10 @@ numbers, bit for bit, on every kind of model rvpp builds. The oracle is Pyomo's 
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pyomo.environ as pyo
 import pytest
@@ -164,3 +168,16 @@ def test_a_fixed_variable_of_a_numbered_component_leaves_an_empty_row():
     m.impossible = pyo.Constraint(expr=m.x[1] >= 5)
     assert_same_matrix(m)
     assert run_highs(m, SolverSettings(rel_gap=0.0, time_limit_s=30)).status is Outcome.INFEASIBLE
+
+
+def test_an_hourly_solve_imports_no_scipy():
+    """The matrix is built with NumPy alone: an hourly solve in a fresh process never imports SciPy,
+    which would make Pyomo import ``scipy.stats`` as well (seconds of a command-line solve)."""
+    code = "\n".join([
+        "import sys", "import rvpp",
+        "result = rvpp.solve(rvpp.load_case('data/cases/paper'))",
+        "print(result.status, sorted(m for m in ('scipy', 'scipy.sparse', 'scipy.stats') if m in sys.modules))"])
+    done = subprocess.run([sys.executable, "-c", code], cwd=Path(__file__).resolve().parent.parent,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "optimal []"
