@@ -196,6 +196,13 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
     case is kept. When the case holds other values than the table shows after an edit
     (e.g. a forecast scale that followed a capacity), the table is drawn again from it.
     """
+    # A new row's defaults follow the case (its free name: BAT2 once BAT1 is in). Streamlit gives an
+    # editor whose settings changed a new identity and drops its edits, so it starts afresh from the case
+    # (an edit that added or deleted rows draws it again at once, below).
+    settings, drawn_with = repr(editor.get("column_config")), st.session_state.get(f"{key}_settings")
+    if drawn_with is not None and drawn_with != settings:
+        reset_editor(key)
+    st.session_state[f"{key}_settings"] = settings
     generation = st.session_state.setdefault(f"{key}_generation", 0)
     widget, base = f"{key}_{generation}", f"{key}_base"
     if widget not in st.session_state or base not in st.session_state:
@@ -214,7 +221,8 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
     if new != state.case():
         st.session_state[f"{key}_accepted"] = changes(state.case(), new)
         state.set_case(new)
-        if not _same_cells(as_text(build(), numbers), edited):
+        rows_moved = len(edited) != len(st.session_state[base])  # a new row's defaults move on with them
+        if rows_moved or not _same_cells(as_text(build(), numbers), edited):
             reset_editor(key)
             st.rerun()
     if accepted := st.session_state.pop(f"{key}_accepted", None):
@@ -298,7 +306,14 @@ def changes(before: Case, after: Case) -> list[str]:
     new, old = service.describe_edits(before, after), service.describe_edits(after, before)
     if len(new) != len(old):
         return switches + new or ["the case"]
-    return switches + [n if o == n else f"{n} (was {_was(o, n)})" for n, o in zip(new, old)] or ["the case"]
+    return switches + [n if o == n or _added_or_removed(n, o) else f"{n} (was {_was(o, n)})"
+                       for n, o in zip(new, old)] or ["the case"]
+
+
+def _added_or_removed(new: str, old: str) -> bool:
+    """Whether a pair of edit words tells a unit added or removed (``BAT1 added (20 MW)`` against
+    ``BAT1 removed``): it says so itself and has no old value."""
+    return new.endswith(" removed") or old.endswith(" removed")
 
 
 def _was(old: str, new: str) -> str:

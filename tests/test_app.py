@@ -221,6 +221,64 @@ def test_portfolio_adds_a_unit_and_switches_the_csp_off(paper_case, paper_solve)
     assert not any(title.endswith("thermal storage") for title in figures(at))
 
 
+def accepted(edits: str) -> str:
+    """The note under a table whose edit the case took, for ``edits`` as markdown."""
+    return f"**Edit accepted**: {edits}. The current case now holds it; solve again on Results to see its plan."
+
+
+def new_row(at: AppTest, kind: str) -> dict:
+    """A new row of the unit table of ``kind`` as the browser sends it: the column defaults, numbers as text."""
+    return {column: value if isinstance(value, (str, bool)) else f"{value:g}"
+            for column, value in rvpp.service.new_unit_row(case_of(at), kind).items()}
+
+
+def test_an_added_or_removed_unit_is_named_without_a_was():
+    at = open_app("portfolio")
+    at.session_state["portfolio_battery_0"] = {"edited_rows": {}, "added_rows": [new_row(at, "battery")],
+                                               "deleted_rows": []}
+    at.run()
+    assert [s.value for s in at.success] == [accepted("BAT1 added \\(20 MW\\)")]
+    key = next(e.key for e in at.data_editor if e.key.startswith("portfolio_battery_"))
+    at.session_state[key] = {"edited_rows": {}, "added_rows": [], "deleted_rows": [0]}
+    at.run()
+    assert [s.value for s in at.success] == [accepted("BAT1 removed")]
+    assert [u.name for u in case_of(at).battery] == []
+
+
+def test_units_added_in_two_tables_both_stay_in_the_case():
+    # The browser sends a new row as its column defaults, number cells as text; a new unit's default
+    # name then moves on (BAT2), which gave the table a new identity: its added row was dropped on the
+    # next run and the unit left the case again.
+    at = open_app("portfolio")
+    for kind, name, capacity in (("battery", "BAT1", "20 MW"), ("hydro", "HY1", "30 MW")):
+        row = new_row(at, kind)
+        assert row["name"] == name
+        at.session_state[f"portfolio_{kind}_0"] = {"edited_rows": {}, "added_rows": [row], "deleted_rows": []}
+        at.run()
+        assert not errors(at)
+        assert [s.value for s in at.success] == [accepted(f"{name} added \\({capacity}\\)")]
+    at.run()
+    assert ([u.name for u in case_of(at).battery], [u.name for u in case_of(at).hydro]) == (["BAT1"], ["HY1"])
+    assert not at.success
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    assert_kpis_match(at, rvpp.solve(case_of(at)))
+    assert "BAT1: state of charge" in figures(at)
+
+
+def test_a_series_edit_of_the_first_unit_stays_on_the_next_run():
+    # A new wind row takes the first farm's series by default: editing that series changed the table's
+    # settings, and the edit was dropped on the next run.
+    at = open_app("portfolio")
+    at.session_state["portfolio_wind_0"] = {"edited_rows": {0: {"series": "WF2"}}, "added_rows": [],
+                                            "deleted_rows": []}
+    at.run()
+    assert [u.column for u in case_of(at).wind] == ["WF2", "WF2"]
+    at.run()
+    assert [u.column for u in case_of(at).wind] == ["WF2", "WF2"]
+    assert not at.success and not errors(at)
+
+
 # ----------------------------------------------------------------------------- Markets & tariffs
 
 
