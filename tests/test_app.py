@@ -143,6 +143,16 @@ def test_home_upload_of_a_broken_case_is_explained_and_a_good_one_loads(paper_ca
     assert case_of(at).name == "uploaded" and case_of(at).replace(name="paper") == paper_case
 
 
+def test_home_upload_of_a_case_file_without_sections_names_each_missing_section():
+    at = open_app()
+    at.file_uploader(key="home_upload").set_value([("case.yaml", b"units: 5\n", "text/yaml")]).run()
+    click(at, "home_load_upload")
+    shown = errors(at)
+    assert "Case not loaded" in shown
+    assert "units: must be a mapping of unit lists" in shown
+    assert "markets: section is required; it needs at least hpa_tariff_eur_per_mwh" in shown
+
+
 def test_home_loads_a_case_folder_only_when_the_server_allows_it(tmp_path, paper_case, monkeypatch):
     monkeypatch.delenv("RVPP_ALLOW_SERVER_FOLDERS", raising=False)
     at = open_app()

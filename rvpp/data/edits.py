@@ -310,6 +310,7 @@ def plain_message(message: str) -> str:
     prefix = ""
     if section:
         prefix, text = section.group(1) + ".", text[section.end():]
+    named = []  # the fields named in the forms' words: they say where without the section
 
     def field(match: re.Match) -> str:
         path, index = match.group(1), match.group(2)
@@ -319,10 +320,14 @@ def plain_message(message: str) -> str:
             return match.group(0)
         if index is not None:
             name = f"{name} (value {int(index) + 1})"
+        named.append(name)
         return f"{name} = "
 
-    text = re.sub(r"\bhpa_tariff_eur_per_mwh hour (\d\d:\d\d) = ", r"HPA tariff at \1 [EUR/MWh_th] = ", text)
+    text, tariffs = re.subn(r"\bhpa_tariff_eur_per_mwh hour (\d\d:\d\d) = ", r"HPA tariff at \1 [EUR/MWh_th] = ",
+                            text)
     text = re.sub(r"\b([a-z][a-z_]*(?:\.[a-z][a-z_]*)*)(?:\.(\d+))?=", field, text)
+    if section and not (named or tariffs):  # "markets: section is required" keeps its section
+        text = section.group(0) + text
     text = re.sub(r"(?<=[ =])-(?=\d)", "−", text)
     return text.replace(">=", "≥").replace("<=", "≤")
 
