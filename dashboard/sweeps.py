@@ -40,14 +40,14 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
     points = solving.swept(run, grid)
     if points is None:
         if not state.is_requested_key(key):
-            left, right = st.columns([3, 2], vertical_alignment="center")
-            # Words, not a disabled slider: Streamlit draws a disabled control's label too faint to read.
-            left.markdown(f"**{label}**: a slider from 0 to {nt} appears here once the plans are computed; "
-                          "then every Γ shows at once.")
-            right.button(f"Compute the plans for every Γ ({len(grid)} solves{_expected(run, grid)})",
-                         key=f"{page}_sweep", icon=":material/play_arrow:", on_click=state.mark_requested_key,
-                         args=(key,), help="One model of the day re-solved for each Γ in the background; the plans "
-                                           "are kept for this case on this server.")
+            # Words, not a disabled slider: Streamlit draws a disabled control's label too faint to read. The
+            # button goes below them, in a row of its own: beside them its expected time was cut off.
+            st.markdown(f"**{label}**: a slider from 0 to {nt} appears here once the plans are computed; "
+                        "then every Γ shows at once.")
+            st.button(f"Compute the plans for every Γ ({len(grid)} solves{_expected(run, grid)})",
+                      key=f"{page}_sweep", icon=":material/play_arrow:", on_click=state.mark_requested_key,
+                      args=(key,), help="One model of the day re-solved for each Γ in the background; the plans "
+                                        "are kept for this case on this server.")
             _ties_note(run, grid)
             return
         points = solving.sweep(run, grid, f"Solving the plans for Γ = 0 to {nt}")

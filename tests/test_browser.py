@@ -328,6 +328,34 @@ def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_p
         assert shown.locator("input").input_value().startswith("browser backtest · ")
 
 
+def cut_off_buttons(page) -> list[str]:
+    """The labels of the page's buttons drawn cut off (ending in an ellipsis)."""
+    return page.evaluate("""() => [...document.querySelectorAll('[data-testid=stMain] button')]
+        .filter(b => [...b.querySelectorAll('*')].some(e => e.scrollWidth > e.clientWidth + 1))
+        .map(b => b.innerText.trim())""")
+
+
+@pytest.mark.slow
+def test_the_sweep_button_shows_its_whole_label_with_the_expected_time_at_1280_pixels(tmp_path):
+    # Once this server has timed a solve, the button of the Γ sweep says how long its solves take;
+    # beside the text in half a row, that end of its label was cut off.
+    require_browser()
+    with streamlit_server("streamlit-sweep-button.log", tmp_path) as url, \
+            chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(url)
+        open_page(page, "Results")
+        page.get_by_role("button", name="Solve", exact=True).click()
+        page.get_by_test_id("stMetric").first.wait_for()
+        for title in ("Robust bidding explained", "Compare strategies"):
+            open_page(page, title)
+            button = page.get_by_role("button", name=re.compile(r"Compute the plans for every Γ \(25 solves · about"))
+            button.wait_for()
+            settle(page)
+            button.scroll_into_view_if_needed()
+            page.screenshot(path=ARTIFACTS / f"sweep-button-{title.split()[0].lower()}.png")
+            assert cut_off_buttons(page) == [], title
+
+
 # ----------------------------------------------------------------------------- saved runs, edits
 
 
