@@ -18,16 +18,16 @@ state.through_app("pages/runs.py")
 
 COMPARE_MAX = 4
 TABLE_KEY = "runs_table"  # the table's widget key, followed by the digest of the runs it lists
-COLUMNS = {
+COLUMNS = {  # the net cost and the status beside the label: in view without scrolling sideways at 1280 px
     "label": st.column_config.TextColumn("Label", width="medium", pinned=True),
-    "saved": st.column_config.TextColumn("Saved (UTC)"),
-    "case": st.column_config.TextColumn("Case"),
-    "day": st.column_config.TextColumn("Delivery day"),
-    "strategy": st.column_config.TextColumn("Strategy"),
-    "markets": st.column_config.TextColumn("Markets"),
-    "status": st.column_config.TextColumn("Status"),
     "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format="%,.1f",
                                                    help="Positive: the plant pays; negative: it earns"),
+    "status": st.column_config.TextColumn("Status"),
+    "strategy": st.column_config.TextColumn("Strategy"),
+    "markets": st.column_config.TextColumn("Markets"),
+    "day": st.column_config.TextColumn("Delivery day"),
+    "case": st.column_config.TextColumn("Case"),
+    "saved": st.column_config.TextColumn("Saved (UTC)"),
     "link": st.column_config.LinkColumn("Link", display_text="open", width="small",
                                         help="Opens the run in a new tab; copy it to share the run"),
 }
@@ -117,7 +117,8 @@ table = pd.DataFrame({
 })
 st.caption(f"{len(runs)} saved run{'s' if len(runs) > 1 else ''}, newest first. Tick the boxes at the left of the "
            f"rows to act on them; tick two, three or {COMPARE_MAX} to compare them.")
-selection = st.dataframe(table, hide_index=True, column_config=COLUMNS, key=table_key(runs), on_select="rerun",
+selection = st.dataframe(table[list(COLUMNS)], hide_index=True, column_config=COLUMNS, key=table_key(runs),
+                         on_select="rerun",
                          selection_mode="multi-row", height=min(38 + 35 * len(runs), 560))
 chosen = [runs[i] for i in selection.selection.rows if i < len(runs)]
 if not chosen:

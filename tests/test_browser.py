@@ -403,6 +403,41 @@ def saved_labels(page) -> list[str]:
     return table.locator("[id^=glide-cell-1-]").all_inner_texts()
 
 
+def table_cells(page, column: int) -> list[str]:
+    """The texts of a column of the page's first table as its grid draws them."""
+    return page.get_by_test_id("stDataFrame").first.locator(f"[id^=glide-cell-{column}-]").all_inner_texts()
+
+
+def number(text: str) -> float:
+    return float(text.replace("−", "-").replace(",", ""))
+
+
+@pytest.mark.slow
+def test_the_saved_runs_table_shows_the_net_cost_whole_at_1280_pixels(tmp_path, paper_case, paper_solve):
+    # The net cost, the number a run is saved for, was cut off at the right edge of the table at 1280
+    # pixels, after the case, the day, the strategy and the markets.
+    require_browser()
+    library = RunLibrary(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
+    pessimistic = rvpp.with_options(paper_case, strategy="pessimistic")
+    library.save("balanced · DAM+SRM+HPA", paper_case, paper_solve())
+    library.save("pessimistic · DAM+SRM+HPA", pessimistic, paper_solve(strategy="pessimistic"))
+    with streamlit_server("streamlit-runs-table.log", tmp_path) as url, \
+            chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(url)
+        open_page(page, "Saved runs")
+        page.get_by_test_id("stDataFrame").first.wait_for()
+        settle(page)
+        page.screenshot(path=ARTIFACTS / "saved-runs-1280.png")
+        # The grid lists the columns it draws, each at least in part: one drawn after the net cost shows it whole.
+        headers = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stDataFrame] [role=columnheader]')]
+            .map(h => h.innerText.trim())""")
+        assert headers[:3] == ["Label", "Net cost [kEUR]", "Status"], headers
+        cells = table_cells(page, 2)
+        assert [number(cell) for cell in cells] == [pytest.approx(-paper_solve(strategy="pessimistic").objective_eur
+                                                                  / 1000, abs=0.05),
+                                                    pytest.approx(-paper_solve().objective_eur / 1000, abs=0.05)]
+
+
 @pytest.mark.slow
 def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the_plan(tmp_path, paper_case,
                                                                                        paper_solve):
