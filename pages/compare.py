@@ -18,6 +18,10 @@ NARROW_PX = 84  # a short header's column [px]
 SHORT_HEADERS = {"Operating cost [kEUR]": "O&M [kEUR]", "Robust protection [kEUR]": "Prot. [kEUR]",
                  "DAM revenue [kEUR]": "DAM [kEUR]", "SR revenue [kEUR]": "SR [kEUR]",
                  "HPA cost [kEUR]": "HPA [kEUR]"}
+# The flexibility table's headers as Results names them (the full name is each one's help), so it fits too.
+FLEXIBILITY_HEADERS = {"Upward reserve [MWh]": "Up reserve [MWh]", "Downward reserve [MWh]": "Down reserve [MWh]",
+                       "Upward reserve to capacity [h]": "Up / capacity [h]",
+                       "Downward reserve to capacity [h]": "Down / capacity [h]"}
 
 
 def save_all(cases: dict, results: dict) -> None:
@@ -63,7 +67,12 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     st.subheader("Flexibility")
     st.caption("Paper Table 9 layout: reserve energy over the day and the same divided by installed capacity [h].")
     flexibility = flexibility_table(results)
-    st.dataframe(flexibility, column_config=widgets.number_formats(flexibility))
+    config = widgets.number_formats(flexibility)
+    for column, short in FLEXIBILITY_HEADERS.items():
+        if column in config:
+            config[column] = st.column_config.NumberColumn(short, format=config[column]["type_config"].get("format"),
+                                                           help=column)
+    st.dataframe(flexibility, column_config=config)
 
 
 def least_safe(results: dict) -> str:

@@ -439,6 +439,23 @@ def test_the_saved_runs_table_shows_the_net_cost_whole_at_1280_pixels(tmp_path, 
 
 
 @pytest.mark.slow
+def test_compare_draws_its_tables_whole_at_1280_pixels(app_url):
+    # The flexibility table's long headers ("Downward reserve to capacity [h]") pushed its last column
+    # past the right edge at 1280 pixels.
+    with chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(app_url)
+        open_page(page, "Compare strategies")
+        page.get_by_role("button", name="Solve 4 plans").click()
+        page.get_by_role("heading", name="Flexibility").wait_for()
+        settle(page)
+        page.get_by_role("heading", name="Flexibility").scroll_into_view_if_needed()
+        page.screenshot(path=ARTIFACTS / "compare-flexibility-1280.png")
+        widths = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stDataFrame] .dvn-scroller')]
+            .map(s => [s.scrollWidth, s.clientWidth])""")
+        assert len(widths) == 3 and all(scroll <= visible + 1 for scroll, visible in widths), widths
+
+
+@pytest.mark.slow
 def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the_plan(tmp_path, paper_case,
                                                                                        paper_solve):
     require_browser()
