@@ -92,6 +92,19 @@ def test_the_figures_and_tables_are_the_stored_records(stored):
 
 
 @pytest.mark.slow
+def test_the_money_axes_write_whole_euros_with_thousands_separators(stored):
+    # Plotly's default wrote a cumulative cost as "2M" and a day as "500k", where the tables beside them
+    # write 2,000,000 and 500,000.
+    at = open_app("backtest")
+    specs = figures(at)
+    money = ["Cumulative net cost of the settled days",
+             "Daily net cost per strategy (box: quartiles and median; points: days)"]
+    for title in money:
+        axis = specs[title]["layout"]["yaxis"]
+        assert (axis.get("exponentformat"), axis.get("separatethousands")) == ("none", True), title
+
+
+@pytest.mark.slow
 def test_opening_a_worst_day_makes_its_plan_the_current_result(stored):
     store, ident = stored
     records = settled_records(store, ident)

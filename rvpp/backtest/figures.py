@@ -23,6 +23,8 @@ from .trading_day import day_summary, sessions
 PARTS = (("mean_market_cost_eur", "market cost", SKY, "dash"), ("mean_penalty_eur", "penalty", VERMILION, "dot"),
          ("mean_net_cost_eur", "net cost", NET_COLOR, "solid"))
 RECOMMENDED_COLOR = ORANGE
+# Money ticks as the tables write money: whole euros with thousands separators, not 2M or 500k.
+MONEY_TICKS = {"exponentformat": "none", "separatethousands": True}
 
 
 def robustness_figure(curve: pd.DataFrame, fraction: float | None = None, period: str = "train") -> go.Figure:
@@ -43,7 +45,7 @@ def robustness_figure(curve: pd.DataFrame, fraction: float | None = None, period
                                  hovertemplate="recommended Γ %{x:.3g}<br>%{y:,.0f} EUR/day<extra></extra>"))
     fig.update_layout(title=f"Price of robustness ({period} period): mean daily cost against Γ",
                       xaxis_title="Γ [fraction of the day, every source]", yaxis_title="cost [EUR/day]",
-                      **_layout())
+                      **_money_layout())
     return fig
 
 
@@ -59,7 +61,7 @@ def cumulative_figure(records: pd.DataFrame) -> go.Figure:
                                  marker={"symbol": look["symbol"], "size": 6},
                                  hovertemplate="%{x}<br>%{y:,.0f} EUR<extra>" + str(label) + "</extra>"))
     fig.update_layout(title="Cumulative net cost of the settled days", xaxis_title="delivery day",
-                      yaxis_title="cumulative net cost [EUR]", **_layout())
+                      yaxis_title="cumulative net cost [EUR]", **_money_layout())
     return fig
 
 
@@ -75,7 +77,7 @@ def distribution_figure(records: pd.DataFrame) -> go.Figure:
                              hovertemplate="%{text}: %{y:,.0f} EUR<extra>" + str(label) + "</extra>"))
     fig.update_layout(title="Daily net cost per strategy (box: quartiles and median; points: days)",
                       xaxis_title="strategy", yaxis_title="daily net cost [EUR/day]", showlegend=False,
-                      **{k: v for k, v in _layout().items() if k != "legend"})
+                      **{k: v for k, v in _money_layout().items() if k != "legend"})
     return fig
 
 
@@ -137,3 +139,8 @@ def _layout() -> dict:
     return {"height": FIGURE_HEIGHT, "paper_bgcolor": TRANSPARENT, "plot_bgcolor": TRANSPARENT,
             "xaxis": {"gridcolor": GRID_COLOR}, "yaxis": {"gridcolor": GRID_COLOR, "zerolinecolor": GRID_COLOR},
             "legend": {"orientation": "h", "y": -0.3}, "margin": {"b": 120}}
+
+
+def _money_layout() -> dict:
+    layout = _layout()
+    return {**layout, "yaxis": {**layout["yaxis"], **MONEY_TICKS}}
