@@ -50,9 +50,9 @@ def what_changed(result, run) -> None:
         return
     edits = widgets.changes(before[2], run)
     difference = shown[1] - before[1]
-    st.info(f"**What changed** since the plan shown before: net cost {before[1]:,.1f} → {shown[1]:,.1f} kEUR "
-            f"({difference:+,.1f} kEUR); " + "; ".join(widgets.literal(e, limit=None) for e in edits) + ".",
-            icon=":material/compare_arrows:")
+    costs = f"{before[1]:,.1f} → {shown[1]:,.1f} kEUR ({difference:+,.1f} kEUR)".replace("-", "−")  # as the cards
+    st.info(f"**What changed** since the plan shown before: net cost {costs}; "
+            + "; ".join(widgets.literal(e, limit=None) for e in edits) + ".", icon=":material/compare_arrows:")
 
 
 st.title("Results")

@@ -25,7 +25,7 @@ from rvpp.backtest import BacktestSettings, variants_of
 from rvpp.backtest.engine import run_backtest
 from rvpp.store import BacktestStore, RunLibrary
 from tests.factories import click, one_day_backtest_form, open_app, wait_for
-from tests.test_app import NET, TIMEOUT_S, case_of, errors, figures, number, shown_kpis
+from tests.test_app import NET, TIMEOUT_S, case_of, edit_capacity, errors, figures, number, shown_kpis
 
 pytestmark = pytest.mark.usefixtures("run_library")  # every test writes into a data folder of its own
 
@@ -162,6 +162,22 @@ def test_an_accepted_edit_is_confirmed_and_results_says_what_changed(paper_case,
     changed = next(i.value for i in at.info if "What changed" in i.value)
     assert f"net cost {before:,.1f} → {after:,.1f} kEUR" in changed
     assert "PV1 20 MW \\(was 50 MW\\)" in changed
+
+
+def test_what_changed_writes_a_fall_in_cost_with_a_true_minus(paper_solve):
+    # The cards write −13.4; the line saying what changed wrote "-13.4 kEUR" with a hyphen.
+    at = click(open_app("results"), "results_solve")
+    at.switch_page("pages/portfolio.py").run()
+    edit_capacity(at, 0, 80.0)  # more wind: the plant pays less
+    at.switch_page("pages/results.py").run()
+    click(at, "results_solve")
+    before = -paper_solve().objective_eur / 1000
+    after = -rvpp.solve(case_of(at)).objective_eur / 1000
+    assert after < before - 1
+    changed = next(i.value for i in at.info if "What changed" in i.value)
+    fall = f"{before - after:,.1f}"
+    assert f"net cost {before:,.1f} → {after:,.1f} kEUR (−{fall} kEUR)" in changed
+    assert not re.search(r"-\d", changed), changed
 
 
 # ----------------------------------------------------------------------------- estimates
