@@ -284,6 +284,7 @@ def test_a_series_edit_of_the_first_unit_stays_on_the_next_run():
                                             "deleted_rows": []}
     at.run()
     assert [u.column for u in case_of(at).wind] == ["WF2", "WF2"]
+    assert [s.value for s in at.success] == [accepted("WF1 History series WF2 \\(was WF1\\)")]
     at.run()
     assert [u.column for u in case_of(at).wind] == ["WF2", "WF2"]
     assert not at.success and not errors(at)

@@ -413,6 +413,8 @@ def _field_edits(kind: str, old: Any, new: Any) -> list[str]:
             words.append(f"{new.name} power-block curve edited")
             continue
         name, unit, _ = FIELDS.get(leaf, (leaf, "", ""))
+        if leaf == "series" and value is None:
+            value = new.name  # no series of its own: the unit reads the history column of its name
         shown = "empty" if value is None else (f"{value:g}" if isinstance(value, float) else str(value))
         words.append(f"{new.name} {name} {shown}{f' {unit}' if unit and unit != '-' and value is not None else ''}")
     return words
