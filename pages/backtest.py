@@ -7,7 +7,7 @@ import datetime as dt
 import streamlit as st
 
 from dashboard import backtests as bt
-from dashboard import state, widgets
+from dashboard import solving, state, widgets
 from rvpp import RvppError
 from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS,
                           PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict, beats_presets_on_training,
@@ -234,12 +234,15 @@ latest = covered[-1]
 default_last = min(latest, max(earliest, run.delivery_date))
 default_first = max(earliest, default_last - dt.timedelta(days=DEFAULT_DAYS - 1))
 
+expected = solving.solver().expected_s(run)  # measured by this server, or nothing
+pace = (f"two solves of about {expected[0]:.1f} s each ({expected[1]})" if expected
+        else "two solves, each about as long as a plan of this case on Results")
 with st.expander(f"Start a backtest of the current case ({widgets.literal(run.name)})", icon=":material/play_circle:",
                  expanded=False):
     st.caption(f"The days can run from {earliest} (the first day with the {run.uncertainty.window_days} days of "
                f"history its bands need) to {latest} (the last day with observations to settle against). It runs "
                "in a process of its own on the server: you may leave this page or close the tab, and come back to "
-               "follow it. Each day of each strategy takes about a second (two solves).")
+               f"follow it. Each day of each strategy takes {pace}.")
     with st.form("backtest_form"):
         first_col, last_col = st.columns(2)
         first_day = first_col.date_input("First day", value=default_first, min_value=earliest, max_value=latest,

@@ -12,7 +12,7 @@ from rvpp.service import (Penalties, STRATEGIES, StudySettings, evaluation_days,
 
 state.through_app("pages/out_of_sample.py")
 
-TEST_DAYS, SCENARIOS, TIME_LIMIT_S = 10, (5, 10), 60.0  # small enough for a browser: about two minutes
+TEST_DAYS, SCENARIOS, TIME_LIMIT_S = 10, (5, 10), 60.0  # small enough for a browser
 STUDIES = {"out-of-sample": "Robust strategies", "stochastic": "Stochastic benchmark"}
 SUMMARY_COLUMNS = {
     "method": st.column_config.TextColumn("Method"),
@@ -44,8 +44,9 @@ st.markdown(f"**How it works.** Each method makes one plan for **{run.delivery_d
             "price, energy beyond it at **m_sur** × that price (a credit), reserve not delivered at **m_sr** × its "
             "price, and heat not served at the unserved-heat price.")
 st.caption(f"The defaults ({TEST_DAYS} test days, N = {', '.join(map(str, SCENARIOS))}, {TIME_LIMIT_S:.0f} s per "
-           "stochastic program) take about two minutes; the paper's 30 days and N up to 25 take half an hour or "
-           "more (the command line: python -m rvpp study reproduce).")
+           "stochastic program) are sized for a browser: each stochastic program stops at its time limit. The "
+           "paper's 30 days and N up to 25 take many times longer (the command line: python -m rvpp study "
+           "reproduce).")
 
 penalties = Penalties()
 with st.form("out_of_sample_form"):

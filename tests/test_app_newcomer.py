@@ -197,6 +197,21 @@ def test_estimates_are_measured_on_this_server_never_read_from_a_file(paper_case
     assert "benchmarks" not in said and ".json" not in said
 
 
+def test_study_pages_give_no_time_this_server_has_not_measured(monkeypatch, paper_case):
+    # Backtest said "about a second" per day and strategy, Out-of-sample "about two minutes", whatever this
+    # machine measured.
+    from dashboard import solving
+
+    solver = solving.Solver(workers=1)
+    monkeypatch.setattr(solving, "solver", lambda: solver)
+    for page in ("backtest", "out_of_sample"):
+        said = " ".join(c.value for c in open_app(page).caption)
+        assert not re.search(r"\bminutes?\b|\bhour\b|a second", said), (page, said)
+    solver.last_solve = (2.0, 24)  # a solve of 2 s on a day of 24 hourly periods, measured here
+    said = " ".join(c.value for c in open_app("backtest").caption)
+    assert "two solves of about 2.0 s each (the last solve on this server)" in said
+
+
 # ----------------------------------------------------------------------------- upload order
 
 
