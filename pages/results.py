@@ -78,8 +78,8 @@ if not (clicked or state.is_requested(run)):
             icon=":material/info:")
     if ties := solving.tied(run):
         st.caption(f"This day has deviations tied at the Γ boundary ({'; '.join(ties)}): the model chooses "
-                   "which of them count, the exact rule, which makes such a day several times slower to solve "
-                   f"(up to half a minute at 15-minute periods in the benchmark). {solving.EARLIEST_HINT}")
+                   "which of them count, the exact rule, which makes such a day several times slower to solve. "
+                   f"{solving.EARLIEST_HINT}")
     st.stop()
 
 state.mark_requested(run)

@@ -371,6 +371,7 @@ def test_results_warns_of_tied_deviations_before_the_solve(paper_case):
         said = " ".join(c.value for c in at.caption)
         assert ("This day has deviations tied at the Γ boundary (CSP1: 4 of the 5 periods tied at a deviation of "
                 "300 MW_th)" in said) is warned, (case.delivery_date, case.budgets.ties)
+        assert "benchmark" not in said and "minute" not in said  # a time shown is measured by this server
 
 
 def test_a_tie_day_is_not_expected_to_take_a_day_without_ties(paper_case):
