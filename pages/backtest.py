@@ -296,11 +296,12 @@ if not listed:
 
 progresses = {b.id: bt.progress(b.id) for b in listed}
 st.dataframe(
-    [{"Label": b.label, "Case": b.case_name,
-      "Period": f"{b.settings['from']} .. {b.settings['to']}", "Strategies": bt.variant_labels(b.settings),
+    [{"Label": b.label,  # where it stands next to the label: in view at 1280 px, the rest may scroll
       "State": progresses[b.id].state if progresses[b.id] else "not started",
       "Progress": b.keys_done / b.keys_total if b.keys_total else 0.0,
-      "Days × strategies": f"{b.keys_done} of {b.keys_total}", "Created (UTC)": b.created_at[:16].replace("T", " ")}
+      "Days × strategies": f"{b.keys_done} of {b.keys_total}",
+      "Period": f"{b.settings['from']} .. {b.settings['to']}", "Strategies": bt.variant_labels(b.settings),
+      "Case": b.case_name, "Created (UTC)": b.created_at[:16].replace("T", " ")}
      for b in listed],
     hide_index=True, width="stretch",
     column_config={"Progress": st.column_config.ProgressColumn("Progress", min_value=0.0, max_value=1.0,

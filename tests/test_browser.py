@@ -439,6 +439,33 @@ def test_the_saved_runs_table_shows_the_net_cost_whole_at_1280_pixels(tmp_path, 
 
 
 @pytest.mark.slow
+def test_the_backtest_list_shows_state_and_progress_whole_at_1280_pixels(tmp_path, paper_case):
+    # "Days × strategies" was cut off at the table's right edge, after the period and the strategies.
+    require_browser()
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.backtest.engine import run_backtest
+    from rvpp.store import BacktestStore
+
+    store = BacktestStore(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
+    day = paper_case.delivery_date
+    run_backtest(paper_case, BacktestSettings(day, day, variants_of(["deterministic", "balanced"], [])), store,
+                 label="one May day")
+    store.engine.dispose()
+    with streamlit_server("streamlit-backtest-list.log", tmp_path) as url, \
+            chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(url)
+        open_page(page, "Backtest")
+        page.get_by_test_id("stDataFrame").first.wait_for()
+        settle(page)
+        page.screenshot(path=ARTIFACTS / "backtest-list-1280.png")
+        # The grid lists the columns it draws, each at least in part: the fifth drawn shows the fourth whole.
+        headers = page.get_by_test_id("stDataFrame").first.evaluate(
+            "table => [...table.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim())")
+        assert headers[:5] == ["Label", "State", "Progress", "Days × strategies", "Period"], headers
+        assert table_cells(page, 1) == ["finished"] and table_cells(page, 3) == ["3 of 3"]  # and perfect information
+
+
+@pytest.mark.slow
 def test_compare_draws_its_tables_whole_at_1280_pixels(app_url):
     # The flexibility table's long headers ("Downward reserve to capacity [h]") pushed its last column
     # past the right edge at 1280 pixels.
