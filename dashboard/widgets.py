@@ -277,6 +277,8 @@ def from_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
     a number is refused in the table's words (``WF1: P max [MW] "abc" is not a number``)."""
     read, wrong = table.copy(), []
     names = next((table[c] for c in ("name", "source", "hour") if c in table), None)
+    if "name" in table:  # typed by the user, like the cells: quoted as markdown that shows it as typed
+        names = names.map(lambda name: literal(name) if isinstance(name, str) else name)
     for column, setting in numbers.items():
         values = []
         for position, (index, cell) in enumerate(table[column].items()):
@@ -288,7 +290,8 @@ def from_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
             if value is None or (text and not math.isfinite(value)):
                 row = names[index] if names is not None and isinstance(names[index], str) else f"row {position + 1}"
                 hint = " (write decimals with a point: 1.5)" if re.fullmatch(r"[+-]?\d+,\d+", text) else ""
-                wrong.append(f'{row}: {setting["label"]} "{excerpt(text)}" is not a number{hint}')
+                # The typed text as markdown that shows it as typed: the refusal is drawn as markdown.
+                wrong.append(f'{row}: {setting["label"]} "{literal(text)}" is not a number{hint}')
                 value = float("nan")
             values.append(value)
         read[column] = pd.Series(values, index=table.index, dtype=float)

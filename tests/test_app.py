@@ -187,6 +187,21 @@ def test_portfolio_renders_tables_and_every_band(paper_case):
     assert "Power-block conversion curve" in titles
 
 
+def test_text_typed_into_a_number_cell_is_quoted_as_typed_never_drawn_as_markdown(paper_case):
+    # The refusal quoted the cell's text as markdown: a link typed there became a live link.
+    at = open_app("portfolio")
+    typed = "[x](https://example.com) **b**"
+    at.session_state["portfolio_wind_0"] = {"edited_rows": {1: {"name": "W*F*", "p_max_mw": typed}},
+                                            "added_rows": [], "deleted_rows": []}
+    at.run()
+    shown = errors(at)
+    quoted = re.search(r'- W\\\*F\\\*: P max \[MW\] "(.*)" is not a number', shown)  # the name as typed too
+    assert quoted, shown
+    assert re.sub(r"\\(.)", r"\1", quoted.group(1)) == typed  # unescaped, it is what was typed
+    assert not re.search(r"(?<!\\)[\[\]()*]", quoted.group(1)), quoted.group(1)  # every special character escaped
+    assert case_of(at) == paper_case
+
+
 def test_portfolio_edit_changes_the_plan_and_an_invalid_edit_is_refused(paper_case):
     at = open_app("portfolio")
     at.session_state["portfolio_csp_0"] = {"edited_rows": {0: {"storage.e_min_mwh_th": 1200.0}},
