@@ -24,6 +24,18 @@ LINKS = (
 )
 
 
+def expected_time(place, balanced) -> None:
+    """How long the balanced solve takes, as this server measured it, in ``place``."""
+    expected = solving.solver().expected_s(balanced)
+    if expected:
+        place.caption(f":material/timer: About {expected[0]:.1f} s ({expected[1]}), with {balanced.dt_h * 60:g}-minute "
+                      "periods. Longer solves show their progress and can be stopped early or cancelled.")
+    else:
+        place.caption(f":material/timer: Not solved on this server yet ({balanced.dt_h * 60:g}-minute periods; "
+                      "15-minute periods take several times longer than hourly ones). The solve shows its progress "
+                      "and can be stopped early or cancelled.")
+
+
 def load_upload() -> None:
     files = st.session_state.get("home_upload") or []
     twice = [twice_named(name, n) for name, n in Counter(f.name for f in files).items() if n > 1]
@@ -63,14 +75,8 @@ with ask:
     balanced = Variant(strategy="balanced").apply(state.run_case())
     clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve",
                         icon=":material/play_arrow:")
-    expected = solving.solver().expected_s(balanced)
-    if expected:
-        st.caption(f":material/timer: About {expected[0]:.1f} s ({expected[1]}), with {balanced.dt_h * 60:g}-minute "
-                   "periods. Longer solves show their progress and can be stopped early or cancelled.")
-    else:
-        st.caption(f":material/timer: Not solved on this server yet ({balanced.dt_h * 60:g}-minute periods; "
-                   "15-minute periods take several times longer than hourly ones). The solve shows its progress "
-                   "and can be stopped early or cancelled.")
+    timing = st.empty()  # said again once a solve below has measured it
+    expected_time(timing, balanced)
     st.caption("One click plans tomorrow's bids for the current case with the balanced budgets of the paper's "
                "Table 7: energy in the day-ahead market (DAM), up and down secondary reserve, heat bought through "
                "the heat purchase agreement (HPA).")
@@ -89,6 +95,7 @@ with about:
 if requested:
     state.mark_requested(balanced)
     result = solving.solve(balanced, "Solving the balanced strategy", again=clicked, stoppable=True)
+    expected_time(timing, balanced)
     if result is not None:
         widgets.status_line(result)
         if result.has_plan:

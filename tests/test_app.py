@@ -119,6 +119,9 @@ def test_home_balanced_solve_shows_the_library_numbers(paper_solve):
                                             "Protection [kEUR]"))
     net = [m for m in at.metric if m.label == NET][0]
     assert net.proto.delta == "the plant pays"  # the sign in words: the default day costs money
+    timing = [c.value for c in at.caption if c.value.startswith(":material/timer:")]
+    assert len(timing) == 1 and "Not solved on this server yet" not in timing[0]  # the solve just measured it
+    assert re.search(r"About \d+\.\d s \(the last solve of this case\)", timing[0]), timing
     spec = figures(at)["Day-ahead energy and secondary-reserve bands"]
     np.testing.assert_allclose(values(trace(spec, "DAM energy (+ sell, − buy)")["y"]), expected.market["p_da_mw"])
 
