@@ -59,6 +59,12 @@ def test_solve_writes_every_export_with_the_public_columns(tmp_path, capsys):
     assert len(units) == 24 * 11 and set(units["kind"]) == {"wind", "pv", "csp", "ed", "td"}
     book = openpyxl.load_workbook(out / "plan.xlsx", read_only=True)
     assert book.sheetnames == ["summary", "market", "units", "csp", "dispatch", "flexibility"]
+    # No battery, hydro or biomass unit: the dispatch file and sheet still name their columns.
+    header = ["t", "start", "clock", "unit", "kind", "p_mw", "r_up_mw", "r_dn_mw", "charge_mw", "discharge_mw",
+              "energy_mwh", "charging", "r_ch_up_mw", "r_ch_dn_mw", "r_dis_up_mw", "r_dis_dn_mw", "sigma_up",
+              "sigma_dn", "energy_floor_mwh", "energy_ceiling_mwh", "online", "startup", "shutdown"]
+    assert (out / "dispatch.csv").read_text().splitlines() == [",".join(header)]
+    assert [list(row) for row in book["dispatch"].iter_rows(values_only=True)] == [header]
     assert audit_export(load_case(PAPER), out) == []
     # Another reader of the MPS file (HiGHS's own parser, not rvpp's compiler) finds the same optimum.
     highs = highspy.Highs()

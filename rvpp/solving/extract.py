@@ -130,6 +130,13 @@ def _units_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     return table
 
 
+# The dispatch table's columns after the period's, in order, and its whole-number ones.
+DISPATCH_FIELDS = ("unit", "kind", "p_mw", "r_up_mw", "r_dn_mw", "charge_mw", "discharge_mw", "energy_mwh", "charging",
+                   "r_ch_up_mw", "r_ch_dn_mw", "r_dis_up_mw", "r_dis_dn_mw", "sigma_up", "sigma_dn",
+                   "energy_floor_mwh", "energy_ceiling_mwh", "online", "startup", "shutdown")
+DISPATCH_STATES = ("charging", "online", "startup", "shutdown")
+
+
 def _dispatch_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     """One row per battery, hydro or biomass unit and period (MODEL_SPEC §13): a battery's charge,
     discharge, energy and reserve by mode with its σ-margins; a hydro or biomass unit's output,
@@ -163,10 +170,11 @@ def _dispatch_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
                 "sigma_up": empty, "sigma_dn": empty, "energy_floor_mwh": empty, "energy_ceiling_mwh": empty,
                 "online": _integers(b.online, T), "startup": _integers(b.startup, T),
                 "shutdown": _integers(b.shutdown, T)}))
-    if not frames:
-        return pd.DataFrame()
+    if not frames:  # the table's header alone: a workbook sheet or CSV file that says what it would hold
+        return pd.DataFrame({column: pd.Series(dtype="Int64" if column in DISPATCH_STATES else float)
+                             for column in (*base, *DISPATCH_FIELDS)}).astype({"unit": object, "kind": object})
     table = pd.concat(frames, ignore_index=True)
-    return table.astype({column: "Int64" for column in ("charging", "online", "startup", "shutdown")})
+    return table.astype({column: "Int64" for column in DISPATCH_STATES})
 
 
 def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
