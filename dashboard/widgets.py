@@ -28,7 +28,8 @@ MONEY = ("Money is in kEUR (EUR where small), as **cost: positive when the plant
 PERCENT = 100.0
 KILO = 1000.0
 # Column formats by the unit a header ends with; money and energy with thousands separators.
-UNIT_FORMATS = {"[EUR]": "%,.0f", "[kEUR]": "%,.1f", "[EUR/day]": "%,.0f", "[%]": "%.1f", "[s]": "%.2f",
+KEUR_FORMAT = "%,.1f"  # an amount in kEUR: one decimal, thousands separators
+UNIT_FORMATS = {"[kEUR]": KEUR_FORMAT, "[kEUR/day]": KEUR_FORMAT, "[%]": "%.1f", "[s]": "%.2f",
                 "[MWh]": "%,.1f", "[h]": "%.2f", "[MW]": "%,.0f"}
 LABEL_CHARS = LABEL_LENGTH  # a saved run's label is shown whole (the library keeps none longer)
 # Markdown's special characters, each shown as typed once backslash-escaped: links and images, emphasis,
@@ -46,6 +47,15 @@ def eur(value: float | None) -> str:
 def keur(value_eur: float | None) -> str:
     """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables."""
     return "–" if value_eur is None else f"{value_eur / KILO:,.1f}".replace("-", "−")
+
+
+def in_keur(frame: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``frame`` to show: every money column ``*_eur`` [EUR] becomes ``*_keur`` [kEUR]
+    (prices ``*_eur_per_mwh`` and other columns as they are)."""
+    money = [c for c in frame.columns if str(c).endswith("_eur")]
+    shown = frame.copy()
+    shown[money] = shown[money] / KILO
+    return shown.rename(columns={c: c.removesuffix("_eur") + "_keur" for c in money})
 
 
 def literal(value: Any, limit: int | None = EXCERPT_CHARS) -> str:

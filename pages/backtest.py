@@ -10,10 +10,10 @@ from dashboard import backtests as bt
 from dashboard import solving, state, widgets
 from rvpp import RvppError
 from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS,
-                          PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict, beats_presets_on_training,
+                          IN_KEUR, PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict, beats_presets_on_training,
                           cumulative_figure, day_summary, distribution_figure, export_zip, intraday_days, launch,
                           metrics, parse_numbers, recommendation_from, reopen_case, robustness_figure, session_table,
-                          shortfalls, trading_day_figure, variants_of)
+                          shortfalls, trading_day_figure, variants_of, verdict_words)
 
 state.through_app("pages/backtest.py")
 
@@ -24,57 +24,57 @@ PENDING = "backtest_pending"  # the id of the backtest this session started, unt
 WORST_DAYS = 10
 PERCENT = 100.0
 CHOSEN = "backtest_chosen"
-EUR_DAY = "%,.0f"  # whole euros with thousands separators
+KEUR = widgets.KEUR_FORMAT  # money in kEUR, shown from the records' EUR by widgets.in_keur
 AGGREGATE_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "days_settled": st.column_config.NumberColumn("Days settled"),
-    "mean_net_cost_eur": st.column_config.NumberColumn("Mean net cost [EUR/day]", format=EUR_DAY),
-    "median_net_cost_eur": st.column_config.NumberColumn("Median net cost [EUR/day]", format=EUR_DAY),
-    "cvar95_net_cost_eur": st.column_config.NumberColumn(
-        "CVaR 95 % [EUR/day]", format=EUR_DAY, help="Mean of the worst 5 % of days (at least the worst day)"),
-    "total_net_cost_eur": st.column_config.NumberColumn("Total net cost [EUR]", format=EUR_DAY),
-    "mean_market_cost_eur": st.column_config.NumberColumn("Mean market cost [EUR/day]", format=EUR_DAY),
-    "mean_penalty_eur": st.column_config.NumberColumn("Mean penalty [EUR/day]", format=EUR_DAY),
+    "mean_net_cost_keur": st.column_config.NumberColumn("Mean net cost [kEUR/day]", format=KEUR),
+    "median_net_cost_keur": st.column_config.NumberColumn("Median net cost [kEUR/day]", format=KEUR),
+    "cvar95_net_cost_keur": st.column_config.NumberColumn(
+        "CVaR 95 % [kEUR/day]", format=KEUR, help="Mean of the worst 5 % of days (at least the worst day)"),
+    "total_net_cost_keur": st.column_config.NumberColumn("Total net cost [kEUR]", format=KEUR),
+    "mean_market_cost_keur": st.column_config.NumberColumn("Mean market cost [kEUR/day]", format=KEUR),
+    "mean_penalty_keur": st.column_config.NumberColumn("Mean penalty [kEUR/day]", format=KEUR),
     "penalty_share_pct": st.column_config.NumberColumn(
         "Penalty share [%]", format="%.1f", help="Total penalty / total net cost; empty when the total is not a cost"),
-    "mean_regret_eur": st.column_config.NumberColumn(
-        "Mean regret [EUR/day]", format=EUR_DAY, help="Net cost minus the perfect-information plan's, same day"),
+    "mean_regret_keur": st.column_config.NumberColumn(
+        "Mean regret [kEUR/day]", format=KEUR, help="Net cost minus the perfect-information plan's, same day"),
     "days_without_plan": st.column_config.NumberColumn("Days without plan"),
     "audit_violations": st.column_config.NumberColumn("Audit violations"),
 }
-AGGREGATE_HEADLINE = ("label", "days_settled", "mean_net_cost_eur", "median_net_cost_eur", "cvar95_net_cost_eur",
-                      "total_net_cost_eur", "mean_regret_eur")
+AGGREGATE_HEADLINE = ("label", "days_settled", "mean_net_cost_keur", "median_net_cost_keur", "cvar95_net_cost_keur",
+                      "total_net_cost_keur", "mean_regret_keur")
 MONTHLY_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "month": st.column_config.TextColumn("Month"),
     "days": st.column_config.NumberColumn("Days settled"),
-    "market_cost_eur": st.column_config.NumberColumn("Market cost [EUR]", format=EUR_DAY),
-    "penalty_eur": st.column_config.NumberColumn("Penalty [EUR]", format=EUR_DAY),
-    "net_cost_eur": st.column_config.NumberColumn("Net cost [EUR]", format=EUR_DAY),
-    "mean_net_cost_eur": st.column_config.NumberColumn("Mean net cost [EUR/day]", format=EUR_DAY),
-    "regret_eur": st.column_config.NumberColumn("Regret [EUR]", format=EUR_DAY),
+    "market_cost_keur": st.column_config.NumberColumn("Market cost [kEUR]", format=KEUR),
+    "penalty_keur": st.column_config.NumberColumn("Penalty [kEUR]", format=KEUR),
+    "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format=KEUR),
+    "mean_net_cost_keur": st.column_config.NumberColumn("Mean net cost [kEUR/day]", format=KEUR),
+    "regret_keur": st.column_config.NumberColumn("Regret [kEUR]", format=KEUR),
 }
 WORST_COLUMNS = {
     "day": st.column_config.DateColumn("Delivery day"),
-    "net_cost_eur": st.column_config.NumberColumn("Net cost [EUR]", format=EUR_DAY),
-    "market_cost_eur": st.column_config.NumberColumn("Market cost [EUR]", format=EUR_DAY),
-    "penalty_eur": st.column_config.NumberColumn("Penalty [EUR]", format=EUR_DAY),
-    "regret_eur": st.column_config.NumberColumn("Regret [EUR]", format=EUR_DAY),
+    "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format=KEUR),
+    "market_cost_keur": st.column_config.NumberColumn("Market cost [kEUR]", format=KEUR),
+    "penalty_keur": st.column_config.NumberColumn("Penalty [kEUR]", format=KEUR),
+    "regret_keur": st.column_config.NumberColumn("Regret [kEUR]", format=KEUR),
     "deficit_mwh": st.column_config.NumberColumn("Energy short [MWh]", format="%.1f"),
     "surplus_mwh": st.column_config.NumberColumn("Energy surplus [MWh]", format="%.1f"),
     "unserved_heat_mwh": st.column_config.NumberColumn("Heat not served [MWh_th]", format="%.1f"),
     "plan_status": st.column_config.TextColumn("Plan"),
 }
-EUR_HELP = "Cost: positive when the plant pays, negative when it earns"
+COST_HELP = "Cost: positive when the plant pays, negative when it earns"
 TRADING_COLUMNS = {
     "Session": st.column_config.TextColumn("Session", pinned=True),
     "Gate closure": st.column_config.TextColumn("Gate closure (local time)"),
     "Status": st.column_config.TextColumn("Solve"),
     "Sold [MWh]": st.column_config.NumberColumn("Sold [MWh]", format="%,.1f"),
     "Bought [MWh]": st.column_config.NumberColumn("Bought [MWh]", format="%,.1f"),
-    "Trading cost [EUR]": st.column_config.NumberColumn(
-        "Trading cost [EUR]", format=EUR_DAY, help="Minus the session's trading revenue: positive when the plant "
-                                                   "buys more than it sells"),
+    "Trading cost [kEUR]": st.column_config.NumberColumn(
+        "Trading cost [kEUR]", format=KEUR, help="Minus the session's trading revenue: positive when the plant "
+                                                "buys more than it sells"),
     "Expected imbalance before [MWh]": st.column_config.NumberColumn(
         "Expected imbalance before [MWh]", format="%,.1f",
         help="The imbalance the position would leave on the forecasts of the session's gate closure"),
@@ -82,11 +82,11 @@ TRADING_COLUMNS = {
 }
 COMPARISON_COLUMNS = {
     "variant": st.column_config.TextColumn("Bidding rule", pinned=True),
-    "train_mean_net_cost_eur": st.column_config.NumberColumn("Training: mean net cost [EUR/day]", format=EUR_DAY),
-    "train_cvar95_net_cost_eur": st.column_config.NumberColumn("Training: CVaR 95 % [EUR/day]", format=EUR_DAY),
-    "test_mean_net_cost_eur": st.column_config.NumberColumn("Test: mean net cost [EUR/day]", format=EUR_DAY),
-    "test_cvar95_net_cost_eur": st.column_config.NumberColumn("Test: CVaR 95 % [EUR/day]", format=EUR_DAY),
-    "test_mean_regret_eur": st.column_config.NumberColumn("Test: mean regret [EUR/day]", format=EUR_DAY),
+    "train_mean_net_cost_keur": st.column_config.NumberColumn("Training: mean net cost [kEUR/day]", format=KEUR),
+    "train_cvar95_net_cost_keur": st.column_config.NumberColumn("Training: CVaR 95 % [kEUR/day]", format=KEUR),
+    "test_mean_net_cost_keur": st.column_config.NumberColumn("Test: mean net cost [kEUR/day]", format=KEUR),
+    "test_cvar95_net_cost_keur": st.column_config.NumberColumn("Test: CVaR 95 % [kEUR/day]", format=KEUR),
+    "test_mean_regret_keur": st.column_config.NumberColumn("Test: mean regret [kEUR/day]", format=KEUR),
 }
 
 
@@ -223,7 +223,7 @@ st.markdown(
     "the history before *D*, and is then **settled against what really happened on D** (realized prices, "
     "production and demand) by the recourse model, which pays penalties for energy short or in surplus, reserve "
     "not delivered and heat not served. The storage level and the turbine state at the end of each settled day "
-    "are the start of the next, as in operation. **Net cost** = market cost + penalty, in EUR, positive when the "
+    "are the start of the next, as in operation. **Net cost** = market cost + penalty, in kEUR, positive when the "
     "plant pays; lower is better. The **CVaR 95 %** is the mean of the worst 5 % of days: what a bad day costs. "
     "The **regret** is what a day cost beyond the plan made with perfect knowledge of that day.")
 
@@ -326,20 +326,20 @@ if progresses[ident] is not None and progresses[ident].running:
     st.button("Redraw with the days settled so far", key="backtest_redraw", icon=":material/refresh:")
 
 st.subheader("Cost over the period")
-st.plotly_chart(cumulative_figure(records), key="backtest_cumulative")
+st.plotly_chart(cumulative_figure(records, IN_KEUR), key="backtest_cumulative")
 st.caption("Each line adds up the net cost of the days settled so far: a steeper line is a costlier strategy; a "
            "jump is a bad day. The boxes below show how the daily net cost spreads.")
-st.plotly_chart(distribution_figure(records), key="backtest_distribution")
+st.plotly_chart(distribution_figure(records, IN_KEUR), key="backtest_distribution")
 
 st.subheader("Per strategy")
-table = metrics.aggregates(records)
+table = widgets.in_keur(metrics.aggregates(records))
 table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
 # Two tables of a few columns each rather than one wider than the page.
 for columns in (AGGREGATE_HEADLINE, ["label", *(c for c in AGGREGATE_COLUMNS if c not in AGGREGATE_HEADLINE)]):
     st.dataframe(table[[c for c in columns if c in table]], hide_index=True, width="stretch",
                  column_config=AGGREGATE_COLUMNS)
 with st.expander("Per month", icon=":material/calendar_month:"):
-    monthly = metrics.monthly(records)
+    monthly = widgets.in_keur(metrics.monthly(records))
     st.dataframe(monthly[[c for c in MONTHLY_COLUMNS if c in monthly]], hide_index=True, width="stretch",
                  column_config=MONTHLY_COLUMNS)
 
@@ -356,13 +356,14 @@ if variants:
     if worst.empty:
         st.caption("No settled day for this strategy yet.")
     else:
-        st.dataframe(worst[[c for c in WORST_COLUMNS if c in worst]], hide_index=True, width="stretch",
+        shown_worst = widgets.in_keur(worst)
+        st.dataframe(shown_worst[[c for c in WORST_COLUMNS if c in shown_worst]], hide_index=True, width="stretch",
                      column_config=WORST_COLUMNS)
         days = [str(d) for d in worst["day"]]
         costs = dict(zip(days, worst["net_cost_eur"]))
         left, right = st.columns([3, 2], vertical_alignment="bottom")
         day = left.selectbox("Day", days, key="backtest_worst_day",
-                             format_func=lambda d: f"{d} · net cost {widgets.eur(costs[d])}")
+                             format_func=lambda d: f"{d} · net cost {widgets.keur(costs[d])} kEUR")
         right.button("Open this day's plan on Results", key="backtest_open_day", type="primary",
                      icon=":material/open_in_browser:", on_click=open_day,
                      args=(ident, RecordKey(day, variant.strategy, variant.gamma),
@@ -390,14 +391,15 @@ def trading_day(ident: str, records) -> None:
     record = bt.record_of(records, day, label)
     try:
         figure = trading_day_figure(record, bt.timezone_of(ident))
-        table, summary = session_table(record), day_summary(record)
+        table, summary = session_table(record, IN_KEUR), day_summary(record)
     except RvppError as err:
         refuse(err, "This day cannot be shown", "The record is kept as it is.")
         return
     cards = st.columns(4)
-    cards[0].metric("Net cost [EUR]", widgets.eur(summary["net_cost_eur"]), help=EUR_HELP)
-    cards[1].metric("Intraday trading cost [EUR]", widgets.eur(summary["intraday_cost_eur"]), help=EUR_HELP)
-    cards[2].metric("Penalty [EUR]", widgets.eur(summary["penalty_eur"]), help=EUR_HELP)
+    for card, (label, key) in zip(cards, (("Net cost [kEUR]", "net_cost_eur"),
+                                          ("Intraday trading cost [kEUR]", "intraday_cost_eur"),
+                                          ("Penalty [kEUR]", "penalty_eur"))):
+        card.metric(label, widgets.keur(summary[key]), help=f"{COST_HELP}. Exact: {widgets.eur(summary[key])}.")
     short, surplus = summary["deficit_mwh"], summary["surplus_mwh"]
     cards[3].metric("Imbalance left [MWh]", "–" if short is None or surplus is None else
                     f"{short:,.1f} short · {surplus:,.1f} surplus", help="Energy short and in surplus against the "
@@ -446,13 +448,14 @@ except RvppError as err:
     refuse(err, "No recommendation", "Change the training or test days.")
     st.stop()
 left, right = st.columns(2)
-left.plotly_chart(robustness_figure(rec.curve, rec.fraction, "train"), key="backtest_robustness_train")
-right.plotly_chart(robustness_figure(rec.curve, rec.fraction, "test"), key="backtest_robustness_test")
+left.plotly_chart(robustness_figure(rec.curve, rec.fraction, "train", IN_KEUR), key="backtest_robustness_train")
+right.plotly_chart(robustness_figure(rec.curve, rec.fraction, "test", IN_KEUR), key="backtest_robustness_test")
 if rec.outcome is Verdict.LOSES:
-    st.warning(rec.verdict, icon=":material/trending_down:")
+    st.warning(verdict_words(rec, IN_KEUR), icon=":material/trending_down:")
 else:
-    st.success(rec.verdict, icon=":material/verified:")
-st.dataframe(rec.comparison[[c for c in COMPARISON_COLUMNS if c in rec.comparison]], hide_index=True,
+    st.success(verdict_words(rec, IN_KEUR), icon=":material/verified:")
+comparison = widgets.in_keur(rec.comparison)
+st.dataframe(comparison[[c for c in COMPARISON_COLUMNS if c in comparison]], hide_index=True,
              width="stretch", column_config=COMPARISON_COLUMNS)
 remembered = bt.recommended()
 if remembered is not None:

@@ -19,9 +19,9 @@ SUMMARY_COLUMNS = {
     "n_scenarios": st.column_config.NumberColumn("N"),
     "status": st.column_config.TextColumn("Status", help="How the plan's solve ended"),
     "mip_gap": st.column_config.NumberColumn("MIP gap [-]", format="%.1e"),
-    "avg_market_cost_keur": st.column_config.NumberColumn("Avg market cost [kEUR]", format="%.1f"),
-    "avg_penalty_keur": st.column_config.NumberColumn("Avg penalty [kEUR]", format="%.1f"),
-    "avg_net_cost_keur": st.column_config.NumberColumn("Avg net cost [kEUR]", format="%.1f"),
+    "avg_market_cost_keur": st.column_config.NumberColumn("Avg market cost [kEUR/day]", format=widgets.KEUR_FORMAT),
+    "avg_penalty_keur": st.column_config.NumberColumn("Avg penalty [kEUR/day]", format=widgets.KEUR_FORMAT),
+    "avg_net_cost_keur": st.column_config.NumberColumn("Avg net cost [kEUR/day]", format=widgets.KEUR_FORMAT),
     "solve_s": st.column_config.NumberColumn("Solve time [s]", format="%.2f"),
     "test_days": st.column_config.NumberColumn("Test days"),
     "settlements_optimal": st.column_config.TextColumn(

@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .backtest.export import export_zip
     from .backtest.figures import cumulative_figure, distribution_figure, robustness_figure, trading_day_figure
     from .backtest.recommend import (CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS, Verdict, beats_presets_on_training,
-                                     recommendation_from, shortfalls)
+                                     recommendation_from, shortfalls, verdict_words)
     from .backtest.trading_day import day_summary, intraday_days, session_table
     from .backtest.settings import CARRY, FRACTION, PERFECT, PRESET, BacktestSettings, BacktestVariant, variants_of
     from .data.case import PRICE_MODELS, STRATEGIES, parse_case
@@ -40,6 +40,7 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
     from .outputs.economics import economics, explanation, waterfall_figure
     from .outputs.export import plan_workbook_bytes
+    from .outputs.money import IN_KEUR
     from .outputs.plots import (SOURCE_TITLES, TRADE_NAMES, band_overlays, bands_figure, compare_trades_figure,
                                 curve_figure, deviating_periods, exposure_figure, idle_trades, tariff_figure,
                                 thin_clock_ticks, trades_figure)
@@ -83,6 +84,7 @@ _WHERE = {
     "shortfalls": ".backtest.recommend",
     "Verdict": ".backtest.recommend",
     "recommendation_from": ".backtest.recommend",
+    "verdict_words": ".backtest.recommend",
     "BacktestSettings": ".backtest.settings",
     "BacktestVariant": ".backtest.settings",
     "CARRY": ".backtest.settings",
@@ -125,6 +127,7 @@ _WHERE = {
     "explanation": ".outputs.economics",
     "waterfall_figure": ".outputs.economics",
     "plan_workbook_bytes": ".outputs.export",
+    "IN_KEUR": ".outputs.money",
     "SOURCE_TITLES": ".outputs.plots",
     "TRADE_NAMES": ".outputs.plots",
     "band_overlays": ".outputs.plots",
@@ -188,7 +191,8 @@ _WHERE = {
 
 __all__ = [
     "BacktestProgress", "BacktestSettings", "BacktestStore", "BacktestVariant", "CARRY", "CasePathError",
-    "CRITERION_NAMES", "EXCERPT_CHARS", "FIELDS", "FRACTION", "GREY", "HPA_FLAT_PRICES", "KIND_LABELS", "KINDS",
+    "CRITERION_NAMES", "EXCERPT_CHARS", "FIELDS", "FRACTION", "GREY", "HPA_FLAT_PRICES", "IN_KEUR", "KIND_LABELS",
+    "KINDS",
     "LABEL_LENGTH", "MARKET_SETS", "MARKET_SETS_WITHOUT_CSP", "MIN_TEST_DAYS", "MIN_TRAIN_DAYS", "Outcome", "Penalties",
     "PERFECT", "PERIOD_NAMES", "PRESET", "PRICE_COLUMNS", "PRICE_MODELS", "RecordKey", "RunInfo", "RunLibrary",
     "SavedRun", "SERIES_COLORS", "SERIES_FIELDS", "SOURCE_TITLES", "SourceKind", "STORE_ERRORS", "StoredRecommendation", "STRATEGIES",
@@ -205,7 +209,7 @@ __all__ = [
     "solve_problem", "strategy_budgets", "sweep_gamma", "table_csv", "table_message", "tables_workbook_bytes",
     "tariff_figure", "thin_clock_ticks", "tied_budgets", "top_gamma_deviation", "trades_figure", "trading_day_figure",
     "training_days",
-    "unit_columns", "variants_of", "waterfall_figure", "with_period_length", "workbook",
+    "unit_columns", "variants_of", "verdict_words", "waterfall_figure", "with_period_length", "workbook",
 ]
 
 

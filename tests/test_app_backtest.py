@@ -9,8 +9,10 @@ store's records, never through ``rvpp.backtest.metrics``.
 from __future__ import annotations
 
 import datetime as dt
+import json
 import math
 import os
+import re
 import shutil
 import sys
 import time
@@ -24,6 +26,7 @@ from rvpp.backtest import BacktestSettings, variants_of
 from rvpp.backtest.engine import run_backtest
 from rvpp.backtest.launch import status, stop
 from rvpp.store import BacktestStore
+from rvpp.studies import STUDIES, StudySettings
 from tests.factories import click, one_day_backtest_form, open_app
 from tests.test_app import NET, TIMEOUT_S, case_of, figures, number, shown_kpis, trace, values
 
@@ -81,20 +84,20 @@ def test_the_figures_and_tables_are_the_stored_records(stored):
     table = at.dataframe[1].value.set_index("label")  # the aggregates (the first table lists the backtests)
     for label, part in records.groupby("label"):
         net = part["net_cost_eur"].to_numpy()
-        np.testing.assert_allclose(values(trace(cumulative, label)["y"]), np.cumsum(net))
-        np.testing.assert_allclose(values(trace(boxes, label)["y"]), net)
+        np.testing.assert_allclose(values(trace(cumulative, label)["y"]), np.cumsum(net) / 1000)  # kEUR
+        np.testing.assert_allclose(values(trace(boxes, label)["y"]), net / 1000)
         row = table.loc[label]
-        assert row["mean_net_cost_eur"] == pytest.approx(net.mean())
-        assert row["cvar95_net_cost_eur"] == pytest.approx(net.max())  # under 20 days: the worst day
-        assert row["mean_regret_eur"] == pytest.approx((part.set_index("day")["net_cost_eur"] - perfect).mean(),
-                                                       abs=1e-6)
+        assert row["mean_net_cost_keur"] == pytest.approx(net.mean() / 1000)
+        assert row["cvar95_net_cost_keur"] == pytest.approx(net.max() / 1000)  # under 20 days: the worst day
+        assert row["mean_regret_keur"] == pytest.approx(
+            (part.set_index("day")["net_cost_eur"] - perfect).mean() / 1000, abs=1e-9)
     assert at.dataframe[0].value["Days × strategies"].tolist() == ["9 of 9"]
 
 
 @pytest.mark.slow
-def test_the_money_axes_write_whole_euros_with_thousands_separators(stored):
-    # Plotly's default wrote a cumulative cost as "2M" and a day as "500k", where the tables beside them
-    # write 2,000,000 and 500,000.
+def test_the_money_axes_write_kEUR_with_thousands_separators(stored):
+    # Plotly's default wrote a cumulative cost as "2M" or "2k", where the tables beside them write the
+    # amount with thousands separators.
     at = open_app("backtest")
     specs = figures(at)
     money = ["Cumulative net cost of the settled days",
@@ -136,7 +139,7 @@ def test_the_price_of_robustness_is_drawn_and_its_recommendation_remembered(stor
     expected = [records[(records["label"] == by_fraction[f]) & (records["day"] <= train[1])]["net_cost_eur"].mean()
                 for f in sorted(by_fraction)]
     np.testing.assert_allclose(values(net["x"]), sorted(by_fraction))
-    np.testing.assert_allclose(values(net["y"]), expected)
+    np.testing.assert_allclose(values(net["y"]), np.asarray(expected) / 1000)  # kEUR/day
     best = sorted(by_fraction)[int(np.argmin(expected))]
     assert values(trace(curve, "recommended")["x"]).tolist() == [best]
     assert "backtest_remember" not in [b.key for b in at.button]  # two training days: too few to remember
@@ -214,3 +217,97 @@ def test_a_backtest_started_on_the_page_runs_in_its_own_process(data_dir):
         assert len(store.records(ident)) == 1
     finally:
         stop(ident, store)
+
+
+# ----------------------------------------------------------------------------- money in kEUR
+
+KEUR_UNITS = ("[kEUR]", "[kEUR/day]")
+MONEY_HEADER = re.compile(r"cost|penalty|regret|CVaR|revenue|protection|profit", re.I)
+
+
+def money_columns(at) -> dict[str, dict]:
+    """Every money column of every table on the page: shown header -> its column settings."""
+    found = {}
+    for frame in at.dataframe:
+        config = json.loads(frame.proto.columns or "{}")
+        for column in frame.value.columns:
+            settings = config.get(str(column)) or {}
+            header = settings.get("label") or str(column)
+            if MONEY_HEADER.search(header) and not header.endswith("[%]"):
+                found[header] = settings
+    return found
+
+
+def assert_money_in_keur(at, page: str) -> None:
+    """Every money header and card of ``page`` in kEUR (per day where a mean), with thousands separators."""
+    columns = money_columns(at)
+    assert columns, page
+    for header, settings in columns.items():
+        assert header.endswith(KEUR_UNITS), (page, header)
+        assert settings.get("type_config", {}).get("format") == "%,.1f", (page, header)
+    for card in at.metric:
+        if MONEY_HEADER.search(card.label):
+            assert card.label.endswith(KEUR_UNITS), (page, card.label)
+    for title, spec in figures(at).items():
+        axis = spec["layout"]["yaxis"]
+        if "EUR" in axis.get("title", {}).get("text", ""):
+            assert axis["title"]["text"].endswith(KEUR_UNITS), (page, title)
+            assert axis.get("separatethousands") is True, (page, title)
+        for t in spec["data"]:
+            hover = t.get("hovertemplate", "")
+            if re.search(r"(?<![k/])EUR(?!/MWh)", hover) or "kEUR" in hover:
+                assert re.search(r"%\{y:,\.1f\} kEUR", hover), (page, title, hover)
+
+
+@pytest.mark.slow
+def test_backtest_and_out_of_sample_show_every_amount_in_kEUR(stored, paper_case, data_dir):
+    # The Backtest page wrote "Mean net cost [EUR/day]" 58,469 where Results writes the same day's net cost
+    # as 58.5 kEUR.
+    from tests.test_trading_day import store_with, trading_record
+
+    store, ident = stored
+    records = settled_records(store, ident)
+    at = open_app("backtest")
+    assert_money_in_keur(at, "backtest")
+    headers = money_columns(at)
+    assert {"Mean net cost [kEUR/day]", "Total net cost [kEUR]", "Test: mean net cost [kEUR/day]"} <= set(headers)
+    aggregates = at.dataframe[1].value.set_index("label")
+    deterministic = records[records["label"] == "deterministic"]["net_cost_eur"]
+    assert aggregates.loc["deterministic", "total_net_cost_keur"] == pytest.approx(deterministic.sum() / 1000)
+    comparison = next(d.value for d in at.dataframe if "variant" in d.value.columns).set_index("variant")
+    on_last = records[(records["day"] == LAST)].set_index("label")["net_cost_eur"]  # the test days: LAST alone
+    assert comparison.loc["deterministic", "test_mean_net_cost_keur"] == pytest.approx(on_last["deterministic"] / 1000)
+    verdict = "\n".join(m.value for m in [*at.success, *at.warning] if m.value.startswith("Recommended Γ"))
+    assert "kEUR" in verdict and not re.search(r"(?<!k)EUR", verdict), verdict
+    chosen = "Γ 0.25 of the day" if "recommended: Γ 0.25 of the day" in comparison.index else "deterministic"
+    assert f"is {on_last[chosen] / 1000:,.1f} kEUR" in verdict
+    worst_days = at.selectbox(key="backtest_worst_day").options
+    assert worst_days and all(option.endswith(" kEUR") for option in worst_days), worst_days
+
+    # A backtest traded in intraday sessions draws the trading day's cards and sessions.
+    record = trading_record()
+    traded = store_with(paper_case, data_dir, [record])
+    at.run()
+    at.selectbox(key="backtest_chosen").set_value(traded).run()
+    assert not at.exception, at.exception
+    assert_money_in_keur(at, "backtest, trading day")
+    cards = {m.label: m for m in at.metric}
+    assert number(cards["Net cost [kEUR]"].value) == pytest.approx(record["net_cost_eur"] / 1000, abs=0.051)
+    assert number(cards["Penalty [kEUR]"].value) == pytest.approx(record["penalty_eur"] / 1000, abs=0.051)
+    sessions = next(d.value for d in at.dataframe if "Session" in d.value.columns)
+    revenue = [s["trading_revenue_eur"] for s in record["intraday"]]
+    np.testing.assert_allclose(sessions["Trading cost [kEUR]"], -np.asarray(revenue) / 1000)
+
+    at.switch_page("pages/out_of_sample.py").run()
+    at.number_input(key="out_of_sample_test_days").set_value(2)
+    at.text_input(key="out_of_sample_scenarios").input("1")
+    at.multiselect(key="out_of_sample_strategies").set_value(["deterministic"])
+    click(at, "out_of_sample_run")
+    assert_money_in_keur(at, "out_of_sample")
+    assert {"Avg net cost [kEUR/day]", "Avg penalty [kEUR/day]"} <= set(money_columns(at))
+    settings = StudySettings(strategies=("deterministic",), test_days=2, scenario_counts=(1,), sp_time_limit_s=60.0)
+    days = STUDIES["out-of-sample"](paper_case, settings).tables["out_of_sample_days"]
+    assert (days["status"].astype(str) == "optimal").all()
+    table13 = next(d.value for d in at.dataframe if "method" in d.value.columns and "n_scenarios" not in d.value)
+    shown = table13.set_index("method").loc["deterministic", "avg_net_cost_keur"]
+    assert shown == pytest.approx(days.loc[days["method"] == "deterministic", "net_cost_eur"].mean() / 1000)

@@ -99,7 +99,7 @@ def test_every_page_speaks_of_money_one_way(paper_solve):
         for label in labels:
             assert not re.search(r"net result|profit", label, re.I), (page, label)
             if not re.search(r"price|tariff", label, re.I) or "[" in label:
-                assert re.search(r"\[(k?EUR|EUR/[\w ]+|%)\]", label), (page, label)
+                assert re.search(r"\[(k?EUR(/day)?|EUR/[\w ]+|%)\]", label), (page, label)
     assert "Net cost [kEUR]" in seen["runs"] and "Net cost [kEUR]" in seen["compare"]
     assert "Net cost, planner-chosen [kEUR]" in seen["learn"]
 

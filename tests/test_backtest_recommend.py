@@ -9,7 +9,9 @@ import pytest
 
 from rvpp import prepare, with_options
 from rvpp.backtest import BacktestError, recommendation_from
-from rvpp.backtest.figures import robustness_figure
+from rvpp.backtest.figures import cumulative_figure, distribution_figure, robustness_figure
+from rvpp.backtest.recommend import verdict_words
+from rvpp.outputs.money import IN_KEUR
 
 TRAIN = (dt.date(2025, 3, 1), dt.date(2025, 3, 4))
 TEST = (dt.date(2025, 3, 5), dt.date(2025, 3, 6))
@@ -86,6 +88,35 @@ def test_the_price_of_robustness_figure_marks_the_recommendation():
     assert names == ["market cost", "penalty", "net cost", "recommended"]
     assert list(figure.data[3].x) == [0.25] and list(figure.data[3].y) == [75.0]
     assert list(figure.data[2].y) == [100.0, 75.0, 78.0]
+    assert figure.layout.yaxis.title.text == "cost [EUR/day]"  # what exports and the command line draw
+
+
+def test_the_dashboard_draws_the_backtest_figures_in_kEUR():
+    costs = {key: [1000.0 * v for v in values] for key, values in BASE.items()}  # 100,000 EUR a day and so on
+    result = recommendation_from(records(costs), TRAIN, TEST, [0.0, 0.25, 0.5], "mean")
+    figure = robustness_figure(result.curve, result.fraction, "train", IN_KEUR)
+    assert list(figure.data[2].y) == [100.0, 75.0, 78.0] and list(figure.data[3].y) == [75.0]
+    assert figure.layout.yaxis.title.text == "cost [kEUR/day]"
+    assert all("%{y:,.1f} kEUR/day" in trace.hovertemplate for trace in figure.data)
+    deterministic = records(costs).query("strategy == 'deterministic'")
+    cumulative = cumulative_figure(deterministic, IN_KEUR)
+    assert list(cumulative.data[0].y) == [100.0, 200.0, 300.0, 400.0, 490.0, 580.0]
+    assert cumulative.layout.yaxis.title.text == "cumulative net cost [kEUR]"
+    boxes = distribution_figure(deterministic, IN_KEUR)
+    assert list(boxes.data[0].y) == [100.0, 100.0, 100.0, 100.0, 90.0, 90.0]
+    assert boxes.layout.yaxis.title.text == "daily net cost [kEUR/day]"
+    assert "%{y:,.1f} kEUR" in boxes.data[0].hovertemplate
+
+
+def test_the_verdict_is_kept_in_EUR_and_shown_in_kEUR():
+    costs = {key: [1000.0 * v for v in values] for key, values in BASE.items()}
+    costs[("fraction", "0.25")] = [70_000, 70_000, 70_000, 90_000, 75_000, 75_000]  # loses to balanced, 70,000
+    result = recommendation_from(records(costs), TRAIN, TEST, [0.0, 0.25, 0.5], "mean")
+    assert "its mean daily net cost is 75,000 EUR" in result.verdict  # stored with the backtest and exported
+    assert "LOSES to balanced (70,000 EUR)" in result.verdict
+    shown = verdict_words(result, IN_KEUR)
+    assert "its mean daily net cost is 75.0 kEUR" in shown and "LOSES to balanced (70.0 kEUR)" in shown
+    assert shown.replace("75.0 kEUR", "75,000 EUR").replace("70.0 kEUR", "70,000 EUR") == result.verdict
 
 
 def test_the_recommended_fraction_is_usable_in_a_solve(paper_case):

@@ -17,6 +17,7 @@ import pytest
 from rvpp.backtest.figures import trading_day_figure
 from rvpp.backtest.trading_day import has_intraday, intraday_days, period_hours, session_table
 from rvpp.errors import RvppError
+from rvpp.outputs.money import IN_KEUR
 
 NT = 24
 
@@ -87,6 +88,9 @@ def test_the_session_table_in_mwh_and_cost():
     assert list(table["Sold [MWh]"]) == [8.0, 0.0, 3.0]
     assert list(table["Bought [MWh]"]) == [0.0, 10.0, 1.0]
     assert list(table["Trading cost [EUR]"]) == [-400.0, 600.0, -140.0]  # cost: positive when the plant pays
+    in_keur = session_table(trading_record(), IN_KEUR)
+    assert list(in_keur["Trading cost [kEUR]"]) == pytest.approx([-0.4, 0.6, -0.14])
+    assert list(in_keur["Sold [MWh]"]) == [8.0, 0.0, 3.0]  # only money changes unit
     assert list(table["Expected imbalance before [MWh]"]) == [8.0, 10.0, 2.0]
     assert list(table["Expected imbalance after [MWh]"]) == [0.0, 0.5, 0.0]
 
@@ -174,9 +178,12 @@ def test_the_backtest_page_shows_the_trading_day(paper_case, data_dir):
     assert list(values(trace(spec, "after IDA2")["y"]))[14] == 5.0
     assert list(values(trace(spec, "IDA3 traded")["y"]))[21] == 3.0
     (table,) = [t.value for t in at.dataframe if "Session" in t.value.columns]
-    assert list(table["Sold [MWh]"]) == [8.0, 0.0, 3.0] and list(table["Trading cost [EUR]"]) == [-400.0, 600.0, -140.0]
-    cards = {m.label: m.value for m in at.metric}
-    assert cards["Intraday trading cost [EUR]"] == "60 EUR"
+    assert list(table["Sold [MWh]"]) == [8.0, 0.0, 3.0]
+    assert list(table["Trading cost [kEUR]"]) == pytest.approx([-0.4, 0.6, -0.14])  # the record's EUR / 1000
+    cards = {m.label: m for m in at.metric}
+    assert cards["Intraday trading cost [kEUR]"].value == "0.1"  # 60 EUR
+    assert cards["Intraday trading cost [kEUR]"].proto.help.endswith("Exact: 60 EUR.")
+    cards = {label: m.value for label, m in cards.items()}
     assert cards["Imbalance left [MWh]"] == "1.2 short · 0.8 surplus"
 
 

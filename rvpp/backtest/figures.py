@@ -15,6 +15,7 @@ from plotly.subplots import make_subplots
 
 from ..data.periods import delivery_periods, period_labels
 from ..errors import RvppError
+from ..outputs.money import IN_EUR, MoneyUnit
 from ..outputs.style import (DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, NET_COLOR, ORANGE, SERIES_COLORS, SKY,
                              TRANSPARENT, VERMILION, run_style)
 from . import metrics
@@ -23,60 +24,66 @@ from .trading_day import day_summary, sessions
 PARTS = (("mean_market_cost_eur", "market cost", SKY, "dash"), ("mean_penalty_eur", "penalty", VERMILION, "dot"),
          ("mean_net_cost_eur", "net cost", NET_COLOR, "solid"))
 RECOMMENDED_COLOR = ORANGE
-# Money ticks as the tables write money: whole euros with thousands separators, not 2M or 500k.
+# Money ticks as the tables write money: with thousands separators, not 2M or 500k.
 MONEY_TICKS = {"exponentformat": "none", "separatethousands": True}
 
 
-def robustness_figure(curve: pd.DataFrame, fraction: float | None = None, period: str = "train") -> go.Figure:
-    """Mean daily market cost, penalty and net cost [EUR/day] against Γ (fraction of the day), with
-    the recommended fraction marked."""
+def robustness_figure(curve: pd.DataFrame, fraction: float | None = None, period: str = "train",
+                      money: MoneyUnit = IN_EUR) -> go.Figure:
+    """Mean daily market cost, penalty and net cost against Γ (fraction of the day), with the
+    recommended fraction marked. ``curve`` in EUR/day; drawn in ``money`` per day."""
     part = curve[curve["period"] == period].sort_values("fraction")
+    per_day = f"{money.symbol}/day"
     fig = go.Figure()
     for column, name, color, dash in PARTS:
-        fig.add_trace(go.Scatter(x=part["fraction"], y=part[column], mode="lines+markers", name=name,
+        fig.add_trace(go.Scatter(x=part["fraction"], y=money.of(part[column]), mode="lines+markers", name=name,
                                  line={"color": color, "dash": dash,
                                        "width": 3 if column == "mean_net_cost_eur" else 2},
-                                 hovertemplate="Γ %{x:.3g} of the day<br>%{y:,.0f} EUR/day<extra>" + name
-                                 + "</extra>"))
+                                 hovertemplate=f"Γ %{{x:.3g}} of the day<br>%{{y:{money.hover}}} {per_day}<extra>"
+                                 + name + "</extra>"))
     if fraction is not None and (part["fraction"] == fraction).any():
         point = part[part["fraction"] == fraction].iloc[0]
-        fig.add_trace(go.Scatter(x=[fraction], y=[point["mean_net_cost_eur"]], mode="markers", name="recommended",
-                                 marker={"symbol": "star", "size": 16, "color": RECOMMENDED_COLOR},
-                                 hovertemplate="recommended Γ %{x:.3g}<br>%{y:,.0f} EUR/day<extra></extra>"))
+        fig.add_trace(go.Scatter(x=[fraction], y=[money.of(point["mean_net_cost_eur"])], mode="markers",
+                                 name="recommended", marker={"symbol": "star", "size": 16, "color": RECOMMENDED_COLOR},
+                                 hovertemplate=f"recommended Γ %{{x:.3g}}<br>%{{y:{money.hover}}} {per_day}"
+                                 "<extra></extra>"))
     fig.update_layout(title=f"Price of robustness ({period} period): mean daily cost against Γ",
-                      xaxis_title="Γ [fraction of the day, every source]", yaxis_title="cost [EUR/day]",
+                      xaxis_title="Γ [fraction of the day, every source]", yaxis_title=f"cost [{per_day}]",
                       **_money_layout())
     return fig
 
 
-def cumulative_figure(records: pd.DataFrame) -> go.Figure:
-    """Cumulative settled net cost per variant over the days [EUR]."""
+def cumulative_figure(records: pd.DataFrame, money: MoneyUnit = IN_EUR) -> go.Figure:
+    """Cumulative settled net cost per variant over the days, in ``money`` (the records in EUR)."""
     table = metrics.daily(records)
     fig = go.Figure()
     for index, (label, part) in enumerate(table[table["settled"]].groupby("label", sort=False)):
         part = part.sort_values("day")
         look = run_style(str(label), index)
-        fig.add_trace(go.Scatter(x=part["day"], y=part["net_cost_eur"].cumsum(), mode="lines+markers", name=label,
-                                 line={"color": look["color"], "dash": look["dash"]},
+        fig.add_trace(go.Scatter(x=part["day"], y=money.of(part["net_cost_eur"].cumsum()), mode="lines+markers",
+                                 name=label, line={"color": look["color"], "dash": look["dash"]},
                                  marker={"symbol": look["symbol"], "size": 6},
-                                 hovertemplate="%{x}<br>%{y:,.0f} EUR<extra>" + str(label) + "</extra>"))
+                                 hovertemplate=f"%{{x}}<br>%{{y:{money.hover}}} {money.symbol}<extra>" + str(label)
+                                 + "</extra>"))
     fig.update_layout(title="Cumulative net cost of the settled days", xaxis_title="delivery day",
-                      yaxis_title="cumulative net cost [EUR]", **_money_layout())
+                      yaxis_title=f"cumulative net cost [{money.symbol}]", **_money_layout())
     return fig
 
 
-def distribution_figure(records: pd.DataFrame) -> go.Figure:
-    """The daily net cost of the settled days, one box per variant [EUR/day] (every day drawn as a point)."""
+def distribution_figure(records: pd.DataFrame, money: MoneyUnit = IN_EUR) -> go.Figure:
+    """The daily net cost of the settled days, one box per variant, in ``money`` per day (the records
+    in EUR; every day drawn as a point)."""
     table = metrics.daily(records)
     fig = go.Figure()
     for index, (label, part) in enumerate(table[table["settled"]].groupby("label", sort=False)):
         look = run_style(str(label), index)
-        fig.add_trace(go.Box(y=part["net_cost_eur"], x=[label] * len(part), name=label, boxpoints="all",
+        fig.add_trace(go.Box(y=money.of(part["net_cost_eur"]), x=[label] * len(part), name=label, boxpoints="all",
                              jitter=0.3, pointpos=0, marker={"color": look["color"], "symbol": look["symbol"]},
                              text=[str(d) for d in part["day"]],
-                             hovertemplate="%{text}: %{y:,.0f} EUR<extra>" + str(label) + "</extra>"))
+                             hovertemplate=f"%{{text}}: %{{y:{money.hover}}} {money.symbol}<extra>" + str(label)
+                             + "</extra>"))
     fig.update_layout(title="Daily net cost per strategy (box: quartiles and median; points: days)",
-                      xaxis_title="strategy", yaxis_title="daily net cost [EUR/day]", showlegend=False,
+                      xaxis_title="strategy", yaxis_title=f"daily net cost [{money.symbol}/day]", showlegend=False,
                       **{k: v for k, v in _money_layout().items() if k != "legend"})
     return fig
 

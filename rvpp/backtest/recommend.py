@@ -23,6 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..data.case import STRATEGIES, Case
+from ..outputs.money import IN_EUR, MoneyUnit
 from ..store import BacktestStore
 from . import metrics
 from .engine import Progress, run_backtest
@@ -196,7 +197,14 @@ class Verdict(StrEnum):
     LOSES = "loses"
 
 
-def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test) -> tuple[Verdict, str]:
+def verdict_words(result: Recommendation, money: MoneyUnit) -> str:
+    """The verdict of ``result`` with its amounts written in ``money`` (``result.verdict``, kept with
+    the backtest and exported, writes them in EUR)."""
+    return _verdict(result.comparison, result.fraction, result.criterion, result.test, money)[1]
+
+
+def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test,
+             money: MoneyUnit = IN_EUR) -> tuple[Verdict, str]:
     column = f"test_{CRITERIA[criterion]}"
     name = CRITERION_NAMES[criterion]
     contenders = comparison[comparison["variant"] != "perfect information"]
@@ -204,13 +212,13 @@ def _verdict(comparison: pd.DataFrame, fraction: float, criterion: str, test) ->
     presets = contenders.iloc[1:]
     better = presets[presets[column] < mine]
     head = (f"Recommended Γ = {fraction:g} of the day (chosen on the training days by the {name}). "
-            f"On the test days {test[0]}..{test[1]} its {name} is {mine:,.0f} EUR")
+            f"On the test days {test[0]}..{test[1]} its {name} is {money.words(mine)}")
     if better.empty:
         runner = presets.nsmallest(1, column)
-        gap = f"; the best preset, {runner.iloc[0]['variant']}, has {runner.iloc[0][column]:,.0f} EUR" \
+        gap = f"; the best preset, {runner.iloc[0]['variant']}, has {money.words(runner.iloc[0][column])}" \
             if len(runner) else ""
         return Verdict.HOLDS, head + f": no preset does better{gap}."
-    listing = ", ".join(f"{r['variant']} ({r[column]:,.0f} EUR)" for _, r in better.sort_values(column).iterrows())
+    listing = ", ".join(f"{r['variant']} ({money.words(r[column])})" for _, r in better.sort_values(column).iterrows())
     return Verdict.LOSES, (head + f", and it LOSES to {listing} on the test days: the choice made on the training "
                            "days did not carry over to the test period.")
 

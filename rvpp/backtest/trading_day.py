@@ -27,9 +27,10 @@ import pandas as pd
 
 from ..data.files import excerpt
 from ..errors import RvppError
+from ..outputs.money import IN_EUR, MoneyUnit
 
 HOURS_PER_DAY = 24
-SESSION_COLUMNS = ("Session", "Gate closure", "Status", "Sold [MWh]", "Bought [MWh]", "Trading cost [EUR]",
+SESSION_COLUMNS = ("Session", "Gate closure", "Status", "Sold [MWh]", "Bought [MWh]", "Trading cost [{money}]",
                    "Expected imbalance before [MWh]", "Expected imbalance after [MWh]")
 
 
@@ -134,17 +135,17 @@ def sessions(record: Mapping[str, Any]) -> TradingDay:
                                                    f"the record of {excerpt(day)}: intraday_revenue_eur"))
 
 
-def session_table(record: Mapping[str, Any]) -> pd.DataFrame:
-    """One row per session: energy sold and bought [MWh], the trading cost [EUR] (minus the trading
-    revenue: positive when the plant pays, the dashboard's money convention) and the expected
-    imbalance before and after the session [MWh]."""
+def session_table(record: Mapping[str, Any], money: MoneyUnit = IN_EUR) -> pd.DataFrame:
+    """One row per session: energy sold and bought [MWh], the trading cost in ``money`` (minus the
+    trading revenue: positive when the plant pays, the dashboard's money convention) and the
+    expected imbalance before and after the session [MWh]."""
     day = sessions(record)
     rows = []
     for s in day.sessions:
         rows.append((s.session, s.gate_closure, s.status, float(np.clip(s.traded_mw, 0.0, None).sum() * day.dt_h),
-                     float(np.clip(-s.traded_mw, 0.0, None).sum() * day.dt_h), -s.trading_revenue_eur,
+                     float(np.clip(-s.traded_mw, 0.0, None).sum() * day.dt_h), money.of(-s.trading_revenue_eur),
                      s.expected_imbalance_before_mwh, s.expected_imbalance_after_mwh))
-    return pd.DataFrame(rows, columns=list(SESSION_COLUMNS))
+    return pd.DataFrame(rows, columns=[c.format(money=money.symbol) for c in SESSION_COLUMNS])
 
 
 def day_summary(record: Mapping[str, Any]) -> dict[str, float | None]:

@@ -29,6 +29,8 @@ PENALTY_CAUSES = (("penalty_deficit_eur", "Energy short of the DAM bid", VERMILI
                   ("penalty_reserve_eur", "Reserve not delivered", ORANGE, "x"),
                   ("penalty_heat_eur", "Heat not served", PURPLE, "."))
 NOT_AVAILABLE = "n/a"
+# Money ticks of the out-of-sample figures as their tables write kEUR: with thousands separators.
+MONEY_TICKS = {"exponentformat": "none", "separatethousands": True}
 
 
 def sensitivity_trade_figure(table: pd.DataFrame) -> go.Figure:
@@ -122,20 +124,20 @@ def out_of_sample_figure(summary: pd.DataFrame) -> go.Figure:
     """Average market cost and penalty per method, net cost marked (paper Tables 13-14)."""
     fig = go.Figure()
     fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_market_cost_keur"], name="Market cost [kEUR]",
-                         marker_color=BLUE, hovertemplate="%{x}: %{y:.1f} kEUR<extra>market cost</extra>"))
+                         marker_color=BLUE, hovertemplate="%{x}: %{y:,.1f} kEUR<extra>market cost</extra>"))
     fig.add_trace(go.Bar(x=summary["method"], y=summary["avg_penalty_keur"], name="Penalty [kEUR]",
                          marker_color=ORANGE, marker_pattern_shape="/",
-                         hovertemplate="%{x}: %{y:.1f} kEUR<extra>penalty</extra>"))
+                         hovertemplate="%{x}: %{y:,.1f} kEUR<extra>penalty</extra>"))
     fig.add_trace(go.Scatter(x=summary["method"], y=summary["avg_net_cost_keur"], mode="markers+text",
                              name="Net cost [kEUR]", marker={"symbol": "diamond", "size": 13, "color": VERMILION,
                                                              "line": {"width": 1, "color": GREY}},
-                             text=[NOT_AVAILABLE if _missing(v) else f"{v:.1f}" for v in summary["avg_net_cost_keur"]],
+                             text=[NOT_AVAILABLE if _missing(v) else f"{v:,.1f}" for v in summary["avg_net_cost_keur"]],
                              textposition="top center", cliponaxis=False,
-                             hovertemplate="%{x}: %{y:.1f} kEUR<extra>net cost</extra>"))
+                             hovertemplate="%{x}: %{y:,.1f} kEUR<extra>net cost</extra>"))
     _style(fig, "Out-of-sample: average cost per test day")
     fig.update_layout(barmode="relative")
     fig.update_xaxes(title_text="Method")
-    fig.update_yaxes(title_text="Average per test day [kEUR]", range=_headroom(
+    fig.update_yaxes(title_text="Average per test day [kEUR]", **MONEY_TICKS, range=_headroom(
         [*summary["avg_market_cost_keur"], *summary["avg_net_cost_keur"],
          *(summary["avg_market_cost_keur"] + summary["avg_penalty_keur"].clip(lower=0))]))
     return fig
@@ -155,11 +157,11 @@ def penalty_causes_figure(evaluations: pd.DataFrame) -> go.Figure:
     for column, label, color, pattern in PENALTY_CAUSES:
         fig.add_trace(go.Bar(x=methods, y=[float(means.loc[m, column]) for m in methods], name=label,
                              marker_color=color, marker_pattern_shape=pattern,
-                             hovertemplate=f"%{{x}}: %{{y:.2f}} kEUR<extra>{label}</extra>"))
+                             hovertemplate=f"%{{x}}: %{{y:,.1f}} kEUR<extra>{label}</extra>"))
     _style(fig, "Penalty per test day by cause")
     fig.update_layout(barmode="relative")
     fig.update_xaxes(title_text="Method")
-    fig.update_yaxes(title_text="Average penalty per test day [kEUR]")
+    fig.update_yaxes(title_text="Average penalty per test day [kEUR]", **MONEY_TICKS)
     return fig
 
 
@@ -171,10 +173,10 @@ def net_cost_by_day_figure(evaluations: pd.DataFrame) -> go.Figure:
         fig.add_trace(go.Scatter(x=part["day"], y=part["net_cost_eur"] / 1000.0, mode="lines+markers", name=method,
                                  line=dict(color=look["color"], dash=look["dash"]),
                                  marker=dict(symbol=look["symbol"], size=8),
-                                 hovertemplate=f"%{{x}}: %{{y:.1f}} kEUR<extra>{method}</extra>"))
+                                 hovertemplate=f"%{{x}}: %{{y:,.1f}} kEUR<extra>{method}</extra>"))
     _style(fig, "Net cost on each test day")
     fig.update_xaxes(title_text="Test day (realization)", type="category")
-    fig.update_yaxes(title_text="Net cost (market cost + penalty) [kEUR]")
+    fig.update_yaxes(title_text="Net cost (market cost + penalty) [kEUR]", **MONEY_TICKS)
     return fig
 
 
