@@ -73,10 +73,11 @@ def protection_demo() -> None:
     gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
                         value=problem.sources[price].gamma, key="learn_price_gamma")
     exposure = price_exposures(plan.problem, plan.market)[price]
-    left.metric("Protection [EUR]", widgets.eur(protection_exact(exposure, gamma)).removesuffix(" EUR"),
-                help="Sum of the Γ largest losses.")
+    protection = protection_exact(exposure, gamma)
+    left.metric("Protection [kEUR]", widgets.keur(protection),
+                help=f"Sum of the Γ largest losses. Exact: {widgets.eur(protection)}.")
     left.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma}; the model charged "
-                 f"{widgets.eur(plan.protection_eur[price])}. Here the plan stays fixed and only the "
+                 f"{widgets.keur(plan.protection_eur[price])} kEUR. Here the plan stays fixed and only the "
                  "adversary's budget moves; a new solve would also change the plan.")
     right.plotly_chart(exposure_figure(plan, price, gamma), key="learn_exposure")
 

@@ -511,11 +511,13 @@ def test_learn_moves_the_adversary_live(paper_solve):
     # rises by its upward deviation where it buys; the adversary takes the 3 largest.
     da, sold = plan.problem.sources["price_da"], plan.market["p_da_mw"].to_numpy(float)
     loss = np.where(sold > 0, da.deviation * sold, -da.deviation_up * sold) * plan.problem.dt_h
-    protection = [m for m in at.metric if m.label == "Protection [EUR]"][0]
-    assert number(protection.value) == pytest.approx(plan.protection_eur["price_da"], abs=0.51)
+    protection = [m for m in at.metric if m.label == "Protection [kEUR]"][0]
+    assert number(protection.value) == pytest.approx(plan.protection_eur["price_da"] / 1000, abs=0.051)
+    assert number(protection.proto.help.split("Exact: ")[1]) == pytest.approx(plan.protection_eur["price_da"],
+                                                                             abs=0.51)
     at.slider(key="learn_price_gamma").set_value(3).run()
-    protection = [m for m in at.metric if m.label == "Protection [EUR]"][0]
-    assert number(protection.value) == pytest.approx(sum(sorted(np.maximum(loss, 0.0))[-3:]), abs=0.51)
+    protection = [m for m in at.metric if m.label == "Protection [kEUR]"][0]
+    assert number(protection.value) == pytest.approx(sum(sorted(np.maximum(loss, 0.0))[-3:]) / 1000, abs=0.051)
     at.slider(key="learn_gamma").set_value(9).run()
     band = next(spec for title, spec in figures(at).items() if title.startswith("WF1 ("))
     assert trace(band, "Deviates (χ = 1) in 9 periods")

@@ -148,8 +148,9 @@ def test_exposure_figure_sums_to_the_protection(result):
     gamma = result.problem.sources["price_da"].gamma
     fig = plots.exposure_figure(result, "price_da", gamma)
     picked = [t for t in fig.data if t.name.startswith("Picked by the adversary")][0]
-    assert sum(picked.y) == pytest.approx(result.protection_eur["price_da"], rel=1e-6)
-    assert f"{result.protection_eur['price_da']:,.0f} EUR" in fig.layout.title.text
+    assert sum(picked.y) == pytest.approx(result.protection_eur["price_da"] / 1000, rel=1e-6)  # kEUR
+    assert f"{result.protection_eur['price_da'] / 1000:,.1f} kEUR" in fig.layout.title.text
+    assert fig.layout.yaxis.title.text == "Loss if the price moves adversely [kEUR]"
 
 
 def test_quarter_hours_keep_hourly_ticks(case):

@@ -26,6 +26,7 @@ from ..settle.audit import price_exposures, protection_exact
 from ..uncertainty.problem import Problem, SourceKind
 from ..data.kinds import ELECTRIC_KINDS, FLEX_KINDS, KINDS, UnitKind
 from ..solving.results import Result
+from .money import IN_KEUR
 from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, FIGURE_MARGIN, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS,
                     MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
 from ..errors import CaseError
@@ -335,20 +336,21 @@ def deviating_periods(result: Result, source: str) -> np.ndarray:
 
 
 def exposure_figure(result: Result, source: str, gamma: int) -> go.Figure:
-    """Per-period loss if ``source``'s price moves adversely [EUR]; the Γ worst periods highlighted.
+    """Per-period loss if ``source``'s price moves adversely [kEUR]; the Γ worst periods highlighted.
 
     Their sum is the price protection (Bertsimas & Sim 2004; MODEL_SPEC §4).
     """
     result = _plan(result)
-    exposure = price_exposures(result.problem, result.market)[source]
+    exposure = IN_KEUR.of(price_exposures(result.problem, result.market)[source])
     worst = _top_periods(exposure, gamma)
     protection = protection_exact(exposure, gamma)
     x = _labels(result)
-    traces = [_bar(x, np.where(worst, 0.0, exposure), "Possible loss", GREY, "%{y:.1f} EUR"),
-              _bar(x, np.where(worst, exposure, 0.0), f"Picked by the adversary (Γ = {gamma})", VERMILION,
-                   "%{y:.1f} EUR")]
-    title = f"{SOURCE_TITLES[source]}: loss per period, protection {protection:,.0f} EUR"
-    layout = _plan_layout(result, title, "Loss if the price moves adversely [EUR]")
+    hover = f"%{{y:{IN_KEUR.hover}}} kEUR"
+    traces = [_bar(x, np.where(worst, 0.0, exposure), "Possible loss", GREY, hover),
+              _bar(x, np.where(worst, exposure, 0.0), f"Picked by the adversary (Γ = {gamma})", VERMILION, hover)]
+    title = f"{SOURCE_TITLES[source]}: loss per period, protection {protection:,.1f} kEUR"
+    layout = _plan_layout(result, title, "Loss if the price moves adversely [kEUR]")
+    layout["yaxis"].update(exponentformat="none", separatethousands=True)
     return go.Figure(data=traces, layout={**layout, "barmode": "stack"})
 
 
