@@ -21,8 +21,8 @@ PLAN_COLUMNS = {
     "column": st.column_config.TextColumn("Column"),
     "variant": st.column_config.TextColumn("Variant solved", help="Strategy, markets and what else the plan changes"),
     "status": st.column_config.TextColumn("Status"),
-    "cost_keur": st.column_config.NumberColumn("Cost [kEUR]", format="%.1f"),
-    "profit_eur": st.column_config.NumberColumn("Profit [EUR]", format="%.0f"),
+    "cost_keur": st.column_config.NumberColumn("Cost [kEUR]", format=widgets.KEUR_FORMAT),
+    "profit_eur": None,  # the cost beside it is minus the profit, in kEUR; exports keep profit_eur
     "solve_s": st.column_config.NumberColumn("Solve [s]", format="%.2f"),
     "sold_mwh": st.column_config.NumberColumn("Sold [MWh]", format="%.1f"),
     "bought_mwh": st.column_config.NumberColumn("Bought [MWh]", format="%.1f"),
@@ -34,7 +34,7 @@ PLAN_COLUMNS = {
 
 def cost_table(table):
     """Cost [kEUR] to one decimal, ``n/a`` where a configuration has no plan."""
-    return table.style.format("{:.1f}", na_rep="n/a")
+    return table.style.format("{:,.1f}", na_rep="n/a")
 
 
 st.title("Market sets and HPA prices")

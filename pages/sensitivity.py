@@ -16,8 +16,8 @@ COLUMNS = {
     "gamma": st.column_config.NumberColumn("Γ [periods]"),
     "variant": st.column_config.TextColumn("Variant solved", help="Strategy, markets and the Γ edits of the plan"),
     "status": st.column_config.TextColumn("Status"),
-    "cost_keur": st.column_config.NumberColumn("Cost [kEUR]", format="%.1f"),
-    "profit_eur": st.column_config.NumberColumn("Profit [EUR]", format="%.0f"),
+    "cost_keur": st.column_config.NumberColumn("Cost [kEUR]", format=widgets.KEUR_FORMAT),
+    "profit_eur": None,  # the cost beside it is minus the profit, in kEUR; exports keep profit_eur
     "mip_gap": st.column_config.NumberColumn("MIP gap [-]", format="%.1e"),
     "solve_s": st.column_config.NumberColumn("Solve [s]", format="%.2f"),
     "sold_mwh": st.column_config.NumberColumn("Sold [MWh]", format="%.1f"),

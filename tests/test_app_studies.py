@@ -6,6 +6,7 @@ checked against the same study run directly in this process, on a reduced settin
 
 from __future__ import annotations
 
+import json
 import time
 
 import numpy as np
@@ -46,6 +47,10 @@ def test_sensitivity_page_matches_the_study_and_comes_back_without_a_click(paper
                                                        rel=1e-6)
     assert shown["cost_keur"].is_monotonic_increasing
     assert shown["audit_violations"].eq(0).all()
+    # Money in kEUR with thousands separators; the profit (minus the cost) is not repeated in EUR.
+    config = json.loads(at.dataframe[0].proto.columns)
+    assert config["cost_keur"]["label"] == "Cost [kEUR]" and config["cost_keur"]["type_config"]["format"] == "%,.1f"
+    assert config["profit_eur"] == {"hidden": True}
 
     spec = figures(at)["Sensitivity to the uncertainty budget: cost and traded energy"]
     cost = next(t for t in spec["data"] if t["name"].startswith("Cost"))
@@ -125,6 +130,9 @@ def test_market_sets_page_matches_the_study(paper_case, paper_solve):
         -paper_solve(strategy="pessimistic").objective_eur / 1000, rel=1e-6)
     assert hpa["time-of-use"].tolist() == pytest.approx(markets["DAM+SRM+HPA"].tolist(), rel=1e-9)
     assert {"Cost by market set", "Cost without the CSP"} <= set(figures(at))
+    plans = next(d for d in at.dataframe if "profit_eur" in d.value.columns)
+    config = json.loads(plans.proto.columns)
+    assert config["cost_keur"]["type_config"]["format"] == "%,.1f" and config["profit_eur"] == {"hidden": True}
 
 
 def test_market_sets_page_refuses_a_negative_tariff_and_an_empty_strategy_list():
