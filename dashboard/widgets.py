@@ -22,7 +22,7 @@ KPI_COLUMNS = 4
 BIDS_HEIGHT_PX = 300  # about eight periods at a time; the table scrolls
 NET = "Net cost [kEUR]"
 # The one money convention of every page, chart, table and export label, said once.
-MONEY = ("Money is in kEUR (EUR where small), as **cost: positive when the plant pays**, negative when it earns; "
+MONEY = ("Money is in kEUR, as **cost: positive when the plant pays**, negative when it earns; "
          "the net cost is the costs and the price protection minus the revenues. A revenue is what the plant "
          "earns.")
 PERCENT = 100.0
