@@ -221,10 +221,13 @@ def table_editor(key: str, build: Callable[[], pd.DataFrame], apply: Callable[[p
     editor["column_config"] = {**(editor.get("column_config") or {}), **{
         column: text_column(config) for column, config in numbers.items()}}
     edited = st.data_editor(as_text(st.session_state[base], numbers), key=widget, **editor)
+    read, refused = read_numbers(edited, numbers, st.session_state[base])
     try:
-        new = apply(from_text(edited, numbers))
+        new = apply(read)
     except CaseError as err:
-        problems(err.problems)
+        refused = refused + err.problems  # every problem of the edit at once, the cells typed first
+    if refused:
+        problems(refused)
         st.button("Discard these edits", key=f"{key}_discard", on_click=reset_editor, args=(key,),
                   icon=":material/undo:")
         return
@@ -247,7 +250,7 @@ def typed_numbers(table: pd.DataFrame, config: dict) -> dict[str, dict]:
 
     The table editor shows them as text cells: a number cell of the browser's grid drops the
     letters typed into it without a word, so "abc" would arrive as an empty cell. As text it
-    reaches :func:`from_text`, which refuses it by column and row.
+    reaches :func:`read_numbers`, which names it by column and row.
     """
     numbers = {}
     for column in table.columns:
@@ -282,9 +285,11 @@ def as_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
     return shown
 
 
-def from_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
-    """The edited ``table`` with its ``numbers`` columns read back as numbers; a cell that is not
-    a number is refused in the table's words (``WF1: P max [MW] "abc" is not a number``)."""
+def read_numbers(table: pd.DataFrame, numbers: dict[str, dict], before: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """The edited ``table`` with its ``numbers`` columns read back as numbers, and the cells that are
+    not numbers in the table's words (``WF1: P max [MW] "abc" is not a number``). Such a cell keeps
+    its value in ``before`` (the table as drawn; empty in a new row), so the rest of the edit can be
+    checked with it and every problem be told at once."""
     read, wrong = table.copy(), []
     names = next((table[c] for c in ("name", "source", "hour") if c in table), None)
     if "name" in table:  # typed by the user, like the cells: quoted as markdown that shows it as typed
@@ -302,12 +307,10 @@ def from_text(table: pd.DataFrame, numbers: dict[str, dict]) -> pd.DataFrame:
                 hint = " (write decimals with a point: 1.5)" if re.fullmatch(r"[+-]?\d+,\d+", text) else ""
                 # The typed text as markdown that shows it as typed: the refusal is drawn as markdown.
                 wrong.append(f'{row}: {setting["label"]} "{literal(text)}" is not a number{hint}')
-                value = float("nan")
+                value = float(before.at[index, column]) if index in before.index else float("nan")
             values.append(value)
         read[column] = pd.Series(values, index=table.index, dtype=float)
-    if wrong:
-        raise CaseError(wrong)
-    return read
+    return read, wrong
 
 
 def changes(before: Case, after: Case) -> list[str]:

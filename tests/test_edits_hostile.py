@@ -203,6 +203,16 @@ def test_portfolio_names_an_emptied_cell_by_its_column(paper_case, change, messa
     assert at.session_state["case"] == paper_case
 
 
+def test_one_edit_with_letters_and_a_bad_number_names_both(paper_case):
+    """Every problem of an edit at once: letters in one cell do not hide a rule another cell breaks."""
+    at = edit(open_app("portfolio"), "portfolio_wind_0", edited_rows={0: {"p_max_mw": "abc"}, 1: {"p_max_mw": "-5"}})
+    shown = errors(at)
+    assert 'WF1: P max [MW] "abc" is not a number' in shown
+    assert "WF2: P max [MW] = −5 must be > 0" in shown  # a true minus, as every message writes it
+    assert shown.index('"abc" is not a number') < shown.index("WF2: P max")  # the typed cells first
+    assert at.session_state["case"] == paper_case
+
+
 def test_letters_in_a_budget_or_tariff_cell_are_named_and_the_case_is_kept(paper_case):
     at = open_app("uncertainty")
     key = editor_key(at, "uncertainty_budgets_")
