@@ -15,7 +15,7 @@ from plotly.subplots import make_subplots
 
 from ..data.periods import delivery_periods, period_labels
 from ..errors import RvppError
-from ..outputs.money import IN_EUR, MoneyUnit
+from ..outputs.money import IN_EUR, MONEY_TICKS, MoneyUnit
 from ..outputs.style import (DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, NET_COLOR, ORANGE, SERIES_COLORS, SKY,
                              TRANSPARENT, VERMILION, run_style)
 from . import metrics
@@ -24,8 +24,6 @@ from .trading_day import day_summary, sessions
 PARTS = (("mean_market_cost_eur", "market cost", SKY, "dash"), ("mean_penalty_eur", "penalty", VERMILION, "dot"),
          ("mean_net_cost_eur", "net cost", NET_COLOR, "solid"))
 RECOMMENDED_COLOR = ORANGE
-# Money ticks as the tables write money: with thousands separators, not 2M or 500k.
-MONEY_TICKS = {"exponentformat": "none", "separatethousands": True}
 
 
 def robustness_figure(curve: pd.DataFrame, fraction: float | None = None, period: str = "train",

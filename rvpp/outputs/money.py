@@ -33,5 +33,8 @@ class MoneyUnit:
         return f"{self.of(amount_eur):,.{self.decimals}f} {self.symbol}"
 
 
+# A money axis written as the tables write money: with thousands separators, not 2M or 500k.
+MONEY_TICKS = {"exponentformat": "none", "separatethousands": True}
+
 IN_EUR = MoneyUnit("EUR", 1.0, 0)
 IN_KEUR = MoneyUnit("kEUR", 1000.0, 1)

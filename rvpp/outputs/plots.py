@@ -26,7 +26,7 @@ from ..settle.audit import price_exposures, protection_exact
 from ..uncertainty.problem import Problem, SourceKind
 from ..data.kinds import ELECTRIC_KINDS, FLEX_KINDS, KINDS, UnitKind
 from ..solving.results import Result
-from .money import IN_KEUR
+from .money import IN_KEUR, MONEY_TICKS
 from .style import (BLUE, CHI_SHADE, FIGURE_HEIGHT, FIGURE_MARGIN, GREEN, GREY, GRID_COLOR, KIND_COLORS, KIND_LABELS,
                     MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, rgba, run_style)
 from ..errors import CaseError
@@ -350,7 +350,7 @@ def exposure_figure(result: Result, source: str, gamma: int) -> go.Figure:
               _bar(x, np.where(worst, exposure, 0.0), f"Picked by the adversary (Γ = {gamma})", VERMILION, hover)]
     title = f"{SOURCE_TITLES[source]}: loss per period, protection {protection:,.1f} kEUR"
     layout = _plan_layout(result, title, "Loss if the price moves adversely [kEUR]")
-    layout["yaxis"].update(exponentformat="none", separatethousands=True)
+    layout["yaxis"].update(MONEY_TICKS)
     return go.Figure(data=traces, layout={**layout, "barmode": "stack"})
 
 

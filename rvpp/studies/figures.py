@@ -15,6 +15,7 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
+from ..outputs.money import MONEY_TICKS
 from ..outputs.style import (BLUE, DASHES, FIGURE_HEIGHT, GREY, GRID_COLOR, KIND_COLORS, KIND_GROUP_LABELS,
                              MARKET_COLORS, ORANGE, PURPLE, SERIES_COLORS, SKY, TRANSPARENT, VERMILION, run_style)
 from ..data.kinds import FLEX_KINDS
@@ -29,8 +30,6 @@ PENALTY_CAUSES = (("penalty_deficit_eur", "Energy short of the DAM bid", VERMILI
                   ("penalty_reserve_eur", "Reserve not delivered", ORANGE, "x"),
                   ("penalty_heat_eur", "Heat not served", PURPLE, "."))
 NOT_AVAILABLE = "n/a"
-# Money ticks of the out-of-sample figures as their tables write kEUR: with thousands separators.
-MONEY_TICKS = {"exponentformat": "none", "separatethousands": True}
 
 
 def sensitivity_trade_figure(table: pd.DataFrame) -> go.Figure:
