@@ -83,10 +83,10 @@ class ColumnMatrix:
 
     def columns(self, keep: np.ndarray) -> ColumnMatrix:
         """The columns ``keep`` (increasing positions), in that order."""
-        starts, ends = self.indptr[keep], self.indptr[keep + 1]
-        picked = np.concatenate([np.arange(a, b) for a, b in zip(starts, ends)]) if len(keep) else np.zeros(0, int)
+        starts, lengths = self.indptr[keep], np.diff(self.indptr)[keep]
         indptr = np.zeros(len(keep) + 1, dtype=np.int32)
-        np.cumsum(ends - starts, out=indptr[1:])
+        np.cumsum(lengths, out=indptr[1:])
+        picked = np.arange(indptr[-1]) + np.repeat(starts - indptr[:-1], lengths)  # each kept column's run
         return ColumnMatrix(shape=(self.shape[0], len(keep)), indptr=indptr, indices=self.indices[picked],
                             data=self.data[picked])
 
