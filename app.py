@@ -17,7 +17,7 @@ def main() -> None:
     from dashboard import serve
 
     serve.wait()  # `python -m dashboard` imports the first page's modules while the server starts
-    from dashboard import browser, solving, state, widgets
+    from dashboard import browser, solving, state, svg, widgets
 
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
                        layout="wide")
@@ -51,6 +51,7 @@ def main() -> None:
     summary = st.sidebar.empty()
     with summary.container():  # stays if the page stops early (st.stop() ends the run)
         widgets.sidebar(state.case())
+    svg.inline_charts()
     browser.preload()
     page.run()
     with summary.container():  # drawn again after the page: the case as the page's edits left it

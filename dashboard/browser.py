@@ -24,7 +24,7 @@ from pathlib import Path
 
 import streamlit as st
 
-from .svg import CHART_CLASS
+from .svg import CHART_CLASS, IMAGE_PREFIX
 
 ELEMENTS = ("PlotlyChart", "Metric", "TextInput", "DataFrame")  # what a plan shows that earlier pages may not have
 WAIT_MS = 5000  # a page without a chart starts loading after this long [ms]
@@ -42,7 +42,7 @@ _LOADER = """<script>
   const load = () => files.forEach(file => import(new URL(file, index.src).href).catch(() => {}));
   const idle = () => window.requestIdleCallback ? requestIdleCallback(load, {timeout: 2000}) : setTimeout(load, 0);
   const wait = () => {
-    const drawn = document.querySelector('[data-testid="stPlotlyChart"] .main-svg, svg.CHART_CLASS');
+    const drawn = document.querySelector('[data-testid="stPlotlyChart"] .main-svg, svg.CHART_CLASS, img[src^="IMAGE_PREFIX"]');
     if (drawn || Date.now() - started > WAIT_MS) idle(); else setTimeout(wait, POLL_MS);
   };
   wait();
@@ -66,7 +66,7 @@ def loader() -> str | None:
     if not files:
         return None
     return (_LOADER.replace("FILES", json.dumps(files)).replace("WAIT_MS", str(WAIT_MS))
-            .replace("POLL_MS", str(POLL_MS)).replace("CHART_CLASS", CHART_CLASS))
+            .replace("POLL_MS", str(POLL_MS)).replace("CHART_CLASS", CHART_CLASS).replace("IMAGE_PREFIX", IMAGE_PREFIX))
 
 
 def preload() -> None:

@@ -2,27 +2,38 @@
 
 Streamlit draws a Plotly chart with Plotly's whole bundle (4.7 MB), which the browser fetches
 when the first chart arrives and then compiles and runs for 2.5-3.5 s on a two-core machine
-before the chart appears. An SVG built here arrives drawn, with the page's own text
-(:func:`draw`). It has what every chart of the project has: a title, axis titles with units
-and the clock of each period's start on x. It is one image to assistive technology
-(``role="img"``), named by its title and described in words (``<desc>``); each period
-carries its values in a tooltip (``<title>``), as Plotly's hover does. The data take their
-colour from rvpp's palette; text and axes take the page's text colour, so the chart follows
-the light and the dark theme.
+before the chart appears. An SVG built here arrives drawn (:func:`draw`). It has what every
+chart of the project has: a title, axis titles with units and the clock of each period's
+start on x. It is one image to assistive technology (``role="img"``), named by its title and
+described in words (``<desc>``); each period carries its values in a tooltip (``<title>``),
+as Plotly's hover does. The data take their colour from rvpp's palette; text and axes take the
+page's text colour, so the chart follows the light and the dark theme.
+
+The chart reaches the page in two steps. First as a markdown image of the SVG, drawn with
+the page's first text: markdown's code is part of every page, where any other element that
+could carry an SVG is fetched on first use and then shown no sooner than 0.3 s after the
+page's last element that waited for its code (React's pace for revealing such elements).
+The page then puts the same SVG in place of the image (:func:`inline_charts`), which brings
+the tooltips and the theme's own text colour; only images whose SVG carries this server's
+:data:`NONCE` are replaced, so no image from user text could ever become markup.
 """
 
 from __future__ import annotations
 
-import json
+import base64
 import math
+import re
+import secrets
 from collections.abc import Sequence
-from html import escape
+from html import escape, unescape
 
 import numpy as np
 import streamlit as st
 
 from rvpp import Problem
 from rvpp.service import SERIES_COLORS, SOURCE_TITLES
+
+from .widgets import literal
 
 WIDTH, HEIGHT = 480, 280  # the drawing's own units; it is scaled to its column's width
 LEFT, RIGHT, TOP, BOTTOM = 62, 14, 56, 46  # plot margins in those units
@@ -34,21 +45,68 @@ CLOCK_TITLE = "Delivery day, period start (local time)"
 PRICE_UNIT = "EUR/MWh"
 MINUS = "\u2212"
 CHART_CLASS = "rvpp-chart"  # what the benchmark and the browser tests look for
+NONCE = secrets.token_hex(16)  # marks this server's charts for :func:`inline_charts`
+TEXT_COLORS = {"light": "#31333F", "dark": "#FAFAFA"}  # Streamlit's text colour per theme, for the image
+IMAGE_PREFIX = "data:image/svg+xml;base64,"
+ROOT = f'<svg class="{CHART_CLASS}" '
+
+_INLINE = """<script>
+(() => {
+  if (window.__rvppCharts) return;
+  window.__rvppCharts = true;
+  const images = 'img[src^="IMAGE_PREFIX"]';
+  const root = 'ROOT' + 'data-rvpp="NONCE"';
+  const shown = new Map();  // inline SVG -> the image it stands for
+  const decode = (src) => new TextDecoder().decode(
+    Uint8Array.from(atob(src.slice(src.indexOf(',') + 1)), (c) => c.charCodeAt(0)));
+  const inline = () => {
+    shown.forEach((img, svg) => {
+      if (!img.isConnected || svg.dataset.src !== img.src) { svg.remove(); shown.delete(svg); img.hidden = false; }
+    });
+    document.querySelectorAll('[data-testid="stMarkdownContainer"] ' + images).forEach((img) => {
+      if (img.hidden) return;
+      let markup;
+      try { markup = decode(img.src); } catch (e) { return; }
+      if (!markup.startsWith(root)) return;
+      img.insertAdjacentHTML('afterend', markup);
+      const svg = img.nextElementSibling;
+      svg.dataset.src = img.src;
+      svg.style.removeProperty('color');
+      svg.style.removeProperty('font-family');
+      shown.set(svg, img);
+      img.hidden = true;
+    });
+  };
+  new MutationObserver(inline).observe(document.body, {subtree: true, childList: true,
+                                                       attributes: true, attributeFilter: ['src']});
+  inline();
+})();
+</script>"""
 
 
 def draw(svg: str) -> None:
-    """Show an SVG of this module in the page.
+    """Show an SVG of this module in the page: at once as an image, then in place (see above)."""
+    st.markdown(image_markdown(svg, getattr(st.context.theme, "type", None)))
 
-    ``st.html`` alone would not do: its sanitizer keeps HTML elements only and drops every
-    SVG one. Streamlit's markdown takes raw SVG, but first has the browser load 0.45 MB of
-    code that parses raw HTML: a busy two-core machine then drew the chart a second later
-    (from its message to the chart, median 2.6 s against 1.5 s this way). So a one-line
-    script puts the markup in place: the SVG as a JSON string, each ``<`` written
-    ``\\u003c`` so that nothing in it can end the script.
-    """
-    markup = json.dumps(svg).replace("<", "\\u003c")
-    st.html(f"<script>document.currentScript.insertAdjacentHTML('afterend', {markup})</script>",
-            unsafe_allow_javascript=True)
+
+def image_markdown(svg: str, theme: str | None) -> str:
+    """``svg`` as a markdown image marked with :data:`NONCE`, in the text colour of ``theme``
+    (``"light"``, ``"dark"``; ``None``: not known, light) and a sans-serif font (an image cannot
+    use the page's fonts); its alternative text is the chart's title."""
+    head, rest = svg.split(">", 1)
+    head = head.replace(ROOT, f'{ROOT}data-rvpp="{NONCE}" ', 1).replace(
+        'style="', f'style="color:{TEXT_COLORS.get(theme, TEXT_COLORS["light"])};font-family:sans-serif;', 1)
+    found = re.search(r"<title[^>]*>([^<]*)</title>", rest)
+    alt = literal(unescape(found.group(1)) if found else "chart", limit=None)
+    return f"![{alt}]({IMAGE_PREFIX}{base64.b64encode((head + '>' + rest).encode()).decode()})"
+
+
+def inline_charts() -> None:
+    """Put the script that shows :func:`draw`'s images in place as SVG at the end of the sidebar
+    (no height; it runs once per tab and keeps watching the page)."""
+    script = (_INLINE.replace("IMAGE_PREFIX", IMAGE_PREFIX).replace("ROOT", ROOT.replace("<", "\\u003c"))
+              .replace("NONCE", NONCE))  # no "<" in a script's text: Streamlit's sanitizer drops such a script
+    st.sidebar.html(script, unsafe_allow_javascript=True)
 
 
 def price_band_svg(problem: Problem, chart_id: str) -> str:

@@ -150,14 +150,31 @@ def test_home_then_results_solve_draws_the_charts(app_url, paper_solve):
         page.get_by_role("heading", name="Robust day-ahead bids").wait_for()
         page.get_by_role("button", name="Solve the balanced strategy").wait_for()
         page.get_by_role("table").first.wait_for()
-        # Home's first chart, drawn on the server as SVG: it must reach the page whole (an
-        # element that kept only HTML would drop it) and be one image named by its title.
+        # Home's first chart, drawn on the server as SVG: first an image, then the SVG in its place
+        # (it must reach the page whole: an element that kept only HTML would drop it), one image
+        # named by its title either way, with a tooltip per period once in place.
+        page.locator("svg.rvpp-chart").wait_for()
         band = page.get_by_role("img", name="Day-ahead price: forecast band", exact=True)
-        band.wait_for()
+        assert band.count() == 1 and band.evaluate("element => element.tagName") == "svg"
+        image = page.locator('[data-testid="stMarkdownContainer"] img[alt="Day-ahead price: forecast band"]')
+        assert image.evaluate("img => img.hidden && img.complete && img.naturalWidth > 0")
         assert len(band.locator("polyline.median").get_attribute("points").split()) == 24
+        assert band.locator("g.tips rect").count() == 24
         assert "Day-ahead price on Mon 05 May 2025, 24 periods of 60 minutes." in band.evaluate(
             "svg => document.getElementById(svg.getAttribute('aria-describedby')).textContent")
         assert band.bounding_box()["width"] > 300
+        # Only an image whose SVG carries this server's token is put in place as markup.
+        page.evaluate("""([root, token]) => {
+            const add = (markup) => {
+                const img = document.createElement('img');
+                img.src = 'data:image/svg+xml;base64,' + btoa(markup);
+                document.querySelector('[data-testid="stMarkdownContainer"]').append(img);
+            };
+            add(root + 'data-rvpp="forged" id="forged"><title>x</title></svg>');
+            add(root + 'data-rvpp="' + token + '" id="genuine"><title>y</title></svg>');
+        }""", ['<svg class="rvpp-chart" ', band.get_attribute("data-rvpp")])
+        page.locator("svg#genuine").wait_for(state="attached")
+        assert page.locator("#forged").count() == 0
         page.screenshot(path=ARTIFACTS / "home.png", full_page=True)
 
         page.get_by_test_id("stSidebarNav").get_by_role("link", name="Results").click()

@@ -7,7 +7,7 @@ turned back into prices and compared with the prepared day's band.
 
 from __future__ import annotations
 
-import json
+import base64
 import re
 import xml.etree.ElementTree as ET
 
@@ -140,16 +140,34 @@ def test_text_is_drawn_as_text_and_bad_series_are_refused():
                      y_title="y", names=("a", "b"), tips=labels, color="#000")
 
 
+IMAGE = re.compile(r"!\[(?P<alt>(?:[^\]\\]|\\.)*)\]\(data:image/svg\+xml;base64,(?P<data>[A-Za-z0-9+/=]+)\)")
+
+
 def test_homes_first_chart_is_the_svg_price_band_and_no_plotly_chart(problem, band):
-    """Before a solve, Home draws its chart as SVG: no chart library to load. The page puts it
-    in place with a one-line script holding the markup as a JSON string."""
+    """Before a solve, Home draws its chart as SVG: no chart library to load. It arrives as a
+    markdown image of the SVG, named by the chart's title, in the light theme's text colour and
+    marked with this server's token, which the page's script needs to put the SVG in place."""
     at = open_app()
     assert not at.get("plotly_chart")
-    charts = [h.proto for h in at.get("html") if "insertAdjacentHTML" in h.proto.body]
-    assert len(charts) == 1 and charts[0].unsafe_allow_javascript
-    call = re.fullmatch(r"<script>document\.currentScript\.insertAdjacentHTML\('afterend', (\".*\")\)</script>",
-                        charts[0].body, re.S)
-    assert call and "<" not in call.group(1)  # nothing in the string can end the script
-    chart = read(json.loads(call.group(1)))
-    assert chart.get("class") == "rvpp-chart"
+    images = [found for md in at.markdown if (found := IMAGE.fullmatch(md.value))]
+    assert len(images) == 1
+    assert images[0]["alt"] == "Day\\-ahead price\\: forecast band"  # escaped for markdown, shown as the title
+    chart = read(base64.b64decode(images[0]["data"]).decode())
+    assert chart.get("class") == "rvpp-chart" and chart.get("data-rvpp") == svg.NONCE
+    assert "color:#31333F;" in chart.get("style")  # an image cannot take the page's colour
     np.testing.assert_allclose(drawn(chart, "median"), band["mid"], atol=PIXEL_EUR)
+    scripts = [h.proto for h in at.get("html") if "__rvppCharts" in h.proto.body]
+    assert len(scripts) == 1 and scripts[0].unsafe_allow_javascript
+    body = scripts[0].body.removeprefix("<script>").removesuffix("</script>")
+    assert "<" not in body  # Streamlit's sanitizer drops a script whose text holds one
+    assert f'data-rvpp="{svg.NONCE}"' in body
+
+
+def test_the_image_takes_the_dark_themes_text_colour_and_escapes_its_title():
+    markup = ('<svg class="rvpp-chart" role="img" style="max-width:600px" '
+              'xmlns="http://www.w3.org/2000/svg"><title>[x](y) &amp; *z*</title></svg>')
+    found = IMAGE.fullmatch(svg.image_markdown(markup, "dark"))
+    assert found["alt"] == "\\[x\\]\\(y\\) \\& \\*z\\*"  # drawn as typed, not as a link or emphasis
+    chart = read(base64.b64decode(found["data"]).decode())
+    assert chart.get("style") == "color:#FAFAFA;font-family:sans-serif;max-width:600px"
+    assert chart.get("data-rvpp") == svg.NONCE
