@@ -27,6 +27,14 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     ({"battery": [{**BAT, "eta_ch": 0.0}]}, 'battery "B1": eta_ch=0 must be > 0'),
     ({"battery": [{**BAT, "eta_dis": 1.2}]}, 'battery "B1": eta_dis=1.2 must be <= 1'),
     ({"battery": [{**BAT, "self_discharge_per_h": 1.0}]}, 'battery "B1": self_discharge_per_h=1 must be < 1'),
+    # 0.5 of 20 MWh lost in an hour (10 MW) beside 0.95 x 10 MW charged: the energy must fall below E min
+    ({"battery": [{**BAT, "e_min_mwh": 20.0, "self_discharge_per_h": 0.5}]},
+     'battery "B1": self_discharge_per_h=0.5 loses 10 MW at e_min_mwh=20, more than charging at full power '
+     "restores: eta_ch=0.95 x p_ch_max_mw=10 = 9.5 MW; the energy could not stay at or above its minimum"),
+    # 0.25 of 40 MWh (10 MW) against 9.5 MW charged: the day cannot end where it started
+    ({"battery": [{**BAT, "e_init_mwh": 40.0, "self_discharge_per_h": 0.25}]},
+     'battery "B1": self_discharge_per_h=0.25 loses 10 MW at e_init_mwh=40, more than charging at full power '
+     "restores: eta_ch=0.95 x p_ch_max_mw=10 = 9.5 MW; the day could not end at or above its initial energy"),
     ({"hydro": [{**HY, "energy_max_mwh": 10.0, "min_up_h": 4.0}]},
      'hydro "H1": energy_max_mwh=10 is below p_min_mw x min_up_h = 5 MW x 4 h = 20 MWh: once started, the unit '
      "could not run its minimum up time at its minimum output"),
