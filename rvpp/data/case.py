@@ -604,8 +604,8 @@ class DispatchableUnit(_Unit):
             if self.initial_online:
                 _require_within("p_init_mw", self.p_init_mw, "p_min_mw", self.p_min_mw, "p_max_mw", self.p_max_mw)
         if self.energy_max_mwh is not None and self.energy_max_mwh < self.p_min_mw * self.min_up_h:
-            raise ValueError(f"energy_max_mwh={self.energy_max_mwh:g} is below p_min_mw x min_up_h = "
-                             f"{self.p_min_mw:g} MW x {self.min_up_h:g} h = {self.p_min_mw * self.min_up_h:g} MWh: "
+            raise ValueError(f"energy_max_mwh={self.energy_max_mwh:g} is below the {self.p_min_mw * self.min_up_h:g} "
+                             f"MWh of a run at p_min_mw={self.p_min_mw:g} for min_up_h={self.min_up_h:g}: "
                              "once started, the unit could not run its minimum up time at its minimum output")
         return self
 
@@ -1033,9 +1033,9 @@ class Case(_Frozen):
                                         f"dt_h={self.dt_h:g}")
                 least = unit.p_min_mw * self.dt_h
                 if unit.energy_max_mwh is not None and unit.energy_max_mwh < least:
-                    problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below one '
-                                    f"period at p_min_mw: {unit.p_min_mw:g} MW x dt_h={self.dt_h:g} h = {least:g} "
-                                    "MWh; the unit could never run")
+                    problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below the '
+                                    f"{least:g} MWh of one period (dt_h={self.dt_h:g}) at p_min_mw={unit.p_min_mw:g}: "
+                                    "the unit could never run")
                 elif unit.energy_max_mwh is not None:
                     committed, run = unit.committed_run(self.dt_h, periods)
                     if unit.energy_max_mwh < committed - 1e-9:
