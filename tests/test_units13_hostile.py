@@ -107,3 +107,14 @@ def test_the_forms_show_the_refusals_in_their_column_names(units, shown):
     from rvpp.data.edits import plain_message
     texts = [plain_message(p) for p in refused(**units)]
     assert shown in texts, texts
+
+
+def test_a_battery_at_the_balance_of_self_discharge_and_charging_loads():
+    # 0.5 of 19 MWh lost in an hour is 9.5 MW, what 0.95 x 10 MW of charging restores: the day can hold
+    # 19 MWh, and a level a ten-millionth of a MWh above it (a settled day's end) is still taken
+    base = tiny_case(battery_units=[{**BAT, "e_min_mwh": 19.0, "self_discharge_per_h": 0.5}])
+    assert [b.e_min_mwh for b in base.battery] == [19.0]
+    carried = tiny_case(battery_units=[{**BAT, "e_init_mwh": 19.0 + 1e-7, "self_discharge_per_h": 0.5}])
+    assert [b.e_init_mwh for b in carried.battery] == [19.0 + 1e-7]
+    with pytest.raises(CaseError, match="loses 9.50001 MW at e_init_mwh=19, more than"):
+        tiny_case(battery_units=[{**BAT, "e_init_mwh": 19.00002, "self_discharge_per_h": 0.5}])
