@@ -183,7 +183,7 @@ def assert_within_documented_bounds(case) -> None:
         assert 0 <= unit["self_discharge_per_h"] < 1 and unit["p_ch_max_mw"] > 0 and unit["p_dis_max_mw"] > 0, unit
         # charging at full power makes up for the self-discharge at the lowest level the day must hold
         held = unit["e_min_mwh"] if unit["e_init_mwh"] is None else unit["e_init_mwh"]
-        assert unit["self_discharge_per_h"] * held <= unit["eta_ch"] * unit["p_ch_max_mw"] * (1 + 1e-9), unit
+        assert unit["self_discharge_per_h"] * (held - 1e-6) <= unit["eta_ch"] * unit["p_ch_max_mw"] * (1 + 1e-9), unit
     for unit in data["hydro"] + data["biomass"]:
         assert unit["p_min_mw"] <= unit["p_max_mw"], unit
         for field in ("min_up_h", "min_down_h"):
