@@ -514,8 +514,8 @@ class Battery(_Unit):
         if lost > restored * (1.0 + 1e-9) + self.self_discharge_per_h * 1e-6:
             goal = ("the energy could not stay at or above its minimum" if self.cyclic
                     else "the day could not end at or above its initial energy")
-            raise ValueError(f"self_discharge_per_h={self.self_discharge_per_h:g} loses {lost:g} MW at {held}={level:g}, "
-                             f"more than charging at full power restores: eta_ch={self.eta_ch:g} x "
+            raise ValueError(f"self_discharge_per_h={self.self_discharge_per_h:g} loses {lost:g} MW at "
+                             f"{held}={level:g}, more than charging at full power restores: eta_ch={self.eta_ch:g} x "
                              f"p_ch_max_mw={self.p_ch_max_mw:g} = {restored:g} MW; {goal}")
         return self
 
