@@ -52,7 +52,8 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     ({"biomass": [{**HY, "min_up_h": 25.0}]}, 'biomass "H1": min_up_h=25 must be <= 24'),
     ({"biomass": [{**HY, "min_down_h": 30.0}]}, 'biomass "H1": min_down_h=30 must be <= 24'),
     ({"hydro": [{**HY, "min_up_h": 1.5}]}, 'hydro "H1": min_up_h=1.5 must be a multiple of dt_h=1'),
-    ({"hydro": [{**HY, "p_init_mw": 3.0}]}, 'hydro "H1": p_init_mw=3 must be 0 when initial_online is false'),
+    ({"hydro": [{**HY, "p_init_mw": 3.0}]},
+     'hydro "H1": p_init_mw=3 must be 0 for a unit off before the day (initial_online=false)'),
     ({"hydro": [{**HY, "p_min_mw": 40.0}]}, 'hydro "H1": p_min_mw=40 must be <= p_max_mw=30'),
     ({"hydro": [{**HY, "name": "OK"}]}, 'hydro "OK": name is used by more than one unit; names must be unique'),
     ({"biomass": [HY, {**HY, "enabled": False}]},
@@ -98,6 +99,9 @@ def test_the_fuzz_base_with_the_new_units_loads(paper_case):
     ({"hydro": [{**HY, "energy_max_mwh": 4.0}]},
      "H1: Energy max [MWh] = 4 is below the 5 MWh of one period (Market time unit [h] = 1) at P min [MW] = 5: "
      "the unit could never run"),
+    ({"hydro": [{**HY, "p_init_mw": 3.0}]},
+     "H1: P start [MW] = 3 must be 0 for a unit off before the day (On at midnight = false): an offline unit "
+     "produces nothing"),
     ({"battery": [{**BAT, "e_min_mwh": 20.0, "self_discharge_per_h": 0.5}]},
      "B1: Self-discharge [1/h] = 0.5 loses 10 MW at E min [MWh] = 20, more than charging at full power restores: "
      "η charge [-] = 0.95 x Charge max [MW] = 10 = 9.5 MW; the energy could not stay at or above its minimum"),

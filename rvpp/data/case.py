@@ -601,8 +601,8 @@ class DispatchableUnit(_Unit):
         _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
         if self.p_init_mw is not None:
             if not self.initial_online and self.p_init_mw > 0.0:
-                raise ValueError(f"p_init_mw={self.p_init_mw:g} must be 0 when initial_online is false: an offline "
-                                 "unit produces nothing")
+                raise ValueError(f"p_init_mw={self.p_init_mw:g} must be 0 for a unit off before the day "
+                                 "(initial_online=false): an offline unit produces nothing")
             if self.initial_online:
                 _require_within("p_init_mw", self.p_init_mw, "p_min_mw", self.p_min_mw, "p_max_mw", self.p_max_mw)
         if self.energy_max_mwh is not None and self.energy_max_mwh < self.p_min_mw * self.min_up_h:
