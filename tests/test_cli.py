@@ -110,6 +110,20 @@ def test_earliest_ties_are_exported_and_audited(tmp_path, capsys):
     assert "budget.earliest_ties" in {v.check for v in audit_export(load_case(PAPER), out)}
 
 
+def test_a_plan_without_a_csp_writes_the_csp_file_and_sheet_with_their_header(tmp_path, capsys):
+    out = tmp_path / "plan"
+    code, err = run(capsys, "solve", "--no-csp", "--quiet", "--out", str(out))
+    assert code == 0, err
+    assert json.loads((out / "summary.json").read_text())["csp"] == []
+    # the public columns of docs/exports.md, in their order, and no row
+    header = ["t", "start", "clock", *CONTRACT["csp"][1:], "shutdown", "ts_r_ch_up_mw", "ts_r_ch_dn_mw",
+              "ts_r_dis_up_mw", "ts_r_dis_dn_mw", "ts_energy_floor_mwh", "ts_energy_ceiling_mwh"]
+    assert (out / "csp.csv").read_text().splitlines() == [",".join(header)]
+    book = openpyxl.load_workbook(out / "plan.xlsx", read_only=True)
+    assert [list(row) for row in book["csp"].iter_rows(values_only=True)] == [header]
+    assert audit_export(load_case(PAPER), out) == []  # the summary names no CSP: the audit leaves it out
+
+
 def test_no_csp_and_no_hpa_names_the_missing_heat_source(tmp_path, capsys):
     code, err = run(capsys, "solve", "--no-csp", "--markets", "DAM,SRM", "--out", str(tmp_path / "x"))
     assert code == 1

@@ -181,6 +181,9 @@ def assert_within_documented_bounds(case) -> None:
             assert unit["e_min_mwh"] <= unit["e_init_mwh"] <= unit["e_max_mwh"], unit
         assert 0 < unit["eta_ch"] <= 1 and 0 < unit["eta_dis"] <= 1, unit
         assert 0 <= unit["self_discharge_per_h"] < 1 and unit["p_ch_max_mw"] > 0 and unit["p_dis_max_mw"] > 0, unit
+        # charging at full power makes up for the self-discharge at the lowest level the day must hold
+        held = unit["e_min_mwh"] if unit["e_init_mwh"] is None else unit["e_init_mwh"]
+        assert unit["self_discharge_per_h"] * (held - 1e-6) <= unit["eta_ch"] * unit["p_ch_max_mw"] * (1 + 1e-9), unit
     for unit in data["hydro"] + data["biomass"]:
         assert unit["p_min_mw"] <= unit["p_max_mw"], unit
         for field in ("min_up_h", "min_down_h"):
@@ -278,6 +281,7 @@ def changed_unit(listed_under: str, **values: Any) -> dict:
 @example(data=changed_unit("battery", e_init_mwh=2.0))
 @example(data=changed_unit("battery", eta_ch=0.0))
 @example(data=changed_unit("battery", eta_dis=95))
+@example(data=changed_unit("battery", self_discharge_per_h=0.9, p_ch_max_mw=1.0))
 @example(data=changed_unit("hydro", energy_max_mwh=8.0))
 @example(data=changed_unit("hydro", p_init_mw=40.0))
 @example(data=changed_unit("hydro", min_up_h=25.0))

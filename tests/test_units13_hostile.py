@@ -27,12 +27,20 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     ({"battery": [{**BAT, "eta_ch": 0.0}]}, 'battery "B1": eta_ch=0 must be > 0'),
     ({"battery": [{**BAT, "eta_dis": 1.2}]}, 'battery "B1": eta_dis=1.2 must be <= 1'),
     ({"battery": [{**BAT, "self_discharge_per_h": 1.0}]}, 'battery "B1": self_discharge_per_h=1 must be < 1'),
+    # 0.5 of 20 MWh lost in an hour (10 MW) beside 0.95 x 10 MW charged: the energy must fall below E min
+    ({"battery": [{**BAT, "e_min_mwh": 20.0, "self_discharge_per_h": 0.5}]},
+     'battery "B1": self_discharge_per_h=0.5 loses 10 MW at e_min_mwh=20, more than charging at full power '
+     "restores: eta_ch=0.95 x p_ch_max_mw=10 = 9.5 MW; the energy could not stay at or above its minimum"),
+    # 0.25 of 40 MWh (10 MW) against 9.5 MW charged: the day cannot end where it started
+    ({"battery": [{**BAT, "e_init_mwh": 40.0, "self_discharge_per_h": 0.25}]},
+     'battery "B1": self_discharge_per_h=0.25 loses 10 MW at e_init_mwh=40, more than charging at full power '
+     "restores: eta_ch=0.95 x p_ch_max_mw=10 = 9.5 MW; the day could not end at or above its initial energy"),
     ({"hydro": [{**HY, "energy_max_mwh": 10.0, "min_up_h": 4.0}]},
-     'hydro "H1": energy_max_mwh=10 is below p_min_mw x min_up_h = 5 MW x 4 h = 20 MWh: once started, the unit '
-     "could not run its minimum up time at its minimum output"),
+     'hydro "H1": energy_max_mwh=10 is below the 20 MWh of a run at p_min_mw=5 for min_up_h=4: once started, the '
+     "unit could not run its minimum up time at its minimum output"),
     ({"hydro": [{**HY, "energy_max_mwh": 4.0}]},
-     'hydro "H1": energy_max_mwh=4 is below one period at p_min_mw: 5 MW x dt_h=1 h = 5 MWh; the unit could '
-     "never run"),
+     'hydro "H1": energy_max_mwh=4 is below the 5 MWh of one period (dt_h=1) at p_min_mw=5: the unit could never '
+     "run"),
     # online before the day at 30 MW, 5 MW/h down and a stop from 10 MW at most: 25 + 20 + 15 + 10 = 70 MWh
     ({"hydro": [{**HY, "initial_online": True, "p_init_mw": 30.0, "ramp_dn_mw_per_h": 5.0,
                  "shutdown_ramp_mw_per_h": 10.0, "energy_max_mwh": 69.0}]},
@@ -44,7 +52,8 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     ({"biomass": [{**HY, "min_up_h": 25.0}]}, 'biomass "H1": min_up_h=25 must be <= 24'),
     ({"biomass": [{**HY, "min_down_h": 30.0}]}, 'biomass "H1": min_down_h=30 must be <= 24'),
     ({"hydro": [{**HY, "min_up_h": 1.5}]}, 'hydro "H1": min_up_h=1.5 must be a multiple of dt_h=1'),
-    ({"hydro": [{**HY, "p_init_mw": 3.0}]}, 'hydro "H1": p_init_mw=3 must be 0 when initial_online is false'),
+    ({"hydro": [{**HY, "p_init_mw": 3.0}]},
+     'hydro "H1": p_init_mw=3 must be 0 for a unit off before the day (initial_online=false)'),
     ({"hydro": [{**HY, "p_min_mw": 40.0}]}, 'hydro "H1": p_min_mw=40 must be <= p_max_mw=30'),
     ({"hydro": [{**HY, "name": "OK"}]}, 'hydro "OK": name is used by more than one unit; names must be unique'),
     ({"biomass": [HY, {**HY, "enabled": False}]},
@@ -81,3 +90,35 @@ def test_the_fuzz_base_with_the_new_units_loads(paper_case):
     case = parse_case(RAW_NEW_UNITS, paper_case.history)
     assert [u.name for _, u in case.units()][-2:] == ["BAT1", "HY1"]  # BIO1 is disabled
     assert [u.name for _, u in case.all_units()][-3:] == ["BAT1", "HY1", "BIO1"]
+
+
+@pytest.mark.parametrize("units, shown", [
+    ({"hydro": [{**HY, "energy_max_mwh": 10.0, "min_up_h": 4.0}]},
+     "H1: Energy max [MWh] = 10 is below the 20 MWh of a run at P min [MW] = 5 for Min up [h] = 4: once started, "
+     "the unit could not run its minimum up time at its minimum output"),
+    ({"hydro": [{**HY, "energy_max_mwh": 4.0}]},
+     "H1: Energy max [MWh] = 4 is below the 5 MWh of one period (Market time unit [h] = 1) at P min [MW] = 5: "
+     "the unit could never run"),
+    ({"hydro": [{**HY, "p_init_mw": 3.0}]},
+     "H1: P start [MW] = 3 must be 0 for a unit off before the day (On at midnight = false): an offline unit "
+     "produces nothing"),
+    ({"battery": [{**BAT, "e_min_mwh": 20.0, "self_discharge_per_h": 0.5}]},
+     "B1: Self-discharge [1/h] = 0.5 loses 10 MW at E min [MWh] = 20, more than charging at full power restores: "
+     "η charge [-] = 0.95 x Charge max [MW] = 10 = 9.5 MW; the energy could not stay at or above its minimum"),
+])
+def test_the_forms_show_the_refusals_in_their_column_names(units, shown):
+    # the Portfolio page shows these messages: every field in the table's words, no case.yaml name left
+    from rvpp.data.edits import plain_message
+    texts = [plain_message(p) for p in refused(**units)]
+    assert shown in texts, texts
+
+
+def test_a_battery_at_the_balance_of_self_discharge_and_charging_loads():
+    # 0.5 of 19 MWh lost in an hour is 9.5 MW, what 0.95 x 10 MW of charging restores: the day can hold
+    # 19 MWh, and a level a ten-millionth of a MWh above it (a settled day's end) is still taken
+    base = tiny_case(battery_units=[{**BAT, "e_min_mwh": 19.0, "self_discharge_per_h": 0.5}])
+    assert [b.e_min_mwh for b in base.battery] == [19.0]
+    carried = tiny_case(battery_units=[{**BAT, "e_init_mwh": 19.0 + 1e-7, "self_discharge_per_h": 0.5}])
+    assert [b.e_init_mwh for b in carried.battery] == [19.0 + 1e-7]
+    with pytest.raises(CaseError, match="loses 9.50001 MW at e_init_mwh=19, more than"):
+        tiny_case(battery_units=[{**BAT, "e_init_mwh": 19.00002, "self_discharge_per_h": 0.5}])

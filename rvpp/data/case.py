@@ -505,6 +505,18 @@ class Battery(_Unit):
     def _limits(self) -> "Battery":
         _require(self.e_min_mwh < self.e_max_mwh, "e_min_mwh", self.e_min_mwh, "<", "e_max_mwh", self.e_max_mwh)
         _require_within("e_init_mwh", self.e_init_mwh, "e_min_mwh", self.e_min_mwh, "e_max_mwh", self.e_max_mwh)
+        # The day keeps the energy at or above e_min (and, with an initial energy, ends at or above
+        # it): self-discharge there must not lose more than charging at full power puts back. A level
+        # within a millionth of a MWh of that balance passes: a backtest carries the settled day's end
+        # into the next, and a battery held at its balance ends there up to the solver's round-off.
+        held, level = ("e_min_mwh", self.e_min_mwh) if self.cyclic else ("e_init_mwh", self.e_init_mwh)
+        lost, restored = self.self_discharge_per_h * level, self.eta_ch * self.p_ch_max_mw
+        if lost > restored * (1.0 + 1e-9) + self.self_discharge_per_h * 1e-6:
+            goal = ("the energy could not stay at or above its minimum" if self.cyclic
+                    else "the day could not end at or above its initial energy")
+            raise ValueError(f"self_discharge_per_h={self.self_discharge_per_h:g} loses {lost:g} MW at "
+                             f"{held}={level:g}, more than charging at full power restores: eta_ch={self.eta_ch:g} x "
+                             f"p_ch_max_mw={self.p_ch_max_mw:g} = {restored:g} MW; {goal}")
         return self
 
 
@@ -589,13 +601,13 @@ class DispatchableUnit(_Unit):
         _require(self.p_min_mw <= self.p_max_mw, "p_min_mw", self.p_min_mw, "<=", "p_max_mw", self.p_max_mw)
         if self.p_init_mw is not None:
             if not self.initial_online and self.p_init_mw > 0.0:
-                raise ValueError(f"p_init_mw={self.p_init_mw:g} must be 0 when initial_online is false: an offline "
-                                 "unit produces nothing")
+                raise ValueError(f"p_init_mw={self.p_init_mw:g} must be 0 for a unit off before the day "
+                                 "(initial_online=false): an offline unit produces nothing")
             if self.initial_online:
                 _require_within("p_init_mw", self.p_init_mw, "p_min_mw", self.p_min_mw, "p_max_mw", self.p_max_mw)
         if self.energy_max_mwh is not None and self.energy_max_mwh < self.p_min_mw * self.min_up_h:
-            raise ValueError(f"energy_max_mwh={self.energy_max_mwh:g} is below p_min_mw x min_up_h = "
-                             f"{self.p_min_mw:g} MW x {self.min_up_h:g} h = {self.p_min_mw * self.min_up_h:g} MWh: "
+            raise ValueError(f"energy_max_mwh={self.energy_max_mwh:g} is below the {self.p_min_mw * self.min_up_h:g} "
+                             f"MWh of a run at p_min_mw={self.p_min_mw:g} for min_up_h={self.min_up_h:g}: "
                              "once started, the unit could not run its minimum up time at its minimum output")
         return self
 
@@ -1023,9 +1035,9 @@ class Case(_Frozen):
                                         f"dt_h={self.dt_h:g}")
                 least = unit.p_min_mw * self.dt_h
                 if unit.energy_max_mwh is not None and unit.energy_max_mwh < least:
-                    problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below one '
-                                    f"period at p_min_mw: {unit.p_min_mw:g} MW x dt_h={self.dt_h:g} h = {least:g} "
-                                    "MWh; the unit could never run")
+                    problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below the '
+                                    f"{least:g} MWh of one period (dt_h={self.dt_h:g}) at p_min_mw={unit.p_min_mw:g}: "
+                                    "the unit could never run")
                 elif unit.energy_max_mwh is not None:
                     committed, run = unit.committed_run(self.dt_h, periods)
                     if unit.energy_max_mwh < committed - 1e-9:

@@ -177,6 +177,14 @@ def _dispatch_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     return table.astype({column: "Int64" for column in DISPATCH_STATES})
 
 
+# The CSP table's columns after the period's, in order, and its whole-number ones.
+CSP_FIELDS = ("unit", "p_sf_mw", "sf_nominal_mw", "sf_deviation_mw", "sf_bound_mw", "chi", "p_pb_mw", "e_none_mw",
+              "e_up_mw", "e_dn_mw", "ts_charge_mw", "ts_discharge_mw", "ts_energy_mwh", "ts_r_up_mw", "ts_r_dn_mw",
+              "charging", "online", "startup", "heat_to_td_mw", "sigma_up", "sigma_dn", "shutdown", "ts_r_ch_up_mw",
+              "ts_r_ch_dn_mw", "ts_r_dis_up_mw", "ts_r_dis_dn_mw", "ts_energy_floor_mwh", "ts_energy_ceiling_mwh")
+CSP_STATES = ("chi", "charging", "online", "startup", "shutdown")
+
+
 def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
     frames = []
     base = _period_columns(problem)
@@ -212,8 +220,10 @@ def _csp_table(m, problem: Problem, T: list[int]) -> pd.DataFrame:
             "ts_energy_floor_mwh": ts.e_min_mwh_th + sigma_up * span,
             "ts_energy_ceiling_mwh": ts.e_max_mwh_th - sigma_dn * span,
         }))
-    if not frames:
-        return pd.DataFrame()
+    if not frames:  # no CSP in the plan: the table's header alone, as the dispatch table's
+        return pd.DataFrame({column: pd.Series(dtype=int if column in CSP_STATES else float)
+                             for column in (*base, *CSP_FIELDS)}).astype({"start": object, "clock": object,
+                                                                           "unit": object})
     return pd.concat(frames, ignore_index=True)
 
 
