@@ -172,7 +172,7 @@ def assert_within_documented_bounds(case) -> None:
         assert all(b >= a for a, b in zip(outputs, outputs[1:])) and inputs[-1] >= pb["p_in_max_mw_th"], pb
         for field in ("min_up_h", "min_down_h"):
             periods = pb[field] / case.dt_h
-            assert pb[field] >= 0 and periods == round(periods), (field, pb[field])
+            assert pb[field] >= 0 and abs(periods - round(periods)) <= 1e-9, (field, pb[field])
         for field in ("min_up_h", "min_down_h"):
             assert pb[field] <= 24, (field, pb[field])  # no minimum time longer than the day
     for unit in data["battery"]:  # MODEL_SPEC §13
@@ -188,7 +188,7 @@ def assert_within_documented_bounds(case) -> None:
         assert unit["p_min_mw"] <= unit["p_max_mw"], unit
         for field in ("min_up_h", "min_down_h"):
             periods = unit[field] / case.dt_h
-            assert 0 <= unit[field] <= 24 and periods == round(periods), (field, unit)
+            assert 0 <= unit[field] <= 24 and abs(periods - round(periods)) <= 1e-9, (field, unit)
         if unit["energy_max_mwh"] is not None:  # enough water or fuel for the least a start commits it to
             assert unit["energy_max_mwh"] >= unit["p_min_mw"] * max(unit["min_up_h"], case.dt_h), unit
             assert unit["energy_max_mwh"] >= least_run_mwh(unit, case.dt_h) - 1e-9, unit
