@@ -280,14 +280,15 @@ def test_the_state_of_charge_chart_draws_the_battery_plan():
 # ----------------------------------------------------------------------------- settlement
 
 
-def settled(case, plan, price_da):
+def settled(case, plan, price_da, with_end_state=False):
     """Settle ``plan`` against realized DAM prices ``price_da`` (reserve prices 0)."""
     import pandas as pd
 
     from rvpp.settle.recourse import Realization, evaluate, first_stage
     values = pd.DataFrame({"price_da": price_da, "price_sr_up": 0.0, "price_sr_dn": 0.0},
                           index=pd.RangeIndex(1, NT + 1, name="t"))
-    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values))
+    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values),
+                      with_end_state=with_end_state)
     assert record["status"] == "optimal"
     return record
 
@@ -334,6 +335,19 @@ def test_the_settlement_records_every_periods_battery_and_unit_dispatch_and_the_
     assert rows.loc["BIO", "online"].tolist() == [0] + [1] * 23
     assert rows.loc["BIO", "p_mw"].to_numpy() == pytest.approx([0.0] + [10.0] * 23, abs=1e-6)
     assert rows.loc["B", "online"].isna().all() and rows.loc["BIO", "e_mwh"].isna().all()
+
+
+def test_the_settlement_holds_a_batterys_end_target_and_hands_its_energy_to_the_next_day():
+    # The plan of the end-target day above (9 MWh start, 4.5 MWh target, price 50) sells 4.05 MWh; settled
+    # at the same prices it does the same, ends at 4.5 MWh (held at 9 MWh it would have to miss its
+    # bids) and hands 4.5 MWh to the next day
+    case = tiny_case(battery_units=[battery(e_init_mwh=9.0, e_end_min_mwh=4.5)])
+    prices = np.full(NT, 50.0)
+    record = settled(case, solved(case, prices), prices, with_end_state=True)
+    energy = np.array(record["settled_units"]["B"]["e_mwh"])
+    assert energy[-1] == pytest.approx(4.5, abs=1e-6)
+    assert sum(record["settled_units"]["B"]["discharge_mw"]) == pytest.approx(4.05, abs=1e-6)
+    assert record["end_state"]["B"]["e_mwh"] == pytest.approx(4.5, abs=1e-6)
 
 
 def test_the_settlement_keeps_a_unit_online_where_the_plan_committed_it():
