@@ -263,8 +263,8 @@ with st.expander(f"Start a backtest of the current case ({widgets.literal(run.na
         end_target = right.number_input(
             "Storage end target [fraction of the storage range], from 0 to 1", min_value=0.0, max_value=1.0,
             value=None, step=0.05, key="backtest_end", placeholder="empty: carry (never end below the start)",
-            help="Empty: each day ends with at least the heat it started with. A fraction: the day may run the "
-                 "storage down to e_min + fraction × (e_max − e_min), never below it.")
+            help="Empty: each day ends with at least the energy it started with, in every tank and battery. A "
+                 "fraction: the day may run each storage down to e_min + fraction × (e_max − e_min), never below it.")
         label = st.text_input("Label", value="", key="backtest_label", max_chars=190,
                               placeholder=f"{run.name} backtest")
         submitted = st.form_submit_button("Start the backtest", type="primary", icon=":material/play_arrow:",

@@ -99,6 +99,21 @@ def test_the_storage_may_run_down_to_its_end_target_and_no_further():
         assert output == pytest.approx(0.4 * (e_init - end), rel=1e-6)  # 40 % of the heat spent
 
 
+@pytest.mark.parametrize("storage_end, tank, battery", [("carry", None, None), (0.5, 550.0, 22.0),
+                                                         (0.0, 100.0, 4.0), (1.0, 1000.0, 40.0)])
+def test_the_end_of_day_rule_gives_the_battery_its_target_as_the_tank(storage_end, tank, battery):
+    # Tank 100-1000 MWh_th, battery 4-40 MWh: e_min + F x (e_max - e_min), e.g. 4 + 0.5 x 36 = 22 MWh
+    from rvpp.backtest.state import with_state
+    unit = {"name": "B", "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 10.0, "p_dis_max_mw": 10.0,
+            "e_init_mwh": 12.0, "ramp_mw_per_min": 5.0}
+    case = tiny_case(csp_units=[csp_unit(e_init=600)], battery_units=[unit])
+    state = {"C": {"e_mwh_th": 700.0, "online": False, "status_h": None}, "B": {"e_mwh": 30.0}}
+    day = with_state(case, state, storage_end)
+    assert (day.csp[0].storage.e_init_mwh_th, day.csp[0].storage.e_end_min_mwh_th) == (700.0, tank)
+    assert (day.battery[0].e_init_mwh, day.battery[0].e_end_min_mwh) == (30.0, battery)
+    assert day.battery[0].end_floor_mwh == (30.0 if battery is None else min(battery, 30.0))
+
+
 def test_the_settlement_reports_the_end_of_day_state_counting_into_the_day_before():
     # A settled day whose turbine never switches hands on its hours plus those carried in
     # (selling at 10 EUR/MWh does not pay the 50 EUR/MWh operating cost: it stays off).

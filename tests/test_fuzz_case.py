@@ -37,7 +37,7 @@ RAW = yaml.safe_load((PAPER / "case.yaml").read_text(encoding="utf-8"))
 RAW_NEW_UNITS = {**RAW, "units": {**RAW["units"], "battery": [
     {"name": "BAT1", "enabled": True, "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 20.0, "p_dis_max_mw": 20.0,
      "eta_ch": 0.95, "eta_dis": 0.9, "self_discharge_per_h": 0.001, "degradation_eur_per_mwh": 5.0,
-     "e_init_mwh": 10.0, "ramp_mw_per_min": 20.0, "reserve_share": 1.0}],
+     "e_init_mwh": 10.0, "e_end_min_mwh": 8.0, "ramp_mw_per_min": 20.0, "reserve_share": 1.0}],
     "hydro": [{"name": "HY1", "enabled": True, "p_min_mw": 5.0, "p_max_mw": 30.0, "marginal_cost_eur_per_mwh": 5.0,
                "startup_cost_eur": 100.0, "shutdown_cost_eur": 10.0, "ramp_up_mw_per_h": 30.0, "ramp_dn_mw_per_h": 30.0,
                "startup_ramp_mw_per_h": 10.0, "shutdown_ramp_mw_per_h": 10.0, "min_up_h": 2.0, "min_down_h": 2.0,
@@ -179,10 +179,15 @@ def assert_within_documented_bounds(case) -> None:
         assert unit["e_min_mwh"] < unit["e_max_mwh"], unit
         if unit["e_init_mwh"] is not None:
             assert unit["e_min_mwh"] <= unit["e_init_mwh"] <= unit["e_max_mwh"], unit
+        target = unit.get("e_end_min_mwh")  # written only when set
+        if target is not None:  # an end target only beside a start, within the battery
+            assert unit["e_init_mwh"] is not None and unit["e_min_mwh"] <= target <= unit["e_max_mwh"], unit
         assert 0 < unit["eta_ch"] <= 1 and 0 < unit["eta_dis"] <= 1, unit
         assert 0 <= unit["self_discharge_per_h"] < 1 and unit["p_ch_max_mw"] > 0 and unit["p_dis_max_mw"] > 0, unit
-        # charging at full power makes up for the self-discharge at the lowest level the day must hold
-        held = unit["e_min_mwh"] if unit["e_init_mwh"] is None else unit["e_init_mwh"]
+        # charging at full power makes up for the self-discharge at the lowest level the day must hold:
+        # E min on a cyclic day, else where it must end, min(target, start)
+        end = unit["e_init_mwh"] if target is None else min(unit["e_init_mwh"], target)
+        held = unit["e_min_mwh"] if unit["e_init_mwh"] is None else end
         assert unit["self_discharge_per_h"] * (held - 1e-6) <= unit["eta_ch"] * unit["p_ch_max_mw"] * (1 + 1e-9), unit
     for unit in data["hydro"] + data["biomass"]:
         assert unit["p_min_mw"] <= unit["p_max_mw"], unit
@@ -279,6 +284,9 @@ def changed_unit(listed_under: str, **values: Any) -> dict:
 @example(data=changed_unit("battery", e_min_mwh=50.0))
 @example(data=changed_unit("battery", e_init_mwh=45.0))
 @example(data=changed_unit("battery", e_init_mwh=2.0))
+@example(data=changed_unit("battery", e_end_min_mwh=45.0))
+@example(data=changed_unit("battery", e_end_min_mwh=2.0))
+@example(data=changed_unit("battery", e_init_mwh=None))
 @example(data=changed_unit("battery", eta_ch=0.0))
 @example(data=changed_unit("battery", eta_dis=95))
 @example(data=changed_unit("battery", self_discharge_per_h=0.9, p_ch_max_mw=1.0))

@@ -74,6 +74,24 @@ def test_a_battery_with_self_discharge_sells_what_would_decay_and_refills_at_the
     assert state.loc[24, "energy_mwh"] == pytest.approx(9.0, abs=1e-6)
 
 
+@pytest.mark.parametrize("e_init, e_end_min, profit, end", [
+    (9.0, None, 0.0, 9.0),  # no target: ends at its start, and a cycle at one price only loses
+    (9.0, 4.5, 202.5, 4.5),  # sells the 4.5 MWh above the target: 4.5 x 0.9 = 4.05 MWh at 50 EUR
+    (9.0, 0.0, 405.0, 0.0),  # sells all 9 MWh: 8.1 MWh at 50 EUR
+    (2.0, 4.5, 0.0, 2.0),  # started below the target: idles at its start (filling to 4.5 would cost 138.9)
+])
+def test_a_battery_may_run_down_to_its_end_target_and_no_further(e_init, e_end_min, profit, end):
+    # Price 50 all day, no wear, no self-discharge, efficiencies 0.9 each way: charging never pays, so the
+    # day sells what lies above min(target, start) and nothing else.
+    unit = battery(e_init_mwh=e_init, e_end_min_mwh=e_end_min)
+    result = solved(tiny_case(battery_units=[unit]), np.full(NT, 50.0))
+    assert result.objective_eur == pytest.approx(profit, abs=1e-6)
+    state = result.dispatch.set_index("t")
+    assert state.loc[NT, "energy_mwh"] == pytest.approx(end, abs=1e-6)
+    assert state["charge_mw"].sum() == pytest.approx(0.0, abs=1e-6)
+    assert state["discharge_mw"].sum() == pytest.approx(0.9 * (e_init - end), abs=1e-6)
+
+
 def test_a_hydro_day_at_its_energy_limit_runs_in_the_dearest_hours():
     # 0-30 MW, 5 EUR/MWh, 100 MWh of water. Hours 10-12 at 80 EUR/MWh, the rest at 50: the water
     # goes first to the three dear hours (3 x 30 = 90 MWh), the last 10 MWh to one hour at 50.
@@ -203,6 +221,18 @@ def test_the_audit_finds_a_battery_that_breaks_its_energy_balance_or_its_mode():
     assert "battery.discharge_ceiling" in checks
 
 
+def test_the_audit_finds_a_battery_that_ends_below_its_end_target():
+    # Sold down to its 4.5 MWh target (above); 0.1 MWh less at midnight breaks the end rule
+    result = solved(tiny_case(battery_units=[battery(e_init_mwh=9.0, e_end_min_mwh=4.5)]), np.full(NT, 50.0))
+    from rvpp.settle.audit import audit_day, audit_tables
+    day = audit_day(result.case, result.problem.bands)
+    tampered = result.dispatch.copy()
+    tampered.loc[tampered["t"] == NT, "energy_mwh"] = 4.4
+    checks = {v.check for v in audit_tables(day, result.market, result.units, result.csp, result.summary(),
+                                            dispatch=tampered)}
+    assert "battery.energy_end" in checks
+
+
 def test_the_audit_finds_a_restart_within_the_minimum_down_time():
     prices = np.select([HOURS == 1, HOURS == 4], [50.0, 200.0], 0.0)
     result = solved(tiny_case(biomass_units=[biomass(initial_online=True)]), prices)  # stops and restarts
@@ -230,7 +260,7 @@ def test_state_carries_a_battery_energy_and_a_unit_status_to_the_next_day():
                      biomass_units=[biomass(min_up_h=4.0, initial_online=False)])
     assert initial_state(case) == {"B": {"e_mwh": 3.0}, "BIO": {"online": False, "status_h": None, "p_mw": None}}
     nxt = with_state(case, {"B": {"e_mwh": 7.5}, "BIO": {"online": True, "status_h": 2.0, "p_mw": 8.0}})
-    assert nxt.battery[0].e_init_mwh == 7.5
+    assert (nxt.battery[0].e_init_mwh, nxt.battery[0].e_end_min_mwh) == (7.5, None)  # carry: ends at its start
     unit = nxt.biomass[0]
     assert (unit.initial_online, unit.initial_hours_in_status, unit.p_init_mw) == (True, 2.0, 8.0)
     assert unit.initial_periods(1.0) == (2, 0)  # 4 h minimum up, 2 h done: 2 more periods online
@@ -250,14 +280,15 @@ def test_the_state_of_charge_chart_draws_the_battery_plan():
 # ----------------------------------------------------------------------------- settlement
 
 
-def settled(case, plan, price_da):
+def settled(case, plan, price_da, with_end_state=False):
     """Settle ``plan`` against realized DAM prices ``price_da`` (reserve prices 0)."""
     import pandas as pd
 
     from rvpp.settle.recourse import Realization, evaluate, first_stage
     values = pd.DataFrame({"price_da": price_da, "price_sr_up": 0.0, "price_sr_dn": 0.0},
                           index=pd.RangeIndex(1, NT + 1, name="t"))
-    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values))
+    record = evaluate(case, first_stage(plan), Realization(day=case.delivery_date, values=values),
+                      with_end_state=with_end_state)
     assert record["status"] == "optimal"
     return record
 
@@ -304,6 +335,19 @@ def test_the_settlement_records_every_periods_battery_and_unit_dispatch_and_the_
     assert rows.loc["BIO", "online"].tolist() == [0] + [1] * 23
     assert rows.loc["BIO", "p_mw"].to_numpy() == pytest.approx([0.0] + [10.0] * 23, abs=1e-6)
     assert rows.loc["B", "online"].isna().all() and rows.loc["BIO", "e_mwh"].isna().all()
+
+
+def test_the_settlement_holds_a_batterys_end_target_and_hands_its_energy_to_the_next_day():
+    # The plan of the end-target day above (9 MWh start, 4.5 MWh target, price 50) sells 4.05 MWh; settled
+    # at the same prices it does the same, ends at 4.5 MWh (held at 9 MWh it would have to miss its
+    # bids) and hands 4.5 MWh to the next day
+    case = tiny_case(battery_units=[battery(e_init_mwh=9.0, e_end_min_mwh=4.5)])
+    prices = np.full(NT, 50.0)
+    record = settled(case, solved(case, prices), prices, with_end_state=True)
+    energy = np.array(record["settled_units"]["B"]["e_mwh"])
+    assert energy[-1] == pytest.approx(4.5, abs=1e-6)
+    assert sum(record["settled_units"]["B"]["discharge_mw"]) == pytest.approx(4.05, abs=1e-6)
+    assert record["end_state"]["B"]["e_mwh"] == pytest.approx(4.5, abs=1e-6)
 
 
 def test_the_settlement_keeps_a_unit_online_where_the_plan_committed_it():

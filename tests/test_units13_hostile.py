@@ -24,6 +24,12 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
 @pytest.mark.parametrize("units, message", [
     ({"battery": [{**BAT, "e_min_mwh": 50.0}]}, 'battery "B1": e_min_mwh=50 must be < e_max_mwh=40'),
     ({"battery": [{**BAT, "e_init_mwh": 45.0}]}, 'battery "B1": e_init_mwh=45 must lie in [e_min_mwh=0, e_max_mwh=40]'),
+    ({"battery": [{**BAT, "e_init_mwh": 20.0, "e_end_min_mwh": 45.0}]},
+     'battery "B1": e_end_min_mwh=45 must lie in [e_min_mwh=0, e_max_mwh=40]'),
+    ({"battery": [{**BAT, "e_min_mwh": 5.0, "e_init_mwh": 20.0, "e_end_min_mwh": 2.0}]},
+     'battery "B1": e_end_min_mwh=2 must lie in [e_min_mwh=5, e_max_mwh=40]'),
+    ({"battery": [{**BAT, "e_end_min_mwh": 10.0}]},
+     'battery "B1": e_end_min_mwh=10 needs e_init_mwh: a cyclic day (no initial energy) has no end target'),
     ({"battery": [{**BAT, "eta_ch": 0.0}]}, 'battery "B1": eta_ch=0 must be > 0'),
     ({"battery": [{**BAT, "eta_dis": 1.2}]}, 'battery "B1": eta_dis=1.2 must be <= 1'),
     ({"battery": [{**BAT, "self_discharge_per_h": 1.0}]}, 'battery "B1": self_discharge_per_h=1 must be < 1'),
@@ -35,6 +41,10 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     ({"battery": [{**BAT, "e_init_mwh": 40.0, "self_discharge_per_h": 0.25}]},
      'battery "B1": self_discharge_per_h=0.25 loses 10 MW at e_init_mwh=40, more than charging at full power '
      "restores: eta_ch=0.95 x p_ch_max_mw=10 = 9.5 MW; the day could not end at or above its initial energy"),
+    # 0.25 of 39 MWh (9.75 MW) against 9.5 MW charged: the day cannot end at its target below its start
+    ({"battery": [{**BAT, "e_init_mwh": 40.0, "e_end_min_mwh": 39.0, "self_discharge_per_h": 0.25}]},
+     'battery "B1": self_discharge_per_h=0.25 loses 9.75 MW at e_end_min_mwh=39, more than charging at full power '
+     "restores: eta_ch=0.95 x p_ch_max_mw=10 = 9.5 MW; the day could not end at or above its end target"),
     ({"hydro": [{**HY, "energy_max_mwh": 10.0, "min_up_h": 4.0}]},
      'hydro "H1": energy_max_mwh=10 is below the 20 MWh of a run at p_min_mw=5 for min_up_h=4: once started, the '
      "unit could not run its minimum up time at its minimum output"),
@@ -102,6 +112,8 @@ def test_the_fuzz_base_with_the_new_units_loads(paper_case):
     ({"hydro": [{**HY, "p_init_mw": 3.0}]},
      "H1: P start [MW] = 3 must be 0 for a unit off before the day (On at midnight = false): an offline unit "
      "produces nothing"),
+    ({"battery": [{**BAT, "e_init_mwh": 20.0, "e_end_min_mwh": 45.0}]},
+     "B1: E end min [MWh] = 45 must lie in [E min [MWh] = 0, E max [MWh] = 40]"),
     ({"battery": [{**BAT, "e_min_mwh": 20.0, "self_discharge_per_h": 0.5}]},
      "B1: Self-discharge [1/h] = 0.5 loses 10 MW at E min [MWh] = 20, more than charging at full power restores: "
      "η charge [-] = 0.95 x Charge max [MW] = 10 = 9.5 MW; the energy could not stay at or above its minimum"),
@@ -122,3 +134,11 @@ def test_a_battery_at_the_balance_of_self_discharge_and_charging_loads():
     assert [b.e_init_mwh for b in carried.battery] == [19.0 + 1e-7]
     with pytest.raises(CaseError, match="loses 9.50001 MW at e_init_mwh=19, more than"):
         tiny_case(battery_units=[{**BAT, "e_init_mwh": 19.00002, "self_discharge_per_h": 0.5}])
+
+
+def test_a_battery_that_cannot_hold_its_start_loads_with_an_end_target_it_can_hold():
+    # 0.25 of 40 MWh (10 MW) outruns 9.5 MW of charging (refused above without a target); 0.25 of a
+    # 20 MWh target is 5 MW, which charging restores: the day may run down to 20 MWh and hold there
+    unit = tiny_case(battery_units=[{**BAT, "e_init_mwh": 40.0, "e_end_min_mwh": 20.0,
+                                     "self_discharge_per_h": 0.25}]).battery[0]
+    assert (unit.e_init_mwh, unit.e_end_min_mwh, unit.end_floor_mwh) == (40.0, 20.0, 20.0)

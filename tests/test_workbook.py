@@ -47,6 +47,18 @@ def test_a_csps_start_status_and_end_of_day_storage_survive_the_table_and_the_wo
     assert workbook.read_case_workbook(workbook.case_workbook_bytes(kept)) == kept
 
 
+def test_a_batterys_end_target_survives_the_table_and_the_workbook(case):
+    battery = {"name": "BAT", "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 20.0, "p_dis_max_mw": 20.0,
+               "e_init_mwh": 30.0, "ramp_mw_per_min": 4.0}
+    kept = case.replace(battery=[battery, {**battery, "name": "BAT2", "e_end_min_mwh": 22.0}])
+    table = workbook.unit_table(kept, "battery")
+    assert pd.isna(table.loc[0, "e_end_min_mwh"]) and table.loc[1, "e_end_min_mwh"] == 22.0
+    table.loc[0, "e_end_min_mwh"] = 13.0  # set in the table
+    edited = workbook.with_unit_table(kept, "battery", table)
+    assert [u.e_end_min_mwh for u in edited.battery] == [13.0, 22.0]
+    assert workbook.read_case_workbook(workbook.case_workbook_bytes(kept)) == kept
+
+
 def test_unit_table_shows_the_history_column_of_each_unit(case):
     renamed = workbook.unit_table(case, "wind")
     assert list(renamed["series"]) == ["WF1", "WF2"]

@@ -46,23 +46,31 @@ def with_state(case: Case, state: State, storage_end: str | float = CARRY) -> Ca
         start = state[csp.name]
         ts = data["storage"]
         ts["e_init_mwh_th"] = start["e_mwh_th"]
-        span = ts["e_max_mwh_th"] - ts["e_min_mwh_th"]
-        ts["e_end_min_mwh_th"] = None if storage_end == CARRY else ts["e_min_mwh_th"] + float(storage_end) * span
+        ts["e_end_min_mwh_th"] = _end_target(ts["e_min_mwh_th"], ts["e_max_mwh_th"], storage_end)
         pb = data["power_block"]
         pb["initially_on"] = bool(start["online"])
         pb["initial_status_h"] = start["status_h"]
         units.append(data)
     changes = {"csp": units} if units else {}
-    changes.update(_carried(case, state))
+    changes.update(_carried(case, state, storage_end))
     return case.replace(**changes) if changes else case
 
 
-def _carried(case: Case, state: State) -> dict[str, list]:
-    """Batteries, hydro and biomass units starting from ``state`` (a unit it does not name, as in a
-    backtest recorded before these kinds, keeps the case's initial conditions)."""
+def _end_target(e_min: float, e_max: float, storage_end: str | float) -> float | None:
+    """The end target of a storage between ``e_min`` and ``e_max`` under the rule ``storage_end``:
+    none for ``carry`` (the day ends at or above its start), else ``e_min + F·(e_max − e_min)``."""
+    return None if storage_end == CARRY else e_min + float(storage_end) * (e_max - e_min)
+
+
+def _carried(case: Case, state: State, storage_end: str | float) -> dict[str, list]:
+    """Batteries, hydro and biomass units starting from ``state``, a battery with the end-of-day
+    rule ``storage_end`` as the tank (a unit ``state`` does not name, as in a backtest recorded
+    before these kinds, keeps the case's initial conditions)."""
     changes = {}
     if any(bat.name in state for bat in case.battery):
-        changes["battery"] = [bat.model_copy(update={"e_init_mwh": state[bat.name]["e_mwh"]})
+        changes["battery"] = [bat.model_copy(update={"e_init_mwh": state[bat.name]["e_mwh"],
+                                                     "e_end_min_mwh": _end_target(bat.e_min_mwh, bat.e_max_mwh,
+                                                                                  storage_end)})
                               if bat.name in state else bat for bat in case.battery]
     for kind in ("hydro", "biomass"):
         units = getattr(case, kind)

@@ -462,9 +462,9 @@ class Battery(_Unit):
     efficiencies, self-discharge, a throughput (degradation) cost per MWh discharged, and
     reserve from both modes with the energy behind it held back.
 
-    ``e_init_mwh`` is the energy at the start of the day (the day then ends at or above it);
-    unset, the day is cyclic. A unit with ``enabled: false`` stays in the case but is left
-    out of the model.
+    ``e_init_mwh`` is the energy at the start of the day (the day then ends at or above it, or
+    at or above ``e_end_min_mwh`` when that is lower: :attr:`end_floor_mwh`); unset, the day is
+    cyclic. A unit with ``enabled: false`` stays in the case but is left out of the model.
     """
 
     KIND: ClassVar[UnitKind] = UnitKind.BATTERY
@@ -480,6 +480,7 @@ class Battery(_Unit):
     self_discharge_per_h: Annotated[Number, Field(ge=0.0, lt=1.0)] = 0.0
     degradation_eur_per_mwh: NonNegative = 0.0
     e_init_mwh: NonNegative | None = None
+    e_end_min_mwh: NonNegative | None = None
     ramp_mw_per_min: NonNegative
     reserve_share: Fraction = 1.0
 
@@ -487,6 +488,22 @@ class Battery(_Unit):
     def cyclic(self) -> bool:
         """True when the day is cyclic (no initial energy)."""
         return self.e_init_mwh is None
+
+    @property
+    def end_floor_mwh(self) -> float | None:
+        """Least energy at the end of a day that starts from ``e_init`` [MWh]: as the tank's
+        (:attr:`ThermalStorage.end_floor_mwh_th`), ``min(e_end_min, e_init)``, or ``e_init``
+        without an end target. ``None`` on a cyclic day."""
+        if self.e_init_mwh is None:
+            return None
+        if self.e_end_min_mwh is None:
+            return self.e_init_mwh
+        return min(self.e_end_min_mwh, self.e_init_mwh)
+
+    @classmethod
+    def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
+        # the end target is written only when set: cases and their digests stay as they were
+        return _without_defaults(data, {"e_end_min_mwh": None})
 
     @property
     def p_max_mw(self) -> float:
@@ -505,15 +522,26 @@ class Battery(_Unit):
     def _limits(self) -> "Battery":
         _require(self.e_min_mwh < self.e_max_mwh, "e_min_mwh", self.e_min_mwh, "<", "e_max_mwh", self.e_max_mwh)
         _require_within("e_init_mwh", self.e_init_mwh, "e_min_mwh", self.e_min_mwh, "e_max_mwh", self.e_max_mwh)
+        _require_within("e_end_min_mwh", self.e_end_min_mwh, "e_min_mwh", self.e_min_mwh, "e_max_mwh", self.e_max_mwh)
+        if self.e_end_min_mwh is not None and self.e_init_mwh is None:
+            raise ValueError(f"e_end_min_mwh={self.e_end_min_mwh:g} needs e_init_mwh: a cyclic day (no initial "
+                             "energy) has no end target")
         # The day keeps the energy at or above e_min (and, with an initial energy, ends at or above
-        # it): self-discharge there must not lose more than charging at full power puts back. A level
-        # within a millionth of a MWh of that balance passes: a backtest carries the settled day's end
-        # into the next, and a battery held at its balance ends there up to the solver's round-off.
-        held, level = ("e_min_mwh", self.e_min_mwh) if self.cyclic else ("e_init_mwh", self.e_init_mwh)
+        # its end floor): self-discharge there must not lose more than charging at full power puts
+        # back. A level within a millionth of a MWh of that balance passes: a backtest carries the
+        # settled day's end into the next, and a battery held at its balance ends there up to the
+        # solver's round-off.
+        if self.cyclic:
+            held, level = "e_min_mwh", self.e_min_mwh
+        elif self.end_floor_mwh < self.e_init_mwh:
+            held, level = "e_end_min_mwh", self.e_end_min_mwh
+        else:
+            held, level = "e_init_mwh", self.e_init_mwh
         lost, restored = self.self_discharge_per_h * level, self.eta_ch * self.p_ch_max_mw
         if lost > restored * (1.0 + 1e-9) + self.self_discharge_per_h * 1e-6:
-            goal = ("the energy could not stay at or above its minimum" if self.cyclic
-                    else "the day could not end at or above its initial energy")
+            goal = {"e_min_mwh": "the energy could not stay at or above its minimum",
+                    "e_end_min_mwh": "the day could not end at or above its end target",
+                    "e_init_mwh": "the day could not end at or above its initial energy"}[held]
             raise ValueError(f"self_discharge_per_h={self.self_discharge_per_h:g} loses {lost:g} MW at "
                              f"{held}={level:g}, more than charging at full power restores: eta_ch={self.eta_ch:g} x "
                              f"p_ch_max_mw={self.p_ch_max_mw:g} = {restored:g} MW; {goal}")

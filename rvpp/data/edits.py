@@ -88,6 +88,8 @@ FIELDS: dict[str, tuple[str, str, str]] = {
     "self_discharge_per_h": ("Self-discharge", "1/h", "Fraction of the stored energy lost per hour [0-1)"),
     "degradation_eur_per_mwh": ("Degradation", "EUR/MWh", "Wear cost per MWh discharged"),
     "e_init_mwh": ("E start", "MWh", "Stored energy at the start of the day; empty: cyclic day"),
+    "e_end_min_mwh": ("E end min", "MWh", "Least stored energy at the end of the day (up to E start); "
+                      "empty: E start"),
     "marginal_cost_eur_per_mwh": ("Marginal cost", "EUR/MWh", "Cost per MWh produced (fuel, water value, O&M)"),
     "startup_cost_eur": ("Start-up cost", "EUR", "Cost of one start"),
     "shutdown_cost_eur": ("Shut-down cost", "EUR", "Cost of one stop"),

@@ -22,7 +22,8 @@ def add_battery(m: pyo.ConcreteModel, bat: Battery, problem: Problem) -> None:
     ``p_dis + r_dis↑ ≤ P̄dis·(1−u)``, ``r_dis↓ ≤ p_dis`` [MW]; ``r↑ = r_ch↑ + r_dis↑``,
     ``r↓ = r_ch↓ + r_dis↓``, each ``≤ min(T_sr·ramp, share·max(P̄ch, P̄dis))``.
     Energy [MWh] ``e[t] = (1 − ς·dt)·e[t−1] + η_ch·p_ch·dt − p_dis·dt/η_dis`` with
-    ``e[0] ≡ e[NT]`` (cyclic day) or ``e[0] = e_init`` and ``e[NT] ≥ e_init``.
+    ``e[0] ≡ e[NT]`` (cyclic day) or ``e[0] = e_init`` and ``e[NT] ≥ min(e_end_min, e_init)``
+    (``e[NT] ≥ e_init`` without an end target ``e_end_min``, as the tank's, MODEL_SPEC §8).
     Reserve energy (TS9-TS11 form): ``Σ r↑·dt/η_dis ≤ σ↑·ΔE``, ``Σ r↓·η_ch·dt ≤ σ↓·ΔE``,
     ``Emin + σ↑·ΔE ≤ e ≤ Emax − σ↓·ΔE``, ``ΔE = Emax − Emin``. The mode binary stays: at a
     negative price a battery would otherwise charge and discharge at once to burn energy.
@@ -62,7 +63,7 @@ def add_battery(m: pyo.ConcreteModel, bat: Battery, problem: Problem) -> None:
     b.energy_balance = pyo.Constraint(m.T, rule=lambda b, t: (
         b.e[t] == keep * previous_energy(b, t) + bat.eta_ch * b.p_ch[t] * dt - b.p_dis[t] * dt / bat.eta_dis))
     if not bat.cyclic:
-        b.energy_end = pyo.Constraint(expr=b.e[m.T.last()] >= bat.e_init_mwh)
+        b.energy_end = pyo.Constraint(expr=b.e[m.T.last()] >= bat.end_floor_mwh)
     b.reserve_energy_up = pyo.Constraint(expr=sum(b.r_up[t] * dt / bat.eta_dis for t in m.T) <= b.sigma_up * span)
     b.reserve_energy_dn = pyo.Constraint(expr=sum(b.r_dn[t] * bat.eta_ch * dt for t in m.T) <= b.sigma_dn * span)
     b.margin_low = pyo.Constraint(m.T, rule=lambda b, t: b.e[t] >= bat.e_min_mwh + b.sigma_up * span)

@@ -138,7 +138,7 @@ def unit_columns(kind: str) -> list[str]:
                 "csp": ["storage.e_init_mwh_th", "storage.e_end_min_mwh_th", "storage.end_value_eur_per_mwh_th",
                         "power_block.initial_status_h", "solar_field.forecast_series"],
                 "ed": ["p_init_mw", "forecast_series"], "td": ["h_init_mw_th", "forecast_series"],
-                "battery": ["e_init_mwh"], "hydro": _DISPATCHABLE_OPTIONAL,
+                "battery": ["e_init_mwh", "e_end_min_mwh"], "hydro": _DISPATCHABLE_OPTIONAL,
                 "biomass": _DISPATCHABLE_OPTIONAL + ["energy_max_mwh"]}
     tool = list(TOOL_OPTIONS.get(kind, {}))
     if KINDS[UnitKind(kind)].role is None:  # no series to follow

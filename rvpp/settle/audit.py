@@ -520,7 +520,8 @@ def _audit_battery(a: _Auditor, day: AuditDay, bat, d: pd.DataFrame) -> None:
     expected = (1 - bat.self_discharge_per_h * dt) * before + bat.eta_ch * ch * dt - dis * dt / bat.eta_dis
     a.eq("battery.energy_balance", e, expected, n, scale=bat.e_max_mwh)
     if bat.e_init_mwh is not None:
-        a.leq("battery.energy_end", bat.e_init_mwh, e[-1], n)
+        floor = bat.e_init_mwh if bat.e_end_min_mwh is None else min(bat.e_end_min_mwh, bat.e_init_mwh)
+        a.leq("battery.energy_end", floor, e[-1], n)
     span = bat.e_max_mwh - bat.e_min_mwh
     sigma_up, sigma_dn = float(d["sigma_up"].iloc[0]), float(d["sigma_dn"].iloc[0])
     a.leq("battery.sigma_range", -min(sigma_up, sigma_dn), 0.0, n)
