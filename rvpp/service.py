@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .outputs.style import GREY, KIND_LABELS, SERIES_COLORS
     from .outputs.workbook import SERIES_FIELDS, case_workbook_bytes, new_unit_row, unit_columns
     from .settle.audit import price_exposures, protection_exact
-    from .settle.recourse import Penalties
+    from .settle.penalties import Penalties
     from .solving.outcome import Outcome
     from .solving.plan import solve, solve_problem
     from .solving.sweep import sweep_gamma

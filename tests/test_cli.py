@@ -516,3 +516,25 @@ def test_the_library_names_a_value_of_the_wrong_type(tmp_path):
             call()
         assert str(error.value).startswith(message)
     assert not (tmp_path / "o").exists()
+
+
+def test_the_help_and_a_bad_option_load_no_solver_stack():
+    """Building the command line (``--help``, a refused option) imports neither Pyomo nor HiGHS
+    nor the studies and backtest engine: their options come from light settings modules."""
+    code = "\n".join([
+        "import sys", "from rvpp.cli import main",
+        "assert main(['solve', '--gap', 'x']) == 1",
+        "assert main(['study', 'nonsense']) == 1",
+        "print(sorted(m for m in ('pyomo', 'highspy', 'rvpp.backtest.engine', 'rvpp.studies.run', 'rvpp.settle.recourse')"
+        " if m in sys.modules))"])
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == ["[]"]
+
+
+def test_the_study_names_the_command_line_offers_are_the_studies():
+    from rvpp.studies import STUDIES
+    from rvpp.studies.settings import STUDY_NAMES
+
+    assert tuple(STUDIES) == STUDY_NAMES
+    assert {"case1", "backtest", "out-of-sample"} <= set(STUDY_NAMES)

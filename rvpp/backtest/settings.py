@@ -21,7 +21,7 @@ from typing import Any
 from ..data.case import STRATEGIES, Case
 from ..data.variants import Variant as CaseVariant
 from ..errors import RvppError
-from ..settle.recourse import Penalties
+from ..settle.penalties import Penalties
 
 PRESET = "preset"            # the budget key of a strategy preset
 FRACTION = "fraction"        # the strategy name of a Γ-fraction variant

@@ -18,7 +18,7 @@ from ..backtest.settings import CARRY, BacktestError, BacktestSettings, parse_da
 from ..data.case import MAX_THREADS, STRATEGIES
 from ..data.case_yaml import load_case
 from ..data.files import excerpt
-from ..settle.recourse import Penalties
+from ..settle.penalties import Penalties
 from .options import DEFAULT_CASE, Number, add_settlement_options, listed, path_option, scheduler_option
 
 CRITERIA = ("mean", "cvar95")

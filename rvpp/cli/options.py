@@ -15,7 +15,7 @@ from ..data.case import FIRST_DATE, ISO_DATE, LAST_DATE, MAX_QUANTITY
 from ..data.files import excerpt
 from ..data.variants import parse_markets
 from ..errors import RvppError
-from ..settle.recourse import Penalties
+from ..settle.penalties import Penalties
 from ..solving.parallel import SCHEDULERS
 
 DEFAULT_CASE = Path(__file__).resolve().parents[2] / "data" / "cases" / "paper"

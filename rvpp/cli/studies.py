@@ -10,23 +10,20 @@ from ..data.case import MAX_QUANTITY, MAX_THREADS, STRATEGIES
 from ..data.case_yaml import load_case
 from ..data.periods import ALLOWED_DT_H
 from ..data.variants import with_options
-from ..settle.recourse import Penalties
-from ..studies.settings import (BACKTEST_CRITERIA, BACKTEST_FRACTIONS, HPA_FLAT_PRICES, MARKET_SETS, SCENARIO_COUNTS,
-                                SEED, SP_TIME_LIMIT_S, TEST_DAYS, StudySettings)
+from ..settle.penalties import Penalties
+from ..studies.settings import (BACKTEST_CRITERIA, BACKTEST_FRACTIONS, HPA_FLAT_PRICES, MARKET_SETS, REPRODUCE,
+                                SCENARIO_COUNTS, SEED, SP_TIME_LIMIT_S, STUDY_NAMES, TEST_DAYS, StudySettings)
 from .options import (DEFAULT_CASE, Number, add_settlement_options, choice, choice_of, date_option, listed, market_set,
                       path_option, period_option, scheduler_option)
 
 
 def add_study_commands(commands) -> None:
     """Add the ``study`` subcommand to the command line's subparsers."""
-    # heavy (the solver stack, the store or pvlib): loaded only when this command runs
-    from ..studies import REPRODUCE, STUDIES
-
     study = commands.add_parser(
         "study", help="run a case study of the paper (or reproduce all of them)",
         description="Run one of the paper's case studies on a case and write its tables (CSV, Markdown, "
                     "tables.xlsx), figures (HTML, PNG) and report.md to --out.")
-    study.add_argument("name", choices=[*STUDIES, REPRODUCE],
+    study.add_argument("name", choices=[*STUDY_NAMES, REPRODUCE],
                        help="the study; reproduce runs those of the paper and the backtest (all but stress)")
     study.add_argument("--case", type=path_option, default=DEFAULT_CASE,
                        help="case folder (default: the paper case)")

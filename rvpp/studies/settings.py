@@ -11,7 +11,7 @@ from ..data.case import STRATEGIES
 from ..data.variants import parse_markets
 from ..data.history import MAX_QUANTITY
 from ..errors import CaseError, RvppError
-from ..settle.recourse import Penalties
+from ..settle.penalties import Penalties
 
 MARKET_SETS = ("DAM", "DAM+HPA", "DAM+SRM", "DAM+SRM+HPA")  # paper Table 10
 MARKET_SETS_WITHOUT_CSP = ("DAM+HPA", "DAM+SRM+HPA")  # paper Table 11 (heat needs the HPA)
@@ -25,6 +25,10 @@ SEED = 20250318
 SP_TIME_LIMIT_S = 600.0
 BACKTEST_FRACTIONS = (0.0, 0.125, 0.25, 0.375)  # Γ grid of the reproduce backtest [fraction of the day]
 BACKTEST_CRITERIA = ("mean", "cvar95")
+STUDY_NAMES = ("case1", "strategies", "sensitivity", "markets", "out-of-sample", "stochastic", "stress", "backtest")
+REPRODUCE = "reproduce"
+PAPER_STUDIES = ("case1", "strategies", "sensitivity", "markets", "out-of-sample", "stochastic")
+REPRODUCE_STUDIES = (*PAPER_STUDIES, "backtest")  # the paper's, then the rolling backtest beyond it
 
 
 @dataclass(frozen=True)
