@@ -48,14 +48,14 @@ def main() -> None:
     page = st.navigation(pages)
     state.resume_deep_link()
     widgets.open_linked_run(page)
-    summary = st.sidebar.empty()  # filled after the page: its own elements reach the browser first
-    try:
-        page.run()
-    finally:  # also when the page ends early (st.stop() raises)
-        with summary.container():  # the case as the page's edits left it
-            widgets.sidebar(state.case())
-        svg.inline_charts()
-        browser.preload()
+    summary = st.sidebar.empty()
+    with summary.container():  # stays if the page stops early (st.stop() ends the run)
+        widgets.sidebar(state.case())
+    svg.inline_charts()
+    browser.preload()
+    page.run()
+    with summary.container():  # drawn again after the page: the case as the page's edits left it
+        widgets.sidebar(state.case())
     solving.start_fork_server()  # once the page is sent (a solve started earlier starts it itself)
 
 
