@@ -40,13 +40,14 @@ MARKDOWN_SPECIAL = re.compile(r"[\\`*_\[\]()#+\-.!|<>~$:/&]")
 
 
 def eur(value: float | None) -> str:
-    """``−124,035 EUR``: whole euros with a true minus sign."""
-    return "–" if value is None else f"{value:,.0f} EUR".replace("-", "−")
+    """``−124,035 EUR``: whole euros with a true minus sign (none on an amount that rounds to 0)."""
+    return "–" if value is None else f"{round(value) + 0:,.0f} EUR".replace("-", "−")
 
 
 def keur(value_eur: float | None) -> str:
-    """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables."""
-    return "–" if value_eur is None else f"{value_eur / KILO:,.1f}".replace("-", "−")
+    """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables; an amount that rounds
+    to 0.0 shows no sign (``−0.0`` read as a loss)."""
+    return "–" if value_eur is None else f"{round(value_eur / KILO, 1) + 0.0:,.1f}".replace("-", "−")
 
 
 def in_keur(frame: pd.DataFrame) -> pd.DataFrame:

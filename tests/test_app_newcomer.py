@@ -121,6 +121,18 @@ def test_the_reserve_chart_says_when_a_plan_offers_no_up_reserve(paper_solve):
     assert list(layout["yaxis"]["range"]) == [0, 1]
 
 
+def test_an_amount_that_rounds_to_zero_shows_no_minus(paper_case, paper_solve):
+    # Compare's Γ slider at 12 showed "DAM revenue [kEUR] −0.0" for a plan that sells almost nothing (it
+    # buys 23 EUR): a minus that reads as a loss the cards cannot show.
+    from dashboard.widgets import kpis
+
+    result = paper_solve(gammas={source: 12 for source in paper_case.sources()})
+    assert -50 < result.parts["revenue_dam_eur"] < 0  # this plan's DAM revenue rounds to 0.0 kEUR from below
+    value, help_text = kpis(result)["DAM revenue [kEUR]"]
+    assert value == "0.0"
+    assert f"Exact: {-round(-result.parts['revenue_dam_eur'])} EUR".replace("-", "−") in help_text
+
+
 # ----------------------------------------------------------------------------- Learn
 
 
