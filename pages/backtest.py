@@ -182,9 +182,10 @@ def listed_ids() -> set[str]:
     return {b.id for b in bt.store().list()}
 
 
-def progress_panel(ident: str) -> None:
+def progress_panel(ident: str, drawn: int) -> None:
     """Where the backtest's process stands, read from the store again every POLL_S while it runs
-    (or has not written its progress yet)."""
+    (or has not written its progress yet); the page is drawn with ``drawn`` settled records, and drawn
+    again when the first ones arrive (it said the figures appear with them)."""
     first = bt.progress(ident)
     was_running = first is not None and first.running
     watch = first is None or first.running
@@ -192,8 +193,8 @@ def progress_panel(ident: str) -> None:
     @st.fragment(run_every=POLL_S if watch else None)
     def panel() -> None:
         info = bt.progress(ident)
-        if info is not None and (info.running != was_running or first is None):
-            st.rerun()  # it started or ended: draw the whole page again with its records
+        if info is not None and (info.running != was_running or first is None or (not drawn and info.done)):
+            st.rerun()  # it started, ended or settled its first days: draw the whole page again with its records
         if info is None:
             st.progress(0.0, text="Starting: its process has not written any progress yet…")
             return
@@ -316,7 +317,7 @@ ident = st.selectbox("Backtest shown below", ids, key=CHOSEN,
                                            f"{info_of[i].settings['to']}")
 chosen = info_of[ident]
 settings = chosen.settings
-progress_panel(ident)
+progress_panel(ident, chosen.keys_done)
 
 records = bt.records(ident, chosen.keys_done)
 if records.empty:

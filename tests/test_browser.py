@@ -345,6 +345,39 @@ def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_p
         assert shown.locator("input").input_value().startswith("browser backtest · ")
 
 
+@pytest.mark.slow
+def test_a_running_backtest_draws_its_figures_once_its_first_days_settle(tmp_path, paper_case):
+    """The page said "No day settled yet; the figures appear with the first days" until the backtest ended
+    (minutes later), while its progress bar counted the days settled."""
+    require_browser()
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.backtest.engine import run_backtest
+    from rvpp.store import BacktestStore
+
+    day = paper_case.delivery_date
+    settings = BacktestSettings(day, day, variants_of(["deterministic", "balanced"], []))
+    settled = BacktestStore(f"sqlite:///{tmp_path / 'settled.sqlite3'}")
+    records = settled.record_map(run_backtest(paper_case, settings, settled))
+    store = BacktestStore(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
+    ident = store.open(paper_case, settings.stored(), keys_total=len(records), label="still running")
+    store.set_progress(ident, "running", 0, len(records))  # this process plays the backtest's own
+    try:
+        with streamlit_server("streamlit-backtest-running.log", tmp_path) as url, \
+                chromium_page({"width": 1280, "height": 1600}) as page:
+            page.goto(url)
+            open_page(page, "Backtest")
+            page.get_by_text("No day settled yet").wait_for()
+            key, record = next(iter(records.items()))
+            store.record(ident, key, record)
+            store.set_progress(ident, "running", 1, len(records))
+            page.get_by_role("heading", name="Cost over the period").wait_for(timeout=30_000)
+            assert page.get_by_text("No day settled yet").count() == 0
+            assert "1 of 3 days × strategies settled · running" in page.get_by_test_id("stProgress").first.inner_text()
+            page.screenshot(path=ARTIFACTS / "backtest-running-figures.png")
+    finally:
+        store.set_progress(ident, "stopped", 1, len(records))
+
+
 def cut_off_buttons(page) -> list[str]:
     """The labels of the page's buttons drawn cut off (ending in an ellipsis)."""
     return page.evaluate("""() => [...document.querySelectorAll('[data-testid=stMain] button')]
