@@ -42,8 +42,11 @@ AGGREGATE_COLUMNS = {
     "days_without_plan": st.column_config.NumberColumn("Days without plan"),
     "audit_violations": st.column_config.NumberColumn("Audit violations"),
 }
-AGGREGATE_HEADLINE = ("label", "days_settled", "mean_net_cost_keur", "median_net_cost_keur", "cvar95_net_cost_keur",
-                      "total_net_cost_keur", "mean_regret_keur")
+# The aggregates in three tables of a few columns each, every one whole at 1280 px: one wider than the page hid
+# the regret and the days without a plan past its right edge.
+AGGREGATE_TABLES = (("label", "days_settled", "days_without_plan", "mean_net_cost_keur", "cvar95_net_cost_keur"),
+                    ("label", "mean_regret_keur", "median_net_cost_keur", "total_net_cost_keur"),
+                    ("label", "mean_market_cost_keur", "mean_penalty_keur", "penalty_share_pct", "audit_violations"))
 MONTHLY_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "month": st.column_config.TextColumn("Month"),
@@ -54,8 +57,9 @@ MONTHLY_COLUMNS = {
     "mean_net_cost_keur": st.column_config.NumberColumn("Mean net cost [kEUR/day]", format=KEUR),
     "regret_keur": st.column_config.NumberColumn("Regret [kEUR]", format=KEUR),
 }
-WORST_COLUMNS = {
+WORST_COLUMNS = {  # the plan's status beside the day: a day without a plan is in view at 1280 px
     "day": st.column_config.DateColumn("Delivery day"),
+    "plan_status": st.column_config.TextColumn("Plan"),
     "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format=KEUR),
     "market_cost_keur": st.column_config.NumberColumn("Market cost [kEUR]", format=KEUR),
     "penalty_keur": st.column_config.NumberColumn("Penalty [kEUR]", format=KEUR),
@@ -63,7 +67,6 @@ WORST_COLUMNS = {
     "deficit_mwh": st.column_config.NumberColumn("Energy short [MWh]", format="%.1f"),
     "surplus_mwh": st.column_config.NumberColumn("Energy surplus [MWh]", format="%.1f"),
     "unserved_heat_mwh": st.column_config.NumberColumn("Heat not served [MWh_th]", format="%.1f"),
-    "plan_status": st.column_config.TextColumn("Plan"),
 }
 COST_HELP = "Cost: positive when the plant pays, negative when it earns"
 TRADING_COLUMNS = {
@@ -335,8 +338,7 @@ st.plotly_chart(distribution_figure(records, IN_KEUR), key="backtest_distributio
 st.subheader("Per strategy")
 table = widgets.in_keur(metrics.aggregates(records))
 table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
-# Two tables of a few columns each rather than one wider than the page.
-for columns in (AGGREGATE_HEADLINE, ["label", *(c for c in AGGREGATE_COLUMNS if c not in AGGREGATE_HEADLINE)]):
+for columns in AGGREGATE_TABLES:
     st.dataframe(table[[c for c in columns if c in table]], hide_index=True, width="stretch",
                  column_config=AGGREGATE_COLUMNS)
 with st.expander("Per month", icon=":material/calendar_month:"):
@@ -456,8 +458,10 @@ if rec.outcome is Verdict.LOSES:
 else:
     st.success(verdict_words(rec, IN_KEUR), icon=":material/verified:")
 comparison = widgets.in_keur(rec.comparison)
-st.dataframe(comparison[[c for c in COMPARISON_COLUMNS if c in comparison]], hide_index=True,
-             width="stretch", column_config=COMPARISON_COLUMNS)
+for period in ("train_", "test_"):  # one table per period: together they were wider than the page at 1280 px
+    columns = [c for c in COMPARISON_COLUMNS if c == "variant" or c.startswith(period)]
+    st.dataframe(comparison[[c for c in columns if c in comparison]], hide_index=True, width="stretch",
+                 column_config=COMPARISON_COLUMNS)
 remembered = bt.recommended()
 if remembered is not None:
     st.caption("Now remembered: " + bt.recommendation_note(remembered))

@@ -10,6 +10,7 @@ by ``make axe`` or, when missing, by ``npm ci`` here) on every page; without axe
 from __future__ import annotations
 
 import contextlib
+import datetime as dt
 import io
 import os
 import re
@@ -513,6 +514,41 @@ def test_the_backtest_list_shows_state_and_progress_whole_at_1280_pixels(tmp_pat
             "table => [...table.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim())")
         assert headers[:5] == ["Label", "State", "Progress", "Days × strategies", "Period"], headers
         assert table_cells(page, 1) == ["finished"] and table_cells(page, 3) == ["3 of 3"]  # and perfect information
+
+
+@pytest.mark.slow
+def test_the_backtest_tables_of_strategies_and_of_the_recommendation_fit_1280_pixels(tmp_path, paper_case):
+    # The per-strategy table hid the total and the regret past its right edge at 1280 pixels, its second half the
+    # days without a plan, the recommendation's table the test period's CVaR and regret; the worst days drew
+    # whether each day had a plan last, out of view.
+    require_browser()
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.backtest.engine import run_backtest
+    from rvpp.store import BacktestStore
+
+    store = BacktestStore(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
+    day = paper_case.delivery_date
+    run_backtest(paper_case, BacktestSettings(day - dt.timedelta(days=1), day, variants_of(["deterministic"], [0.25])),
+                 store, label="two May days")
+    store.engine.dispose()
+    with streamlit_server("streamlit-backtest-tables.log", tmp_path) as url, \
+            chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(url)
+        open_page(page, "Backtest")
+        page.get_by_role("heading", name="Price of robustness and the recommended Γ").wait_for()
+        settle(page)
+        tables = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stDataFrame]')]
+            .filter(t => t.querySelector('.dvn-scroller'))
+            .map(t => ({headers: [...t.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim()),
+                        scroll: t.querySelector('.dvn-scroller').scrollWidth,
+                        visible: t.querySelector('.dvn-scroller').clientWidth}))""")
+        page.screenshot(path=ARTIFACTS / "backtest-tables-1280.png")
+        whole = [t["headers"] for t in tables if t["scroll"] <= t["visible"] + 1]
+        for header in ("Total net cost [kEUR]", "Mean regret [kEUR/day]", "Days without plan", "Audit violations",
+                       "Test: CVaR 95 % [kEUR/day]", "Test: mean regret [kEUR/day]"):
+            assert any(header in headers for headers in whole), (header, tables)
+        worst = next(t["headers"] for t in tables if t["headers"][:1] == ["Delivery day"])
+        assert worst[:2] == ["Delivery day", "Plan"], worst
 
 
 @pytest.mark.slow
