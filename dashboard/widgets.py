@@ -384,8 +384,19 @@ def sidebar(case: Case) -> None:
     page ran, so it shows the page's own edits)."""
     st.caption("Current case")
     st.markdown(f"**{literal(case.name)}** · {case.delivery_date:%d %b %Y}  \n{state.default_label()}")
-    if state.is_requested(state.run_case()):
+    run = state.run_case()
+    if not state.is_requested(run):
+        return
+    from . import solving  # solving imports this module
+
+    key = state.case_key(run)
+    result = solving.solver().result(key)
+    if result is not None and result.has_plan:
         st.caption(":material/check: solved — see Results")
+    elif result is not None:  # infeasible, or no plan within the time limit: not "solved"
+        st.caption(":material/error: no plan — see Results for why")
+    elif solving.solver().running(key):
+        st.caption(":material/hourglass_top: solving…")
 
 
 def open_linked_run(page) -> None:
