@@ -173,10 +173,14 @@ def status_line(result: Result) -> None:
                    f"found so far, feasible and within {result.mip_gap:.2%} of the optimum. Press **Solve** to "
                    "search on to the optimum.", icon=":material/done_all:")
     elif result.has_plan:
-        st.warning(f"The solver stopped at its time limit; the plan below is feasible but may not be optimal "
-                   f"(gap {result.mip_gap:.2%}).", icon=":material/timer:")
-    else:
-        st.error(f"No plan: {result.status}. {result.message}", icon=":material/error:")
+        st.warning(f"The solver stopped at its time limit of {result.case.solver.time_limit_s:g} s; the plan below "
+                   f"is feasible but may not be optimal (gap {result.mip_gap:.2%}).", icon=":material/timer:")
+    else:  # the message in words, not the solver's status code ("No plan: no_solution.")
+        message = result.message or f"no plan ({result.status})"
+        if result.status is Outcome.NO_SOLUTION:
+            message += (f" (the limit is {result.case.solver.time_limit_s:g} s per solve, the case's "
+                        "`solver.time_limit_s` in case.yaml or the case workbook)")
+        st.error(f"**No plan.** {message[0].upper()}{message[1:]}.".replace("..", "."), icon=":material/error:")
 
 
 def unproven(result: Result) -> str:

@@ -192,6 +192,21 @@ def test_what_changed_writes_a_fall_in_cost_with_a_true_minus(paper_solve):
     assert not re.search(r"-\d", changed), changed
 
 
+def test_a_solve_without_a_plan_says_why_in_words_and_names_the_time_limit(paper_case):
+    # Results said "No plan: no_solution. time limit reached before any feasible plan was found": the solver's
+    # status code, and no word of which limit or where it is set.
+    at = open_app("results")
+    at.session_state["case"] = rvpp.with_options(paper_case, dt_h=0.25, strategy="pessimistic").replace(
+        solver={"time_limit_s": 0.001})
+    said = click(at.run(), "results_solve").error[0].value
+    assert "no_solution" not in said and "the limit is 0.001 s per solve" in said, said
+    assert "solver.time_limit_s" in said
+    at.session_state["case"] = paper_case.replace(markets={"hpa": False})
+    said = click(at.run(), "results_solve").error[0].value
+    assert said.startswith("**No plan.** No feasible plan: heat balance short"), said
+    assert "infeasible." not in said
+
+
 # ----------------------------------------------------------------------------- estimates
 
 
