@@ -348,4 +348,4 @@ def test_the_authors_workbook_uploaded_as_a_case_says_how_to_import_it():
         read_case_files({"RVPP_data.xlsx": WORKBOOK.read_bytes()})
     [message] = err.value.problems
     assert message.startswith("RVPP_data.xlsx: sheet 'case' is missing"), message
-    assert "python -m rvpp import-workbook RVPP_data.xlsx --out FOLDER --date YYYY-MM-DD" in message
+    assert "python -m rvpp data import-workbook RVPP_data.xlsx --out FOLDER --date YYYY-MM-DD" in message

@@ -215,5 +215,5 @@ def test_a_workbook_of_another_kind_is_refused_for_its_missing_sheets_not_for_it
     [message] = err.value.problems
     assert message.startswith("RVPP_data.xlsx: sheet 'case' is missing (a case workbook has the sheets case, "
                               "hpa_tariff, budgets, "), message
-    assert "authors' RVPP tool" in message and "python -m rvpp import-workbook" in message
+    assert "authors' RVPP tool" in message and "python -m rvpp data import-workbook" in message
     assert "twice" not in message

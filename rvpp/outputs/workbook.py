@@ -327,7 +327,7 @@ def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "wo
 REQUIRED_SHEETS = ("case", "hpa_tariff", "history")
 AUTHORS_TOOL_SHEET = "Global_params"  # the first sheet of the seed paper's authors' tool workbook (RVPP_data.xlsx)
 AUTHORS_TOOL_HINT = ("; this is the workbook of the authors' RVPP tool, not a case workbook: turn it into a case "
-                     "folder with `python -m rvpp import-workbook RVPP_data.xlsx --out FOLDER --date YYYY-MM-DD` "
+                     "folder with `python -m rvpp data import-workbook RVPP_data.xlsx --out FOLDER --date YYYY-MM-DD` "
                      "(docs/gams-tool.md), then load that folder or upload it as a zip")
 
 
