@@ -81,6 +81,7 @@ class Job:
     case: Case
     gammas: tuple[int, ...] | None = None
     started: float = field(default_factory=time.perf_counter)
+    began: float | None = None  # when it had a solver slot: a solve's time counts from here
     stage: str = "waiting for a free solver"
     done_points: tuple[int, int] | None = None  # a sweep's plans solved so far, of how many
     finished: float | None = None
@@ -95,7 +96,14 @@ class Job:
 
     @property
     def elapsed_s(self) -> float:
+        """How long the page has waited for it, its time waiting for a free solver included."""
         return (self.finished or time.perf_counter()) - self.started
+
+    @property
+    def solve_s(self) -> float:
+        """How long it took once it had a solver: the time an estimate of the same work may promise
+        (a solve that waited for another's slot would otherwise count that wait as its own)."""
+        return (self.finished or time.perf_counter()) - (self.began or self.started)
 
     def run(self, solver: "Solver") -> None:
         """In a thread of the server: wait for a slot, solve in a new process, keep the outcome.
@@ -104,6 +112,7 @@ class Job:
         while the process ends (5-15 ms), and the slot is freed once it has.
         """
         with solver.slots:
+            self.began = time.perf_counter()
             if not self.cancelled:
                 self._solve()
             solver.finish(self)
@@ -226,11 +235,11 @@ class Solver:
                     while len(self.sweeps) > KEPT_SWEEPS:
                         self.sweeps.popitem(last=False)
                 if not stopped(job.result):  # a search cut short says nothing of the case's time
-                    self.seconds[job.key] = job.elapsed_s
+                    self.seconds[job.key] = job.solve_s
                     prepared = (job.result if job.gammas is None else job.result[0]).problem
-                    self.shape_seconds[shape(job.case, job.gammas, prepared)] = job.elapsed_s
+                    self.shape_seconds[shape(job.case, job.gammas, prepared)] = job.solve_s
                     if job.gammas is None and not tied_budgets(prepared):
-                        self.last_solve = (job.elapsed_s, periods_of(job.case))
+                        self.last_solve = (job.solve_s, periods_of(job.case))
         job.done.set()
 
     def expected_s(self, case: Case, gammas: Sequence[int] | None = None) -> tuple[float, str] | None:

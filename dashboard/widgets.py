@@ -40,13 +40,14 @@ MARKDOWN_SPECIAL = re.compile(r"[\\`*_\[\]()#+\-.!|<>~$:/&]")
 
 
 def eur(value: float | None) -> str:
-    """``−124,035 EUR``: whole euros with a true minus sign."""
-    return "–" if value is None else f"{value:,.0f} EUR".replace("-", "−")
+    """``−124,035 EUR``: whole euros with a true minus sign (none on an amount that rounds to 0)."""
+    return "–" if value is None else f"{round(value) + 0:,.0f} EUR".replace("-", "−")
 
 
 def keur(value_eur: float | None) -> str:
-    """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables."""
-    return "–" if value_eur is None else f"{value_eur / KILO:,.1f}".replace("-", "−")
+    """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables; an amount that rounds
+    to 0.0 shows no sign (``−0.0`` read as a loss)."""
+    return "–" if value_eur is None else f"{round(value_eur / KILO, 1) + 0.0:,.1f}".replace("-", "−")
 
 
 def in_keur(frame: pd.DataFrame) -> pd.DataFrame:
@@ -172,10 +173,14 @@ def status_line(result: Result) -> None:
                    f"found so far, feasible and within {result.mip_gap:.2%} of the optimum. Press **Solve** to "
                    "search on to the optimum.", icon=":material/done_all:")
     elif result.has_plan:
-        st.warning(f"The solver stopped at its time limit; the plan below is feasible but may not be optimal "
-                   f"(gap {result.mip_gap:.2%}).", icon=":material/timer:")
-    else:
-        st.error(f"No plan: {result.status}. {result.message}", icon=":material/error:")
+        st.warning(f"The solver stopped at its time limit of {result.case.solver.time_limit_s:g} s; the plan below "
+                   f"is feasible but may not be optimal (gap {result.mip_gap:.2%}).", icon=":material/timer:")
+    else:  # the message in words, not the solver's status code ("No plan: no_solution.")
+        message = result.message or f"no plan ({result.status})"
+        if result.status is Outcome.NO_SOLUTION:
+            message += (f" (the limit is {result.case.solver.time_limit_s:g} s per solve, the case's "
+                        "`solver.time_limit_s` in case.yaml or the case workbook)")
+        st.error(f"**No plan.** {message[0].upper()}{message[1:]}.".replace("..", "."), icon=":material/error:")
 
 
 def unproven(result: Result) -> str:
@@ -383,8 +388,19 @@ def sidebar(case: Case) -> None:
     page ran, so it shows the page's own edits)."""
     st.caption("Current case")
     st.markdown(f"**{literal(case.name)}** · {case.delivery_date:%d %b %Y}  \n{state.default_label()}")
-    if state.is_requested(state.run_case()):
+    run = state.run_case()
+    if not state.is_requested(run):
+        return
+    from . import solving  # solving imports this module
+
+    key = state.case_key(run)
+    result = solving.solver().result(key)
+    if result is not None and result.has_plan:
         st.caption(":material/check: solved — see Results")
+    elif result is not None:  # infeasible, or no plan within the time limit: not "solved"
+        st.caption(":material/error: no plan — see Results for why")
+    elif solving.solver().running(key):
+        st.caption(":material/hourglass_top: solving…")
 
 
 def open_linked_run(page) -> None:

@@ -42,8 +42,11 @@ AGGREGATE_COLUMNS = {
     "days_without_plan": st.column_config.NumberColumn("Days without plan"),
     "audit_violations": st.column_config.NumberColumn("Audit violations"),
 }
-AGGREGATE_HEADLINE = ("label", "days_settled", "mean_net_cost_keur", "median_net_cost_keur", "cvar95_net_cost_keur",
-                      "total_net_cost_keur", "mean_regret_keur")
+# The aggregates in three tables of a few columns each, every one whole at 1280 px: one wider than the page hid
+# the regret and the days without a plan past its right edge.
+AGGREGATE_TABLES = (("label", "days_settled", "days_without_plan", "mean_net_cost_keur", "cvar95_net_cost_keur"),
+                    ("label", "mean_regret_keur", "median_net_cost_keur", "total_net_cost_keur"),
+                    ("label", "mean_market_cost_keur", "mean_penalty_keur", "penalty_share_pct", "audit_violations"))
 MONTHLY_COLUMNS = {
     "label": st.column_config.TextColumn("Strategy", pinned=True),
     "month": st.column_config.TextColumn("Month"),
@@ -54,8 +57,9 @@ MONTHLY_COLUMNS = {
     "mean_net_cost_keur": st.column_config.NumberColumn("Mean net cost [kEUR/day]", format=KEUR),
     "regret_keur": st.column_config.NumberColumn("Regret [kEUR]", format=KEUR),
 }
-WORST_COLUMNS = {
+WORST_COLUMNS = {  # the plan's status beside the day: a day without a plan is in view at 1280 px
     "day": st.column_config.DateColumn("Delivery day"),
+    "plan_status": st.column_config.TextColumn("Plan"),
     "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format=KEUR),
     "market_cost_keur": st.column_config.NumberColumn("Market cost [kEUR]", format=KEUR),
     "penalty_keur": st.column_config.NumberColumn("Penalty [kEUR]", format=KEUR),
@@ -63,7 +67,6 @@ WORST_COLUMNS = {
     "deficit_mwh": st.column_config.NumberColumn("Energy short [MWh]", format="%.1f"),
     "surplus_mwh": st.column_config.NumberColumn("Energy surplus [MWh]", format="%.1f"),
     "unserved_heat_mwh": st.column_config.NumberColumn("Heat not served [MWh_th]", format="%.1f"),
-    "plan_status": st.column_config.TextColumn("Plan"),
 }
 COST_HELP = "Cost: positive when the plant pays, negative when it earns"
 TRADING_COLUMNS = {
@@ -182,9 +185,10 @@ def listed_ids() -> set[str]:
     return {b.id for b in bt.store().list()}
 
 
-def progress_panel(ident: str) -> None:
+def progress_panel(ident: str, drawn: int) -> None:
     """Where the backtest's process stands, read from the store again every POLL_S while it runs
-    (or has not written its progress yet)."""
+    (or has not written its progress yet); the page is drawn with ``drawn`` settled records, and drawn
+    again when the first ones arrive (it said the figures appear with them)."""
     first = bt.progress(ident)
     was_running = first is not None and first.running
     watch = first is None or first.running
@@ -192,8 +196,8 @@ def progress_panel(ident: str) -> None:
     @st.fragment(run_every=POLL_S if watch else None)
     def panel() -> None:
         info = bt.progress(ident)
-        if info is not None and (info.running != was_running or first is None):
-            st.rerun()  # it started or ended: draw the whole page again with its records
+        if info is not None and (info.running != was_running or first is None or (not drawn and info.done)):
+            st.rerun()  # it started, ended or settled its first days: draw the whole page again with its records
         if info is None:
             st.progress(0.0, text="Starting: its process has not written any progress yet…")
             return
@@ -316,7 +320,7 @@ ident = st.selectbox("Backtest shown below", ids, key=CHOSEN,
                                            f"{info_of[i].settings['to']}")
 chosen = info_of[ident]
 settings = chosen.settings
-progress_panel(ident)
+progress_panel(ident, chosen.keys_done)
 
 records = bt.records(ident, chosen.keys_done)
 if records.empty:
@@ -334,8 +338,7 @@ st.plotly_chart(distribution_figure(records, IN_KEUR), key="backtest_distributio
 st.subheader("Per strategy")
 table = widgets.in_keur(metrics.aggregates(records))
 table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
-# Two tables of a few columns each rather than one wider than the page.
-for columns in (AGGREGATE_HEADLINE, ["label", *(c for c in AGGREGATE_COLUMNS if c not in AGGREGATE_HEADLINE)]):
+for columns in AGGREGATE_TABLES:
     st.dataframe(table[[c for c in columns if c in table]], hide_index=True, width="stretch",
                  column_config=AGGREGATE_COLUMNS)
 with st.expander("Per month", icon=":material/calendar_month:"):
@@ -455,8 +458,10 @@ if rec.outcome is Verdict.LOSES:
 else:
     st.success(verdict_words(rec, IN_KEUR), icon=":material/verified:")
 comparison = widgets.in_keur(rec.comparison)
-st.dataframe(comparison[[c for c in COMPARISON_COLUMNS if c in comparison]], hide_index=True,
-             width="stretch", column_config=COMPARISON_COLUMNS)
+for period in ("train_", "test_"):  # one table per period: together they were wider than the page at 1280 px
+    columns = [c for c in COMPARISON_COLUMNS if c == "variant" or c.startswith(period)]
+    st.dataframe(comparison[[c for c in columns if c in comparison]], hide_index=True, width="stretch",
+                 column_config=COMPARISON_COLUMNS)
 remembered = bt.recommended()
 if remembered is not None:
     st.caption("Now remembered: " + bt.recommendation_note(remembered))

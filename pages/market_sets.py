@@ -1,6 +1,7 @@
 """Market sets and HPA prices: cost by market set and strategy, without the CSP and by HPA
 tariff (paper Case 3, Tables 10-12), computed by ``rvpp.studies.markets``."""
 
+import pandas as pd
 import streamlit as st
 
 from dashboard import state, studies, widgets
@@ -9,6 +10,7 @@ from rvpp.service import HPA_FLAT_PRICES, MARKET_SETS, MARKET_SETS_WITHOUT_CSP, 
 
 state.through_app("pages/market_sets.py")
 
+NOT_AVAILABLE = "n/a"  # a configuration without a plan, as the warning above the tables says
 TABLES = (  # table, figure, heading, what the columns are
     ("table10_markets", "markets_cost", "Cost by market set (paper Table 10)", "Market set"),
     ("table11_without_csp", "markets_without_csp", "Cost without the CSP (paper Table 11)", "Market set, no CSP"),
@@ -32,9 +34,13 @@ PLAN_COLUMNS = {
 }
 
 
-def cost_table(table):
-    """Cost [kEUR] to one decimal, ``n/a`` where a configuration has no plan."""
-    return table.style.format("{:,.1f}", na_rep="n/a")
+def cost_table(table) -> tuple[pd.DataFrame, dict]:
+    """Cost [kEUR] to one decimal with thousands separators and a true minus, ``n/a`` where a configuration
+    has no plan, right-aligned, with its column settings: as text, since the grid draws a missing number as
+    "None" whatever a Styler says."""
+    shown = table.map(lambda value: NOT_AVAILABLE if pd.isna(value) else f"{value:,.1f}".replace("-", "−"))
+    shown = shown.rename(columns=lambda c: f"{c:g}" if isinstance(c, float) else str(c))
+    return shown, {c: st.column_config.TextColumn(c, alignment="right") for c in shown.columns}
 
 
 st.title("Market sets and HPA prices")
@@ -85,7 +91,8 @@ for name, figure, heading, columns in TABLES:
     if table.columns.empty:
         continue
     st.subheader(heading)
-    st.dataframe(cost_table(table.rename_axis(index="Strategy", columns=columns)))
+    shown, config = cost_table(table.rename_axis(index="Strategy", columns=columns))
+    st.dataframe(shown, column_config=config)
     st.plotly_chart(out.figures[figure], key=f"market_sets_{figure}")
 
 with st.expander("Every plan: trades and reserve", icon=":material/table_rows:"):

@@ -72,6 +72,14 @@ def test_the_page_without_a_backtest_says_how_to_start_one():
     assert at.date_input(key="backtest_first").value <= at.date_input(key="backtest_last").value
 
 
+def aggregates_shown(at) -> pd.DataFrame:
+    """The per-strategy aggregates as one table: the page draws them in three of a few columns each (after
+    the first table, which lists the backtests), one row per strategy in each."""
+    parts = [d.value.set_index("label") for d in at.dataframe[1:4]]
+    assert all(list(part.index) == list(parts[0].index) for part in parts)
+    return pd.concat(parts, axis=1)
+
+
 @pytest.mark.slow
 def test_the_figures_and_tables_are_the_stored_records(stored):
     store, ident = stored
@@ -81,7 +89,7 @@ def test_the_figures_and_tables_are_the_stored_records(stored):
     cumulative = specs["Cumulative net cost of the settled days"]
     boxes = specs["Daily net cost per strategy (box: quartiles and median; points: days)"]
     perfect = records[records["strategy"] == "perfect"].set_index("day")["net_cost_eur"]
-    table = at.dataframe[1].value.set_index("label")  # the aggregates (the first table lists the backtests)
+    table = aggregates_shown(at)
     for label, part in records.groupby("label"):
         net = part["net_cost_eur"].to_numpy()
         np.testing.assert_allclose(values(trace(cumulative, label)["y"]), np.cumsum(net) / 1000)  # kEUR
@@ -271,10 +279,10 @@ def test_backtest_and_out_of_sample_show_every_amount_in_kEUR(stored, paper_case
     assert_money_in_keur(at, "backtest")
     headers = money_columns(at)
     assert {"Mean net cost [kEUR/day]", "Total net cost [kEUR]", "Test: mean net cost [kEUR/day]"} <= set(headers)
-    aggregates = at.dataframe[1].value.set_index("label")
+    aggregates = aggregates_shown(at)
     deterministic = records[records["label"] == "deterministic"]["net_cost_eur"]
     assert aggregates.loc["deterministic", "total_net_cost_keur"] == pytest.approx(deterministic.sum() / 1000)
-    comparison = next(d.value for d in at.dataframe if "variant" in d.value.columns).set_index("variant")
+    comparison = next(d.value for d in at.dataframe if "test_mean_net_cost_keur" in d.value.columns).set_index("variant")
     on_last = records[(records["day"] == LAST)].set_index("label")["net_cost_eur"]  # the test days: LAST alone
     assert comparison.loc["deterministic", "test_mean_net_cost_keur"] == pytest.approx(on_last["deterministic"] / 1000)
     verdict = "\n".join(m.value for m in [*at.success, *at.warning] if m.value.startswith("Recommended Γ"))

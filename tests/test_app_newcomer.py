@@ -121,6 +121,18 @@ def test_the_reserve_chart_says_when_a_plan_offers_no_up_reserve(paper_solve):
     assert list(layout["yaxis"]["range"]) == [0, 1]
 
 
+def test_an_amount_that_rounds_to_zero_shows_no_minus(paper_case, paper_solve):
+    # Compare's Γ slider at 12 showed "DAM revenue [kEUR] −0.0" for a plan that sells almost nothing (it
+    # buys 23 EUR): a minus that reads as a loss the cards cannot show.
+    from dashboard.widgets import kpis
+
+    result = paper_solve(gammas={source: 12 for source in paper_case.sources()})
+    assert -50 < result.parts["revenue_dam_eur"] < 0  # this plan's DAM revenue rounds to 0.0 kEUR from below
+    value, help_text = kpis(result)["DAM revenue [kEUR]"]
+    assert value == "0.0"
+    assert f"Exact: {-round(-result.parts['revenue_dam_eur'])} EUR".replace("-", "−") in help_text
+
+
 # ----------------------------------------------------------------------------- Learn
 
 
@@ -180,6 +192,21 @@ def test_what_changed_writes_a_fall_in_cost_with_a_true_minus(paper_solve):
     assert not re.search(r"-\d", changed), changed
 
 
+def test_a_solve_without_a_plan_says_why_in_words_and_names_the_time_limit(paper_case):
+    # Results said "No plan: no_solution. time limit reached before any feasible plan was found": the solver's
+    # status code, and no word of which limit or where it is set.
+    at = open_app("results")
+    at.session_state["case"] = rvpp.with_options(paper_case, dt_h=0.25, strategy="pessimistic").replace(
+        solver={"time_limit_s": 0.001})
+    said = click(at.run(), "results_solve").error[0].value
+    assert "no_solution" not in said and "the limit is 0.001 s per solve" in said, said
+    assert "solver.time_limit_s" in said
+    at.session_state["case"] = paper_case.replace(markets={"hpa": False})
+    said = click(at.run(), "results_solve").error[0].value
+    assert said.startswith("**No plan.** No feasible plan: heat balance short"), said
+    assert "infeasible." not in said
+
+
 # ----------------------------------------------------------------------------- estimates
 
 
@@ -195,6 +222,24 @@ def test_estimates_are_measured_on_this_server_never_read_from_a_file(paper_case
     at = open_app()
     said = " ".join(c.value for c in at.caption) + " ".join(m.value for m in at.markdown)
     assert "benchmarks" not in said and ".json" not in said
+
+
+def test_a_solve_that_waited_for_a_free_solver_does_not_count_the_wait_as_its_time(paper_case):
+    # Compare's four plans share two solvers: the last one's time counted its wait for a slot, and the
+    # sweep button then promised "about 222 s" for a sweep that took 32 s.
+    from dashboard.solving import Solver
+
+    solver = Solver(workers=1)
+    solver.slots.acquire()  # another solve holds the only slot
+    job = solver.start(paper_case)
+    time.sleep(3.0)
+    freed = time.perf_counter()
+    solver.slots.release()
+    assert job.done.wait(TIMEOUT_S) and job.result.status == "optimal"
+    own = job.finished - freed  # the most it can have taken once it had the slot
+    assert job.elapsed_s > own + 2.9  # the page did wait that long
+    assert solver.seconds[job.key] <= own and solver.last_solve[0] <= own
+    assert solver.expected_s(paper_case)[0] <= own
 
 
 def test_study_pages_give_no_time_this_server_has_not_measured(monkeypatch, paper_case):

@@ -10,6 +10,7 @@ by ``make axe`` or, when missing, by ``npm ci`` here) on every page; without axe
 from __future__ import annotations
 
 import contextlib
+import datetime as dt
 import io
 import os
 import re
@@ -345,6 +346,39 @@ def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_p
         assert shown.locator("input").input_value().startswith("browser backtest · ")
 
 
+@pytest.mark.slow
+def test_a_running_backtest_draws_its_figures_once_its_first_days_settle(tmp_path, paper_case):
+    """The page said "No day settled yet; the figures appear with the first days" until the backtest ended
+    (minutes later), while its progress bar counted the days settled."""
+    require_browser()
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.backtest.engine import run_backtest
+    from rvpp.store import BacktestStore
+
+    day = paper_case.delivery_date
+    settings = BacktestSettings(day, day, variants_of(["deterministic", "balanced"], []))
+    settled = BacktestStore(f"sqlite:///{tmp_path / 'settled.sqlite3'}")
+    records = settled.record_map(run_backtest(paper_case, settings, settled))
+    store = BacktestStore(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
+    ident = store.open(paper_case, settings.stored(), keys_total=len(records), label="still running")
+    store.set_progress(ident, "running", 0, len(records))  # this process plays the backtest's own
+    try:
+        with streamlit_server("streamlit-backtest-running.log", tmp_path) as url, \
+                chromium_page({"width": 1280, "height": 1600}) as page:
+            page.goto(url)
+            open_page(page, "Backtest")
+            page.get_by_text("No day settled yet").wait_for()
+            key, record = next(iter(records.items()))
+            store.record(ident, key, record)
+            store.set_progress(ident, "running", 1, len(records))
+            page.get_by_role("heading", name="Cost over the period").wait_for(timeout=30_000)
+            assert page.get_by_text("No day settled yet").count() == 0
+            assert "1 of 3 days × strategies settled · running" in page.get_by_test_id("stProgress").first.inner_text()
+            page.screenshot(path=ARTIFACTS / "backtest-running-figures.png")
+    finally:
+        store.set_progress(ident, "stopped", 1, len(records))
+
+
 def cut_off_buttons(page) -> list[str]:
     """The labels of the page's buttons drawn cut off (ending in an ellipsis)."""
     return page.evaluate("""() => [...document.querySelectorAll('[data-testid=stMain] button')]
@@ -371,6 +405,24 @@ def test_the_sweep_button_shows_its_whole_label_with_the_expected_time_at_1280_p
             button.scroll_into_view_if_needed()
             page.screenshot(path=ARTIFACTS / f"sweep-button-{title.split()[0].lower()}.png")
             assert cut_off_buttons(page) == [], title
+
+
+def test_the_sidebar_says_solved_only_of_a_solve_that_gave_a_plan(app_url, paper_solve):
+    # With the HPA off the day has no plan (heat short at night): Home said so, and the sidebar beside it
+    # said "solved — see Results" with a tick.
+    assert not paper_solve(markets="DAM+SRM").has_plan  # the library agrees: no plan without the HPA
+    with chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(app_url)
+        open_page(page, "Markets & tariffs")
+        page.get_by_text("Heat purchase (HPA)").click()
+        page.get_by_test_id("stSidebar").get_by_text(re.compile(r"balanced · DAM\+SRM$")).wait_for()
+        open_page(page, "Home")
+        page.get_by_role("button", name="Solve the balanced strategy").click()
+        page.get_by_test_id("stAlert").filter(has_text="No plan").wait_for()
+        settle(page)
+        sidebar = page.get_by_test_id("stSidebarUserContent").inner_text()
+        page.screenshot(path=ARTIFACTS / "sidebar-no-plan.png")
+        assert "solved" not in sidebar and "no plan" in sidebar, sidebar
 
 
 # ----------------------------------------------------------------------------- saved runs, edits
@@ -480,6 +532,41 @@ def test_the_backtest_list_shows_state_and_progress_whole_at_1280_pixels(tmp_pat
             "table => [...table.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim())")
         assert headers[:5] == ["Label", "State", "Progress", "Days × strategies", "Period"], headers
         assert table_cells(page, 1) == ["finished"] and table_cells(page, 3) == ["3 of 3"]  # and perfect information
+
+
+@pytest.mark.slow
+def test_the_backtest_tables_of_strategies_and_of_the_recommendation_fit_1280_pixels(tmp_path, paper_case):
+    # The per-strategy table hid the total and the regret past its right edge at 1280 pixels, its second half the
+    # days without a plan, the recommendation's table the test period's CVaR and regret; the worst days drew
+    # whether each day had a plan last, out of view.
+    require_browser()
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.backtest.engine import run_backtest
+    from rvpp.store import BacktestStore
+
+    store = BacktestStore(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
+    day = paper_case.delivery_date
+    run_backtest(paper_case, BacktestSettings(day - dt.timedelta(days=1), day, variants_of(["deterministic"], [0.25])),
+                 store, label="two May days")
+    store.engine.dispose()
+    with streamlit_server("streamlit-backtest-tables.log", tmp_path) as url, \
+            chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(url)
+        open_page(page, "Backtest")
+        page.get_by_role("heading", name="Price of robustness and the recommended Γ").wait_for()
+        settle(page)
+        tables = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stDataFrame]')]
+            .filter(t => t.querySelector('.dvn-scroller'))
+            .map(t => ({headers: [...t.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim()),
+                        scroll: t.querySelector('.dvn-scroller').scrollWidth,
+                        visible: t.querySelector('.dvn-scroller').clientWidth}))""")
+        page.screenshot(path=ARTIFACTS / "backtest-tables-1280.png")
+        whole = [t["headers"] for t in tables if t["scroll"] <= t["visible"] + 1]
+        for header in ("Total net cost [kEUR]", "Mean regret [kEUR/day]", "Days without plan", "Audit violations",
+                       "Test: CVaR 95 % [kEUR/day]", "Test: mean regret [kEUR/day]"):
+            assert any(header in headers for headers in whole), (header, tables)
+        worst = next(t["headers"] for t in tables if t["headers"][:1] == ["Delivery day"])
+        assert worst[:2] == ["Delivery day", "Plan"], worst
 
 
 @pytest.mark.slow

@@ -45,6 +45,21 @@ def test_the_explanation_states_the_sign_and_the_cost_per_mwh(balanced):
     assert f"net cost per MWh served is {-balanced.objective_eur / day.served_mwh:,.1f} EUR" in line
 
 
+def test_a_day_whose_markets_cost_money_is_not_said_to_have_negative_revenues(paper_solve):
+    # 1 June, pessimistic: the plan buys more than it sells and Results read "market revenues of −5.8 kEUR do
+    # not cover 76.7 kEUR of operating cost": a revenue below zero that "does not cover" a cost.
+    result = paper_solve(strategy="pessimistic", date="2025-06-01")
+    parts = result.parts
+    markets = parts["revenue_dam_eur"] + parts["revenue_sr_eur"]
+    assert markets < 0  # by hand: this day's DAM and SR revenues sum to a cost
+    costs = parts["cost_hpa_eur"] + parts["cost_opex_eur"] + sum(result.protection_eur.values())
+    line = explanation(economics(result))
+    assert line.startswith(f"A net cost of {-result.objective_eur / 1000:,.1f} kEUR: the markets cost "
+                           f"{-markets / 1000:,.1f} kEUR (the plant buys more than it sells) on top of "
+                           f"{costs / 1000:,.1f} kEUR of operating cost, heat and protection"), line
+    assert "revenues of −" not in line
+
+
 def test_the_waterfall_ends_at_the_net_cost(balanced, paper_solve):
     fig = waterfall_figure({"balanced": balanced})
     [trace] = fig.data

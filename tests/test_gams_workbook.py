@@ -337,3 +337,15 @@ def test_without_the_tools_conventions_rvpp_finds_a_lower_optimum(imported):
     served = result.units.loc[result.units.unit == "U6", "p_mw"].sum() * case.dt_h
     assert floor == pytest.approx(1923.3, abs=1e-9)
     assert served == pytest.approx(floor, abs=1e-4)
+
+
+@needs_workbook
+def test_the_authors_workbook_uploaded_as_a_case_says_how_to_import_it():
+    from rvpp.errors import CaseError
+    from rvpp.outputs.bundle import read_case_files
+
+    with pytest.raises(CaseError) as err:
+        read_case_files({"RVPP_data.xlsx": WORKBOOK.read_bytes()})
+    [message] = err.value.problems
+    assert message.startswith("RVPP_data.xlsx: sheet 'case' is missing"), message
+    assert "python -m rvpp data import-workbook RVPP_data.xlsx --out FOLDER --date YYYY-MM-DD" in message

@@ -268,6 +268,7 @@ def test_a_workbook_with_too_many_rows_is_refused_while_streaming():
 
     book = openpyxl.Workbook()
     book.active.title = "case"
+    book.create_sheet("hpa_tariff")  # every sheet a case workbook needs: a workbook without one is refused first
     sheet = book.create_sheet("history")
     for row in range(50):
         sheet.append([f"2025-01-01T{row % 24:02d}:00:00+00:00", 1.0])

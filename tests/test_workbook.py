@@ -197,3 +197,23 @@ def test_an_uploaded_workbook_names_a_field_given_twice(case):
     with pytest.raises(rvpp.CaseError) as err:
         bundle.read_case_files({"case.xlsx": buffer.getvalue()})
     assert err.value.problems == [f"case.xlsx: sheet 'case' gives the field 'name' twice (rows 2 and {rows}); keep one"]
+
+
+def test_a_workbook_of_another_kind_is_refused_for_its_missing_sheets_not_for_its_contents():
+    # The authors' tool workbook was refused for "sheet 'Global_params' has the column 'Global parameters' twice":
+    # true, but not why it is no case workbook.
+    import openpyxl
+
+    book = openpyxl.Workbook()
+    book.active.title = "Global_params"
+    book.active.append(["Global parameters", "value", None, None, None, "Global parameters"])
+    book.create_sheet("hpa_tariff")
+    buffer = io.BytesIO()
+    book.save(buffer)
+    with pytest.raises(rvpp.CaseError) as err:
+        bundle.read_case_files({"RVPP_data.xlsx": buffer.getvalue()})
+    [message] = err.value.problems
+    assert message.startswith("RVPP_data.xlsx: sheet 'case' is missing (a case workbook has the sheets case, "
+                              "hpa_tariff, budgets, "), message
+    assert "authors' RVPP tool" in message and "python -m rvpp data import-workbook" in message
+    assert "twice" not in message

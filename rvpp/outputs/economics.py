@@ -99,7 +99,11 @@ def explanation(day: DayEconomics) -> str:
         served += f" ({day.heat_bought_mwh_th:,.0f} MWh_th of it bought through the HPA)"
     earned = day.revenue_dam_eur + day.revenue_sr_eur
     paid = day.cost_hpa_eur + day.cost_opex_eur + day.protection_eur
-    if net < 0:
+    if net < 0 and earned < 0:  # the markets cost money too: no "revenues of −5.8 kEUR"
+        head = (f"A net cost of {-net / KILO:,.1f} kEUR: the markets cost {-earned / KILO:,.1f} kEUR (the plant buys "
+                f"more than it sells) on top of {paid / KILO:,.1f} kEUR of operating cost, heat and protection, "
+                f"because {served}")
+    elif net < 0:
         head = (f"A net cost of {-net / KILO:,.1f} kEUR: market revenues of {earned / KILO:,.1f} kEUR do not cover "
                 f"{paid / KILO:,.1f} kEUR of operating cost, heat and protection, because {served}")
     else:

@@ -297,11 +297,6 @@ def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "wo
     elif isinstance(source, io.BytesIO):
         source = source.getvalue()
     sheets = _read_sheets(source, label, budget)
-    required = ("case", "hpa_tariff", "history")
-    missing = [name for name in required if name not in sheets]
-    if missing:
-        raise CaseError(f"{label}: sheet {missing[0]!r} is missing (a case workbook has the sheets case, "
-                        f"hpa_tariff, budgets, {', '.join(UNIT_KINDS)}, breakpoints and history)")
     for name, columns in (("case", ("field", "value")), ("budgets", ("source", "gamma")),
                           ("breakpoints", ("unit", *BREAKPOINT_COLUMNS)), ("history", ("timestamp",))):
         if name in sheets:
@@ -329,8 +324,16 @@ def read_case_workbook(source: str | Path | io.BytesIO | bytes, label: str = "wo
     return case
 
 
+REQUIRED_SHEETS = ("case", "hpa_tariff", "history")
+AUTHORS_TOOL_SHEET = "Global_params"  # the first sheet of the seed paper's authors' tool workbook (RVPP_data.xlsx)
+AUTHORS_TOOL_HINT = ("; this is the workbook of the authors' RVPP tool, not a case workbook: turn it into a case "
+                     "folder with `python -m rvpp data import-workbook RVPP_data.xlsx --out FOLDER --date YYYY-MM-DD` "
+                     "(docs/gams-tool.md), then load that folder or upload it as a zip")
+
+
 def _read_sheets(data: bytes, label: str, budget: UploadBudget) -> dict[str, pd.DataFrame]:
-    """Every sheet of the workbook as a table of cell values (first row: the column names).
+    """Every sheet of the workbook as a table of cell values (first row: the column names); a workbook
+    without the sheets every case workbook has is refused first, by the first one missing.
 
     The zip is inflated once and counted before openpyxl parses it (its headers are not
     trusted); rows are streamed, so a sheet larger than the limits is refused early.
@@ -343,6 +346,13 @@ def _read_sheets(data: bytes, label: str, budget: UploadBudget) -> dict[str, pd.
         book = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True, keep_links=False)
     except Exception as exc:  # openpyxl raises many types for a zip that is not a workbook
         raise CaseFileError(f"{label}: cannot be read as an Excel workbook ({excerpt(exc, 120)})") from None
+    missing = [name for name in REQUIRED_SHEETS if name not in book.sheetnames]
+    if missing:  # before any sheet is read: a workbook of another kind is named as such, not by its contents
+        tool = AUTHORS_TOOL_SHEET in book.sheetnames
+        book.close()
+        raise CaseError(f"{label}: sheet {missing[0]!r} is missing (a case workbook has the sheets case, "
+                        f"hpa_tariff, budgets, {', '.join(UNIT_KINDS)}, breakpoints and history)"
+                        + (AUTHORS_TOOL_HINT if tool else ""))
     sheets = {}
     try:
         for sheet in book.worksheets:
