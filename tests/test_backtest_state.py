@@ -221,3 +221,28 @@ def test_the_case_variant_of_a_fraction_sets_the_case_edits_aside_and_names_the_
     assert describe(case).startswith("Γ 0.25 of the day · DAM+SRM+HPA")
     preset = Variant(strategy="pessimistic").apply(case)
     assert preset.budgets.fraction is None and describe(preset).startswith("pessimistic · ")
+
+
+def test_a_day_a_carried_minimum_up_time_leaves_without_plan_is_planned_with_a_trip():
+    # The turbine has run 2 h of its 6 h minimum, the storage is empty (at E min) and the day has no
+    # sun: it cannot run the 4 periods it owes, so the plan is infeasible. Planned again with that
+    # minimum counted as done (as the settlement lets it trip), the turbine stops at once.
+    from rvpp.backtest.engine import day_plan
+    from rvpp.backtest.state import min_up_lifted
+
+    price = np.full(NT, 10.0)
+    case = tiny_case(csp_units=[csp_unit(on=True, status_h=2.0, e_init=100)])
+    make = lambda day: solve_problem(tiny_problem(day, C=(0, 0, 0), price_da=(price, price, price)))  # noqa: E731
+    assert make(case).status == "infeasible"
+    planned_for, result, lifted = day_plan(case, make)
+    assert lifted and result.status == "optimal"
+    assert planned_for.csp[0].power_block.initial_status_h == 6.0 and case.csp[0].power_block.initial_status_h == 2.0
+    assert online(result) == [0] * NT
+    assert audit_result(result, bands=result.problem.bands) == []
+    # With heat in store the owed periods can be run: planned as it is, the minimum up time kept.
+    stored = tiny_case(csp_units=[csp_unit(on=True, status_h=2.0, e_init=600, e_end_min=100, om=50.0)])
+    planned_for, result, lifted = day_plan(stored, make)
+    assert not lifted and planned_for is stored and online(result)[:5] == [1, 1, 1, 1, 0]
+    for unlifted in (csp_unit(on=True, status_h=None), csp_unit(on=True, status_h=6.0), csp_unit(on=False, status_h=2.0)):
+        one = tiny_case(csp_units=[unlifted])
+        assert min_up_lifted(one) is one

@@ -42,11 +42,12 @@ from ..errors import RvppError
 from ..settle.audit import audit_result
 from ..settle.recourse import FirstStage, Realization, evaluate, first_stage, realization, realized_problem
 from ..solving.plan import solve, solve_problem
+from ..solving.outcome import Outcome
 from ..solving.results import Result
 from ..store import BacktestStore, RecordKey
 from .intraday import trade_sessions
 from .settings import BacktestSettings, BacktestVariant
-from .state import State, initial_state, with_state
+from .state import State, initial_state, min_up_lifted, with_state
 
 Progress = Callable[[int, int, "float | None"], None]  # (records done, records in all, seconds left)
 TRADES = {"sold_mwh": ("p_da_mw", 1), "bought_mwh": ("p_da_mw", -1), "sr_up_mwh": ("r_sr_up_mw", 1),
@@ -67,6 +68,25 @@ def plan(case: Case, keep_schedule: bool = False) -> Result:
 def perfect_plan(case: Case, real: Realization) -> Result:
     """The plan made on the realized values of the day: bands of zero width at what happened."""
     return solve_problem(realized_problem(case, real))
+
+
+TRIP_NOTE = ("planned with the turbine free to stop from the first period: the minimum up time carried from "
+             "the day before left no feasible plan (the settlement lets a turbine trip too)")
+
+
+def day_plan(case: Case, make: Callable[[Case], Result]) -> tuple[Case, Result, bool]:
+    """The day's plan by ``make``, and the case it was made for. A day left without a feasible plan by a
+    minimum up time carried from the day before (a turbine online at midnight with too little heat
+    to run on) is planned again with that time counted as done, as the settlement lets a turbine trip;
+    the flag says so (docs/backtest.md)."""
+    result = make(case)
+    if result.status != Outcome.INFEASIBLE:
+        return case, result, False
+    lifted = min_up_lifted(case)
+    if lifted is case:
+        return case, result, False
+    again = make(lifted)
+    return (lifted, again, True) if again.has_plan else (case, result, False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,13 +153,15 @@ def run_day(task: DayTask) -> dict[str, Any]:
         real = realization(case, task.day)
         intraday = settings.trades_intraday(case) and not task.variant.is_perfect
         if task.variant.is_perfect:
-            result = perfect_plan(case, real)
+            case, result, lifted = day_plan(case, lambda day: perfect_plan(day, real))
         else:
-            result = plan(case, keep_schedule=True) if intraday else plan(case)
+            case, result, lifted = day_plan(case, lambda day: plan(day, keep_schedule=True) if intraday else plan(day))
     except RvppError as exc:
         return _finish({**record, "status": "error", "plan_status": "error", "message": str(exc),
                         "end_state": task.state, "state_source": "start (the day could not be prepared)"}, started)
     record.update(plan_numbers(result))
+    if lifted:
+        record["message"] = f"{TRIP_NOTE}; {result.message}" if result.message else TRIP_NOTE
     record["plan_integer_ones"] = list(result.integer_ones)
     bids = first_stage(result, settings.fix_commitment) if result.has_plan else no_bids(result.problem.nt)
     record["bids"] = {name: getattr(bids, name.removesuffix("_mw")).tolist() for name in BIDS}
@@ -197,8 +219,9 @@ def reopen_plan(store: BacktestStore, ident: str, key: RecordKey) -> Result:
     table of a :class:`~rvpp.solving.results.Result`, e.g. to show a worst day)."""
     day_of = reopen_case(store, ident, key)
     if key.strategy == BacktestVariant.perfect().strategy:
-        return perfect_plan(day_of, realization(day_of, dt.date.fromisoformat(key.day)))
-    return plan(day_of)
+        real = realization(day_of, dt.date.fromisoformat(key.day))
+        return day_plan(day_of, lambda day: perfect_plan(day, real))[1]
+    return day_plan(day_of, plan)[1]
 
 
 def plan_numbers(result: Result) -> dict[str, Any]:

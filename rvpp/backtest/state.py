@@ -80,3 +80,17 @@ def _carried(case: Case, state: State, storage_end: str | float) -> dict[str, li
                 "initial_hours_in_status": state[unit.name]["status_h"],
                 "p_init_mw": state[unit.name]["p_mw"]}) if unit.name in state else unit for unit in units]
     return changes
+
+
+def min_up_lifted(case: Case) -> Case:
+    """``case`` with the minimum up time a turbine online at midnight carries into the day counted as
+    done, so the turbine may stop from the first period, as the settlement lets it trip
+    (:func:`rvpp.settle.recourse.allow_trip`); ``case`` itself when no turbine carries one."""
+    units, lifted = [], False
+    for csp in case.csp:
+        data = csp.model_dump(mode="python")
+        pb = data["power_block"]
+        if pb["initially_on"] and pb["initial_status_h"] is not None and pb["initial_status_h"] < pb["min_up_h"]:
+            pb["initial_status_h"], lifted = pb["min_up_h"], True
+        units.append(data)
+    return case.replace(csp=units) if lifted else case
