@@ -12,29 +12,20 @@ Names are imported on first use, so ``import rvpp`` stays light: the case model 
 its validation load without the optimisation stack (Pyomo, HiGHS).
 """
 
-from importlib import import_module
+from .lazy import lazy_names
 
 _EXPORTS = {
-    "Case": "data.case", "load_case": "data.case_yaml", "save_case": "data.case_yaml", "with_options": "data.variants",
-    "CaseError": "errors", "ModelError": "errors", "RvppError": "errors",
-    "Problem": "uncertainty.problem", "prepare": "uncertainty.problem",
-    "Result": "solving.results", "Search": "solving.outcome",
-    "audit_export": "settle.audit", "audit_result": "settle.audit",
-    "write_plan": "outputs.export",
-    "solve": "solving.plan", "solve_problem": "solving.plan",
+    "Case": ".data.case", "load_case": ".data.case_yaml", "save_case": ".data.case_yaml", "with_options": ".data.variants",
+    "CaseError": ".errors", "ModelError": ".errors", "RvppError": ".errors",
+    "Problem": ".uncertainty.problem", "prepare": ".uncertainty.problem",
+    "Result": ".solving.results", "Search": ".solving.outcome",
+    "audit_export": ".settle.audit", "audit_result": ".settle.audit",
+    "write_plan": ".outputs.export",
+    "solve": ".solving.plan", "solve_problem": ".solving.plan",
 }
 
 __all__ = sorted(_EXPORTS)
 __version__ = "0.1.0"
 
 
-def __getattr__(name: str):
-    if name not in _EXPORTS:
-        raise AttributeError(f"module 'rvpp' has no attribute {name!r}")
-    value = getattr(import_module(f".{_EXPORTS[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS)

@@ -14,7 +14,7 @@ touching the dashboard and a reader sees at once what the dashboard uses. Groupe
 
 from __future__ import annotations
 
-from importlib import import_module
+from .lazy import lazy_names
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a name loads on first use
@@ -213,14 +213,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
-    if name not in _WHERE:
-        raise AttributeError(f"module 'rvpp.service' has no attribute {name!r}")
-    module = import_module(_WHERE[name], __name__.rpartition(".")[0])
-    value = getattr(module, name) if hasattr(module, name) else import_module(f"{module.__name__}.{name}")
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_WHERE))
+__getattr__, __dir__ = lazy_names(__name__, _WHERE, anchor=__name__.rpartition(".")[0])

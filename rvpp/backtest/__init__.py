@@ -9,29 +9,20 @@ checks it on a test period, :mod:`.export` writes records and inputs to a folder
 :mod:`.launch` runs a backtest in a detached process for the dashboard.
 """
 
-from importlib import import_module
+from ..lazy import lazy_names
 
 _EXPORTS = {
-    "run_backtest": "engine", "run_day": "engine",
-    "aggregates": "metrics", "cvar": "metrics", "daily": "metrics", "monthly": "metrics", "reconcile": "metrics",
-    "worst_days": "metrics",
-    "Recommendation": "recommend", "recommend": "recommend", "recommendation_from": "recommend",
-    "BacktestError": "settings", "BacktestSettings": "settings", "BacktestVariant": "settings",
-    "variants_of": "settings",
+    "run_backtest": ".engine", "run_day": ".engine",
+    "aggregates": ".metrics", "cvar": ".metrics", "daily": ".metrics", "monthly": ".metrics", "reconcile": ".metrics",
+    "worst_days": ".metrics",
+    "Recommendation": ".recommend", "recommend": ".recommend", "recommendation_from": ".recommend",
+    "BacktestError": ".settings", "BacktestSettings": ".settings", "BacktestVariant": ".settings",
+    "variants_of": ".settings",
 }
 
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str):
-    """Names are imported on first use (as in :mod:`rvpp`): the settings, which the command line
-    reads to build its options, load without the engine and its solver stack."""
-    if name not in _EXPORTS:
-        raise AttributeError(f"module 'rvpp.backtest' has no attribute {name!r}")
-    value = getattr(import_module(f".{_EXPORTS[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+# Names are imported on first use (as in rvpp): the settings, which the command line reads to build
+# its options, load without the engine and its solver stack.
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS)

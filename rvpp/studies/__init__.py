@@ -9,23 +9,14 @@ studies of the paper and the rolling backtest with its recommended Γ (beyond th
 the stress test (beyond the paper) runs on request.
 """
 
-from importlib import import_module
+from ..lazy import lazy_names
 
-_EXPORTS = {"STUDIES": "run", "run_studies": "run", "REPRODUCE": "settings", "StudySettings": "settings",
-            "StudyOutput": "runner"}
+_EXPORTS = {"STUDIES": ".run", "run_studies": ".run", "REPRODUCE": ".settings", "StudySettings": ".settings",
+            "StudyOutput": ".runner"}
 
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str):
-    """Names are imported on first use (as in :mod:`rvpp`): the settings, which the command line
-    reads to build its options, load without the studies and their solver stack."""
-    if name not in _EXPORTS:
-        raise AttributeError(f"module 'rvpp.studies' has no attribute {name!r}")
-    value = getattr(import_module(f".{_EXPORTS[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+# Names are imported on first use (as in rvpp): the settings, which the command line reads to build
+# its options, load without the studies and their solver stack.
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS)
