@@ -242,11 +242,7 @@ class ThermalStorage(_Frozen):
         storage may always idle); without a target, at or above its start. ``None`` on
         a cyclic day.
         """
-        if self.e_init_mwh_th is None:
-            return None
-        if self.e_end_min_mwh_th is None:
-            return self.e_init_mwh_th
-        return min(self.e_end_min_mwh_th, self.e_init_mwh_th)
+        return _end_floor(self.e_init_mwh_th, self.e_end_min_mwh_th)
 
 
 class PowerBlock(_Frozen):
@@ -494,11 +490,7 @@ class Battery(_Unit):
         """Least energy at the end of a day that starts from ``e_init`` [MWh]: as the tank's
         (:attr:`ThermalStorage.end_floor_mwh_th`), ``min(e_end_min, e_init)``, or ``e_init``
         without an end target. ``None`` on a cyclic day."""
-        if self.e_init_mwh is None:
-            return None
-        if self.e_end_min_mwh is None:
-            return self.e_init_mwh
-        return min(self.e_end_min_mwh, self.e_init_mwh)
+        return _end_floor(self.e_init_mwh, self.e_end_min_mwh)
 
     @classmethod
     def plain_data(cls, data: dict[str, Any]) -> dict[str, Any]:
@@ -1123,6 +1115,14 @@ def _unit_data(kind: str, unit: dict[str, Any]) -> dict[str, Any]:
     if kind in SHARED_CLASS_KINDS:
         unit = {k: v for k, v in unit.items() if k != "kind"}
     return UNIT_MODELS[kind].plain_data(unit)
+
+
+def _end_floor(e_init: float | None, e_end_min: float | None) -> float | None:
+    """Least energy at the end of a storage's day: ``min(e_end_min, e_init)``, ``e_init`` without an
+    end target, ``None`` on a cyclic day (no ``e_init``)."""
+    if e_init is None:
+        return None
+    return e_init if e_end_min is None else min(e_end_min, e_init)
 
 
 def _without_defaults(data: dict[str, Any], defaults: Mapping[str, Any]) -> dict[str, Any]:
