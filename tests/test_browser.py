@@ -477,6 +477,15 @@ def table_cells(page, column: int) -> list[str]:
     return page.get_by_test_id("stDataFrame").first.locator(f"[id^=glide-cell-{column}-]").all_inner_texts()
 
 
+def first_table_headers(page, screenshot: str) -> list[str]:
+    """The column headers the page's first table draws, once the page has settled (kept as ``screenshot``)."""
+    table = page.get_by_test_id("stDataFrame").first
+    table.wait_for()
+    settle(page)
+    page.screenshot(path=ARTIFACTS / screenshot)
+    return table.evaluate("table => [...table.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim())")
+
+
 def number(text: str) -> float:
     return float(text.replace("−", "-").replace(",", ""))
 
@@ -494,12 +503,8 @@ def test_the_saved_runs_table_shows_the_net_cost_whole_at_1280_pixels(tmp_path, 
             chromium_page({"width": 1280, "height": 800}) as page:
         page.goto(url)
         open_page(page, "Saved runs")
-        page.get_by_test_id("stDataFrame").first.wait_for()
-        settle(page)
-        page.screenshot(path=ARTIFACTS / "saved-runs-1280.png")
         # The grid lists the columns it draws, each at least in part: one drawn after the net cost shows it whole.
-        headers = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stDataFrame] [role=columnheader]')]
-            .map(h => h.innerText.trim())""")
+        headers = first_table_headers(page, "saved-runs-1280.png")
         assert headers[:3] == ["Label", "Net cost [kEUR]", "Status"], headers
         cells = table_cells(page, 2)
         assert [number(cell) for cell in cells] == [pytest.approx(-paper_solve(strategy="pessimistic").objective_eur
@@ -524,12 +529,8 @@ def test_the_backtest_list_shows_state_and_progress_whole_at_1280_pixels(tmp_pat
             chromium_page({"width": 1280, "height": 800}) as page:
         page.goto(url)
         open_page(page, "Backtest")
-        page.get_by_test_id("stDataFrame").first.wait_for()
-        settle(page)
-        page.screenshot(path=ARTIFACTS / "backtest-list-1280.png")
         # The grid lists the columns it draws, each at least in part: the fifth drawn shows the fourth whole.
-        headers = page.get_by_test_id("stDataFrame").first.evaluate(
-            "table => [...table.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim())")
+        headers = first_table_headers(page, "backtest-list-1280.png")
         assert headers[:5] == ["Label", "State", "Progress", "Days × strategies", "Period"], headers
         assert table_cells(page, 1) == ["finished"] and table_cells(page, 3) == ["3 of 3"]  # and perfect information
 
