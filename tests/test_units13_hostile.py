@@ -59,6 +59,13 @@ HY = {"name": "H1", "p_min_mw": 5.0, "p_max_mw": 30.0, "ramp_mw_per_min": 5.0}
     # online 1 h of a 6 h minimum up time: 5 more hours at 5 MW = 25 MWh
     ({"biomass": [{**HY, "initial_online": True, "initial_hours_in_status": 1.0, "min_up_h": 6.0,
                    "energy_max_mwh": 31.0, "min_down_h": 0.0}]}, None),
+    # a start's period reaches at most 3 MW/h x 1 h = 3 MW, below the 5 MW the unit runs at when online
+    ({"hydro": [{**HY, "startup_ramp_mw_per_h": 3.0}]},
+     'hydro "H1": startup_ramp_mw_per_h=3 allows at most 3 MW in the period of a start (dt_h=1), below '
+     "p_min_mw=5: the unit could never start; give a ramp of at least 5 MW/h"),
+    ({"biomass": [{**HY, "shutdown_ramp_mw_per_h": 4.0}]},
+     'biomass "H1": shutdown_ramp_mw_per_h=4 allows at most 4 MW in the period before a stop (dt_h=1), below '
+     "p_min_mw=5: the unit could never stop; give a ramp of at least 5 MW/h"),
     ({"biomass": [{**HY, "min_up_h": 25.0}]}, 'biomass "H1": min_up_h=25 must be <= 24'),
     ({"biomass": [{**HY, "min_down_h": 30.0}]}, 'biomass "H1": min_down_h=30 must be <= 24'),
     ({"hydro": [{**HY, "min_up_h": 1.5}]}, 'hydro "H1": min_up_h=1.5 must be a multiple of dt_h=1'),
@@ -142,3 +149,20 @@ def test_a_battery_that_cannot_hold_its_start_loads_with_an_end_target_it_can_ho
     unit = tiny_case(battery_units=[{**BAT, "e_init_mwh": 40.0, "e_end_min_mwh": 20.0,
                                      "self_discharge_per_h": 0.25}]).battery[0]
     assert (unit.e_init_mwh, unit.e_end_min_mwh, unit.end_floor_mwh) == (40.0, 20.0, 20.0)
+
+
+def test_a_start_up_ramp_that_fits_an_hour_but_not_15_minutes_is_refused_at_15_minutes():
+    # 8 MW/h reaches 8 MW in an hour (above P min 5 MW: the unit may start) but 8 x 0.25 = 2 MW in a
+    # 15-minute period: at 15 minutes the unit could never start, nor stop from P min
+    unit = {**HY, "startup_ramp_mw_per_h": 8.0, "shutdown_ramp_mw_per_h": 8.0}
+    hourly = tiny_case(hydro_units=[unit])
+    assert [u.name for _, u in hourly.units()] == ["H1"]
+    data = hourly.to_data()
+    data["dt_h"] = 0.25
+    with pytest.raises(CaseError) as info:
+        parse_case(data, hourly.history)
+    assert info.value.problems == [
+        'hydro "H1": startup_ramp_mw_per_h=8 allows at most 2 MW in the period of a start (dt_h=0.25), below '
+        "p_min_mw=5: the unit could never start; give a ramp of at least 20 MW/h",
+        'hydro "H1": shutdown_ramp_mw_per_h=8 allows at most 2 MW in the period before a stop (dt_h=0.25), below '
+        "p_min_mw=5: the unit could never stop; give a ramp of at least 20 MW/h"]

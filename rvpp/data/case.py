@@ -1053,6 +1053,7 @@ class Case(_Frozen):
                     if hours is not None and not _is_multiple(hours, self.dt_h):
                         problems.append(f'{kind} "{unit.name}": {field}={hours:g} must be a multiple of '
                                         f"dt_h={self.dt_h:g}")
+                problems += _ramp_problems(kind, unit, self.dt_h)
                 least = unit.p_min_mw * self.dt_h
                 if unit.energy_max_mwh is not None and unit.energy_max_mwh < least:
                     problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below the '
@@ -1128,6 +1129,21 @@ def _end_floor(e_init: float | None, e_end_min: float | None) -> float | None:
 def _without_defaults(data: dict[str, Any], defaults: Mapping[str, Any]) -> dict[str, Any]:
     """``data`` without the options ``defaults`` names where they hold their default."""
     return {k: v for k, v in data.items() if k not in defaults or v != defaults[k]}
+
+
+def _ramp_problems(kind: str, unit: DispatchableUnit, dt_h: float) -> list[str]:
+    """A start-up or shut-down ramp whose step in one period stays below ``p_min``: the unit could never
+    start (the start's period must reach ``p_min``) or never stop (the period before a stop must be at or
+    below the step), as the model has it (MODEL_SPEC §13: ``SU·dt``, ``SD·dt``)."""
+    problems = []
+    for field, action, where in (("startup_ramp_mw_per_h", "start", "in the period of a start"),
+                                 ("shutdown_ramp_mw_per_h", "stop", "in the period before a stop")):
+        ramp = getattr(unit, field)
+        if ramp is not None and ramp * dt_h < unit.p_min_mw - 1e-9:
+            problems.append(f'{kind} "{unit.name}": {field}={ramp:g} allows at most {ramp * dt_h:g} MW {where} '
+                            f"(dt_h={dt_h:g}), below p_min_mw={unit.p_min_mw:g}: the unit could never {action}; "
+                            f"give a ramp of at least {unit.p_min_mw / dt_h:g} MW/h")
+    return problems
 
 
 def _committed_problem(kind: str, unit: DispatchableUnit, committed: float, run: int, dt_h: float) -> str:
