@@ -8,7 +8,9 @@ temporary folder.
 from __future__ import annotations
 
 import datetime as dt
+import json
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -146,6 +148,27 @@ def test_the_command_writes_a_case_and_refuses_to_overwrite_it(tmp_path, capsys)
     assert main(argv) == 1
     assert "already holds case.yaml" in capsys.readouterr().err
     assert (out / "case.yaml").read_bytes() == before
+
+
+@needs_workbook
+def test_the_two_documented_commands_print_the_tools_six_numbers(tmp_path, capsys):
+    # a newcomer's route: import, solve, read the printed parts; the SR protection is up + down
+    case, out = tmp_path / "case", tmp_path / "plan"
+    assert main(["data", "import-workbook", str(WORKBOOK), "--out", str(case), "--date", "2025-06-01"]) == 0
+    capsys.readouterr()
+    assert main(["solve", "--case", str(case), "--out", str(out)]) == 0
+    (line,) = [x for x in capsys.readouterr().err.splitlines() if x.strip().startswith("parts [EUR]:")]
+    printed = {}
+    for name, number in re.findall(r"([A-Za-z][A-Za-z ]*?) (-?[\d,]+\.\d\d)", line.split(":", 1)[1]):
+        printed[name.removeprefix("price protection ")] = float(number.replace(",", ""))
+    assert printed == pytest.approx({
+        "DAM revenue": STORED["revenue_dam"], "SR revenue": STORED["revenue_srm"], "HPA cost": 0.0,
+        "operating cost": STORED["operating_cost"], "DAM": STORED["protection_dam"], "SR up": printed["SR up"],
+        "SR down": printed["SR down"], "profit": STORED["profit"]}, abs=0.006)
+    assert printed["SR up"] + printed["SR down"] == pytest.approx(STORED["protection_srm"], abs=0.011)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "optimal"
+    assert summary["objective_eur"] == pytest.approx(STORED["profit"], abs=0.006)
 
 
 # ----------------------------------------------------------------------------- bad workbooks

@@ -106,6 +106,7 @@ def _run_solve(args: argparse.Namespace) -> int:
     if not args.quiet:
         if result.has_plan:
             print(_describe(result), file=sys.stderr)
+            print(_describe_parts(result), file=sys.stderr)
             for phrase in tied_budgets(result.problem):
                 print(f"  tied deviations, the model chose: {phrase} (--ties earliest fixes the earliest)",
                       file=sys.stderr)
@@ -156,3 +157,16 @@ def _describe(result) -> str:
     gap = f"{result.mip_gap:.2e}" if result.mip_gap is not None else "n/a"
     return (f"status {result.status}; profit {result.objective_eur:,.0f} EUR (cost {result.cost_keur:.1f} kEUR); "
             f"MIP gap {gap}; build {result.build_s:.2f} s, solve {result.solve_s:.2f} s")
+
+
+def _describe_parts(result) -> str:
+    """The objective's parts to the cent, as summary.json holds them, e.g. to compare them with another
+    tool's accounts: ``objective = DAM revenue + SR revenue − HPA cost − operating cost − protection``."""
+    parts, protection = result.parts, result.protection_eur
+    kept = parts.get("value_heat_kept_eur", 0.0)
+    return ("  parts [EUR]: " + "; ".join([
+        f"DAM revenue {parts.get('revenue_dam_eur', 0.0):,.2f}", f"SR revenue {parts.get('revenue_sr_eur', 0.0):,.2f}",
+        f"HPA cost {parts.get('cost_hpa_eur', 0.0):,.2f}", f"operating cost {parts.get('cost_opex_eur', 0.0):,.2f}",
+        f"price protection DAM {protection.get('price_da', 0.0):,.2f}, "
+        f"SR up {protection.get('price_sr_up', 0.0):,.2f}, SR down {protection.get('price_sr_dn', 0.0):,.2f}",
+        *([f"heat kept {kept:,.2f}"] if kept else []), f"profit {result.objective_eur:,.2f}"]))
