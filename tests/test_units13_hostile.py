@@ -166,3 +166,17 @@ def test_a_start_up_ramp_that_fits_an_hour_but_not_15_minutes_is_refused_at_15_m
         "p_min_mw=5: the unit could never start; give a ramp of at least 20 MW/h",
         'hydro "H1": shutdown_ramp_mw_per_h=8 allows at most 2 MW in the period before a stop (dt_h=0.25), below '
         "p_min_mw=5: the unit could never stop; give a ramp of at least 20 MW/h"]
+
+
+def test_a_case_whose_every_unit_is_switched_off_is_refused():
+    # a battery and a hydro unit, both enabled: false: the plan would have no unit and profit 0
+    base = tiny_case(battery_units=[{**BAT, "enabled": False}, {**BAT, "name": "B2"}])
+    data = base.to_data()
+    data["units"]["battery"][1]["enabled"] = False
+    data["units"]["hydro"] = [{**HY, "enabled": False}]
+    with pytest.raises(CaseError) as info:
+        parse_case(data, base.history)
+    assert info.value.problems == ['units: every unit is switched off (enabled: false: "B1", "B2", "H1"); the plan '
+                                   "would hold no unit and trade nothing; switch one on"]
+    data["units"]["hydro"][0]["enabled"] = True
+    assert [u.name for _, u in parse_case(data, base.history).units()] == ["H1"]

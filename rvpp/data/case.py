@@ -1001,6 +1001,10 @@ class Case(_Frozen):
             if unit.name in RESERVED_NAMES:
                 problems.append(f'{kind} "{unit.name}": name is reserved for a price series; choose another')
             seen.add(unit.name)
+        switched_off = [unit.name for _, unit in self.all_units()]
+        if switched_off and not any(True for _ in self.units()):
+            problems.append(f"units: every unit is switched off (enabled: false: {excerpt_names(switched_off, 12)}); "
+                            "the plan would hold no unit and trade nothing; switch one on")
         known = set(self.sources())
         uncertain = [unit.name for _, unit in self.uncertain_units()]
         for source, _ in self.budgets.overrides:
