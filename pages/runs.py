@@ -18,13 +18,12 @@ state.through_app("pages/runs.py")
 
 COMPARE_MAX = 4
 TABLE_KEY = "runs_table"  # the table's widget key, followed by the digest of the runs it lists
-COLUMNS = {  # the net cost and the status beside the label: in view without scrolling sideways at 1280 px
-    "label": st.column_config.TextColumn("Label", width="medium", pinned=True),
+COLUMNS = {  # every column in view without scrolling sideways at 1280 px: the strategy and the markets are in the
+    # default label and in the caption of a ticked run
+    "label": st.column_config.TextColumn("Label", width=280, pinned=True),
     "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format="%,.1f",
                                                    help="Positive: the plant pays; negative: it earns"),
     "status": st.column_config.TextColumn("Status"),
-    "strategy": st.column_config.TextColumn("Strategy"),
-    "markets": st.column_config.TextColumn("Markets"),
     "day": st.column_config.TextColumn("Delivery day"),
     "case": st.column_config.TextColumn("Case"),
     "saved": st.column_config.TextColumn("Saved (UTC)"),
@@ -77,6 +76,11 @@ def table_key(runs) -> str:
     return f"{TABLE_KEY}_{listed}"
 
 
+def saved(run) -> str:
+    """When ``run`` was saved, to the minute, in UTC (the store's time)."""
+    return run.created_at[:16].replace("T", " ")
+
+
 def where() -> str:
     url = library.library().engine.url
     if url.get_backend_name() == "sqlite":
@@ -106,11 +110,9 @@ if not runs:
 
 table = pd.DataFrame({
     "label": [r.label for r in runs],
-    "saved": [r.created_at[:16].replace("T", " ") for r in runs],
+    "saved": [saved(r) for r in runs],
     "case": [r.case_name for r in runs],
     "day": [r.delivery_date for r in runs],
-    "strategy": [r.strategy for r in runs],
-    "markets": [r.markets for r in runs],
     "status": [r.status for r in runs],
     "net_cost_keur": [None if r.objective_eur is None else -r.objective_eur / 1000.0 for r in runs],
     "link": [library.link(r.id) for r in runs],
@@ -128,6 +130,8 @@ ids = [r.id for r in chosen]
 if len(chosen) == 1:
     run = chosen[0]
     st.subheader(widgets.literal(run.label, widgets.LABEL_CHARS))
+    st.caption(widgets.literal(f"{run.strategy} strategy · {run.markets} · case {run.case_name} · delivery day "
+                               f"{run.delivery_date} · saved {saved(run)} UTC", limit=None))
     first, second, third = st.columns(3, vertical_alignment="bottom")
     first.button("Open as the current case", key="runs_open_button", type="primary", on_click=open_one,
                  args=(run.id,), icon=":material/open_in_browser:",

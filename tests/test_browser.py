@@ -486,14 +486,20 @@ def first_table_headers(page, screenshot: str) -> list[str]:
     return table.evaluate("table => [...table.querySelectorAll('[role=columnheader]')].map(h => h.innerText.trim())")
 
 
+def table_overflow(page, table: int = 0) -> int:
+    """How many pixels of the ``table``-th table's columns lie past its right edge (0: every column in view)."""
+    return page.get_by_test_id("stDataFrame").nth(table).evaluate(
+        "table => { const s = table.querySelector('.dvn-scroller'); return Math.max(0, s.scrollWidth - s.clientWidth - 1); }")
+
+
 def number(text: str) -> float:
     return float(text.replace("−", "-").replace(",", ""))
 
 
 @pytest.mark.slow
-def test_the_saved_runs_table_shows_the_net_cost_whole_at_1280_pixels(tmp_path, paper_case, paper_solve):
+def test_the_saved_runs_table_shows_every_column_whole_at_1280_pixels(tmp_path, paper_case, paper_solve):
     # The net cost, the number a run is saved for, was cut off at the right edge of the table at 1280
-    # pixels, after the case, the day, the strategy and the markets.
+    # pixels, after the case, the day, the strategy and the markets; then the time saved and the link were.
     require_browser()
     library = RunLibrary(f"sqlite:///{tmp_path / 'rvpp.sqlite3'}")
     pessimistic = rvpp.with_options(paper_case, strategy="pessimistic")
@@ -506,6 +512,13 @@ def test_the_saved_runs_table_shows_the_net_cost_whole_at_1280_pixels(tmp_path, 
         # The grid lists the columns it draws, each at least in part: one drawn after the net cost shows it whole.
         headers = first_table_headers(page, "saved-runs-1280.png")
         assert headers[:3] == ["Label", "Net cost [kEUR]", "Status"], headers
+        assert headers[-2:] == ["Saved (UTC)", "Link"], headers
+        assert not table_overflow(page), headers
+        # The strategy and the markets, no longer columns, are said of a ticked run.
+        box = page.get_by_test_id("stDataFrame").first.bounding_box()
+        page.mouse.click(box["x"] + 16, box["y"] + GRID_HEADER_PX + GRID_ROW_PX / 2)
+        page.get_by_text(f"pessimistic strategy · DAM+SRM+HPA · case paper · delivery day {paper_case.delivery_date}"
+                         " · saved ").wait_for()
         cells = table_cells(page, 2)
         assert [number(cell) for cell in cells] == [pytest.approx(-paper_solve(strategy="pessimistic").objective_eur
                                                                   / 1000, abs=0.05),
