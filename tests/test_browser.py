@@ -488,8 +488,9 @@ def first_table_headers(page, screenshot: str) -> list[str]:
 
 def table_overflow(page, table: int = 0) -> int:
     """How many pixels of the ``table``-th table's columns lie past its right edge (0: every column in view)."""
-    return page.get_by_test_id("stDataFrame").nth(table).evaluate(
-        "table => { const s = table.querySelector('.dvn-scroller'); return Math.max(0, s.scrollWidth - s.clientWidth - 1); }")
+    return page.get_by_test_id("stDataFrame").nth(table).evaluate("""table => {
+        const scroller = table.querySelector('.dvn-scroller');
+        return Math.max(0, scroller.scrollWidth - scroller.clientWidth - 1); }""")
 
 
 def number(text: str) -> float:
