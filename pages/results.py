@@ -55,6 +55,71 @@ def what_changed(result, run) -> None:
             + "; ".join(widgets.literal(e, limit=None) for e in edits) + ".", icon=":material/compare_arrows:")
 
 
+def plan(result, edited, run) -> None:
+    """The plan of a solve that gave one: what changed, the cards, the charts, saving it, the downloads."""
+    what_changed(result, run)
+    widgets.kpi_cards(result)
+    # Every figure before the first is drawn: the browser draws each chart twice (Streamlit applies its theme
+    # once a chart is mounted), and the second drawing of a chart sent alone comes before the next chart's first.
+    figures = plan_figures(result)
+    st.plotly_chart(figures["economics"], key="results_economics")
+
+    with st.expander("Save this run to the library", icon=":material/bookmark_add:", expanded=True):
+        key = state.case_key(run)
+        if st.session_state.get(LABEL_FOR) != key:
+            st.session_state[LABEL_FOR] = key
+            st.session_state[LABEL_KEY] = state.default_label(edited)
+        left, right = st.columns([4, 1], vertical_alignment="bottom")
+        left.text_input("Label (unique; a taken label gets a number)", key=LABEL_KEY, max_chars=190,
+                        help="By default: strategy, market set and what you edited since the case was loaded.")
+        right.button("Save run", key="results_save", on_click=save, args=(result, edited, run), icon=":material/save:")
+        if st.session_state.get("results_save_problem"):
+            widgets.problems([widgets.literal(st.session_state["results_save_problem"], limit=None)], "Not saved",
+                             note="Nothing was changed.")
+        elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case
+            run_id, label, _ = st.session_state["results_saved"]
+            st.success(f"Saved as **{widgets.literal(label, widgets.LABEL_CHARS)}**. It stays in the library across "
+                       f"reloads and restarts; [open it by link]({library.link(run_id)}) or see it on Saved runs.",
+                       icon=":material/check:")
+        st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
+
+    st.subheader("Bids")
+    widgets.bids(result, key="results")
+    st.plotly_chart(figures["trades"], key="results_trades")
+    st.subheader("Heat")
+    if figures.get("heat") is None:
+        st.caption("No thermal demand in this case: no heat to show.")
+    else:
+        if not heat_bought(result):
+            st.caption("No heat bought through the HPA: the CSP covers the thermal demands all day.")
+        st.plotly_chart(figures["heat"], key="results_heat")
+    st.subheader("Electrical dispatch")
+    st.plotly_chart(figures["dispatch"], key="results_dispatch")
+    if result.case.csp:
+        st.subheader("Thermal storage")
+        st.caption("The margins above the minimum and below the maximum (σ) are kept free so the CSP can deliver "
+                   "the up and down reserve it offers (paper constraints TS9-TS11).")
+        for csp in result.case.csp:
+            st.plotly_chart(figures[f"storage {csp.name}"], key=f"results_storage_{csp.name}")
+    batteries = [name.removeprefix("battery ") for name in figures if name.startswith("battery ")]
+    if batteries:
+        st.subheader("Batteries")
+        st.caption("State of charge; the margins (σ) are kept free so the battery can deliver the reserve it offers.")
+        for name in batteries:
+            st.plotly_chart(figures[f"battery {name}"], key=f"results_battery_{name}")
+    st.subheader("Reserve by unit kind")
+    st.plotly_chart(figures["reserve"], key="results_reserve")
+
+    st.subheader("Flexibility")
+    st.caption("Reserve energy over the day per unit kind, and the same divided by installed capacity "
+               "(paper Table 9; the paper's \"%\" columns are this ratio in hours).")
+    flexibility = result.flexibility.assign(kind=result.flexibility["kind"].map(KIND_LABELS))
+    st.dataframe(flexibility, hide_index=True, column_config=FLEXIBILITY_COLUMNS)
+
+    st.subheader("Downloads")
+    widgets.plan_downloads(result, run, key="results")
+
+
 st.title("Results")
 edited, run = state.case(), state.run_case()
 recommendation = backtests.recommended()
@@ -87,67 +152,5 @@ result = solving.solve(run, "Solving the current case", again=clicked, stoppable
 if result is None:
     st.stop()
 widgets.status_line(result)
-if not result.has_plan:
-    st.stop()
-
-what_changed(result, run)
-widgets.kpi_cards(result)
-# Every figure before the first is drawn: the browser draws each chart twice (Streamlit applies its theme
-# once a chart is mounted), and the second drawing of a chart sent alone comes before the next chart's first.
-figures = plan_figures(result)
-st.plotly_chart(figures["economics"], key="results_economics")
-
-with st.expander("Save this run to the library", icon=":material/bookmark_add:", expanded=True):
-    key = state.case_key(run)
-    if st.session_state.get(LABEL_FOR) != key:
-        st.session_state[LABEL_FOR] = key
-        st.session_state[LABEL_KEY] = state.default_label(edited)
-    left, right = st.columns([4, 1], vertical_alignment="bottom")
-    left.text_input("Label (unique; a taken label gets a number)", key=LABEL_KEY, max_chars=190,
-                    help="By default: strategy, market set and what you edited since the case was loaded.")
-    right.button("Save run", key="results_save", on_click=save, args=(result, edited, run), icon=":material/save:")
-    if st.session_state.get("results_save_problem"):
-        widgets.problems([widgets.literal(st.session_state["results_save_problem"], limit=None)], "Not saved",
-                         note="Nothing was changed.")
-    elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case
-        run_id, label, _ = st.session_state["results_saved"]
-        st.success(f"Saved as **{widgets.literal(label, widgets.LABEL_CHARS)}**. It stays in the library across "
-                   f"reloads and restarts; [open it by link]({library.link(run_id)}) or see it on Saved runs.",
-                   icon=":material/check:")
-    st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
-
-st.subheader("Bids")
-widgets.bids(result, key="results")
-st.plotly_chart(figures["trades"], key="results_trades")
-st.subheader("Heat")
-if figures.get("heat") is None:
-    st.caption("No thermal demand in this case: no heat to show.")
-else:
-    if not heat_bought(result):
-        st.caption("No heat bought through the HPA: the CSP covers the thermal demands all day.")
-    st.plotly_chart(figures["heat"], key="results_heat")
-st.subheader("Electrical dispatch")
-st.plotly_chart(figures["dispatch"], key="results_dispatch")
-if result.case.csp:
-    st.subheader("Thermal storage")
-    st.caption("The margins above the minimum and below the maximum (σ) are kept free so the CSP can deliver "
-               "the up and down reserve it offers (paper constraints TS9-TS11).")
-    for csp in result.case.csp:
-        st.plotly_chart(figures[f"storage {csp.name}"], key=f"results_storage_{csp.name}")
-batteries = [name.removeprefix("battery ") for name in figures if name.startswith("battery ")]
-if batteries:
-    st.subheader("Batteries")
-    st.caption("State of charge; the margins (σ) are kept free so the battery can deliver the reserve it offers.")
-    for name in batteries:
-        st.plotly_chart(figures[f"battery {name}"], key=f"results_battery_{name}")
-st.subheader("Reserve by unit kind")
-st.plotly_chart(figures["reserve"], key="results_reserve")
-
-st.subheader("Flexibility")
-st.caption("Reserve energy over the day per unit kind, and the same divided by installed capacity "
-           "(paper Table 9; the paper's \"%\" columns are this ratio in hours).")
-flexibility = result.flexibility.assign(kind=result.flexibility["kind"].map(KIND_LABELS))
-st.dataframe(flexibility, hide_index=True, column_config=FLEXIBILITY_COLUMNS)
-
-st.subheader("Downloads")
-widgets.plan_downloads(result, run, key="results")
+if result.has_plan:  # without a plan the page ends here, not by st.stop(): app.py then says "no plan" in the sidebar
+    plan(result, edited, run)

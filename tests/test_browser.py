@@ -407,21 +407,22 @@ def test_the_sweep_button_shows_its_whole_label_with_the_expected_time_at_1280_p
             assert cut_off_buttons(page) == [], title
 
 
-def test_the_sidebar_says_solved_only_of_a_solve_that_gave_a_plan(app_url, paper_solve):
+@pytest.mark.parametrize(("page_name", "button"), [("Home", "Solve the balanced strategy"), ("Results", "Solve")])
+def test_the_sidebar_says_solved_only_of_a_solve_that_gave_a_plan(app_url, paper_solve, page_name, button):
     # With the HPA off the day has no plan (heat short at night): Home said so, and the sidebar beside it
-    # said "solved — see Results" with a tick.
+    # said "solved — see Results" with a tick; Results said so, and the sidebar beside it said nothing of the solve.
     assert not paper_solve(markets="DAM+SRM").has_plan  # the library agrees: no plan without the HPA
     with chromium_page({"width": 1280, "height": 800}) as page:
         page.goto(app_url)
         open_page(page, "Markets & tariffs")
         page.get_by_text("Heat purchase (HPA)").click()
         page.get_by_test_id("stSidebar").get_by_text(re.compile(r"balanced · DAM\+SRM$")).wait_for()
-        open_page(page, "Home")
-        page.get_by_role("button", name="Solve the balanced strategy").click()
+        open_page(page, page_name)
+        page.get_by_role("button", name=button, exact=True).click()
         page.get_by_test_id("stAlert").filter(has_text="No plan").wait_for()
         settle(page)
         sidebar = page.get_by_test_id("stSidebarUserContent").inner_text()
-        page.screenshot(path=ARTIFACTS / "sidebar-no-plan.png")
+        page.screenshot(path=ARTIFACTS / f"sidebar-no-plan-{page_name.lower()}.png")
         assert "solved" not in sidebar and "no plan" in sidebar, sidebar
 
 
