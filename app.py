@@ -17,7 +17,7 @@ def main() -> None:
     from dashboard import serve
 
     serve.wait()  # `python -m dashboard` imports the first page's modules while the server starts
-    from dashboard import browser, solving, state, svg, widgets
+    from dashboard import browser, solving, state, style, svg, widgets
 
     st.set_page_config(page_title="rvpp · robust VPP bidding", page_icon=":material/solar_power:",
                        layout="wide")
@@ -53,6 +53,7 @@ def main() -> None:
         widgets.sidebar(state.case())
     svg.inline_charts()
     browser.preload()
+    style.contrast()
     page.run()
     with summary.container():  # drawn again after the page: the case as the page's edits left it
         widgets.sidebar(state.case())

@@ -123,14 +123,15 @@ def streamlit_server(log_name: str, data_dir: Path | None = None, port: int | No
 
 
 @contextlib.contextmanager
-def chromium_page(viewport: dict = VIEWPORT):
-    """A page of Debian's Chromium, driven by Playwright, that accepts downloads."""
+def chromium_page(viewport: dict = VIEWPORT, scheme: str = "light"):
+    """A page of Debian's Chromium, driven by Playwright, that accepts downloads, in the colour ``scheme``
+    (``light`` or ``dark``: the viewer's preference, which the dashboard's theme follows)."""
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
         try:
-            page = browser.new_page(viewport=viewport, accept_downloads=True)
+            page = browser.new_page(viewport=viewport, accept_downloads=True, color_scheme=scheme)
             page.set_default_timeout(WAIT_MS)
             yield page
         finally:
@@ -722,6 +723,56 @@ def settle(page) -> None:
     while quiet < QUIET_POLLS:
         page.wait_for_timeout(POLL_MS)
         quiet = 0 if page.query_selector("[data-testid=stStatusWidget]") else quiet + 1
+
+
+# The contrast of each text against the backgrounds behind it (of the elements whose boxes cover the text's, up to
+# the first opaque one), computed here from the colours the browser drew, each with its alpha laid over what is
+# below it, by WCAG 2's relative luminance.
+CONTRASTS = """selector => [...document.querySelectorAll(selector)].map(element => {
+    const parse = text => { const n = text.match(/[\\d.]+/g).map(Number);
+        return text.startsWith('color(') ? [n[0] * 255, n[1] * 255, n[2] * 255, n[3] ?? 1] : [n[0], n[1], n[2], n[3] ?? 1]; };
+    element.scrollIntoView({block: 'center'});  // the app's background covers what is in view
+    const box = element.getBoundingClientRect();
+    const covers = outer => { const b = outer.getBoundingClientRect();
+        return b.left <= box.left + 1 && b.right >= box.right - 1 && b.top <= box.top + 1 && b.bottom >= box.bottom - 1; };
+    const over = (top, base) => [0, 1, 2].map(i => top[3] * top[i] + (1 - top[3]) * base[i]).concat([1]);
+    let behind = element, layers = [];
+    while (behind && !(layers.length && layers[layers.length - 1][3] >= 1)) {  // up to the first opaque one
+        const colour = parse(getComputedStyle(behind).backgroundColor);
+        if (covers(behind) && colour[3] > 0) layers.push(colour);  // a slider's thumb, beside its value, is not
+        behind = behind.parentElement;
+    }
+    const back = layers.reduceRight((base, layer) => over(layer, base), [255, 255, 255, 1]);
+    const drawn = over(parse(getComputedStyle(element).color), back);
+    const luminance = rgb => { const c = rgb.map(v => v / 255).map(v => v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
+        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+    const [high, low] = [luminance(drawn), luminance(back.slice(0, 3))].sort((a, b) => b - a);
+    return [element.innerText.trim(), (high + 0.05) / (low + 0.05)];
+})"""
+# What the theme draws in its primary colour or dimmed, each checked on a page that shows it.
+CONTRAST_TEXTS = {"Markets & tariffs": ('[data-testid=stButtonGroup] button[data-selected=true] p',
+                                        'label[data-disabled=true] p'),
+                  "Uncertainty": ('[data-testid=stTab][aria-selected=true] p', '[data-testid=stSliderThumbValue] p')}
+
+
+@pytest.mark.parametrize("scheme", ["light", "dark"])
+def test_selected_options_tabs_slider_values_and_disabled_labels_reach_4_5_to_1(app_url, scheme):
+    # In the dark theme the selected option of a segmented control (3.6:1), the selected tab and a slider's
+    # value (3.9:1) were in the primary colour on the dark background; in both the label of the day-ahead
+    # market's switch, which cannot be turned off, was the text colour at 40 % (2.8:1 light, 3.8:1 dark).
+    script = axe_script()
+    with chromium_page({"width": 1280, "height": 800}, scheme) as page:
+        page.goto(app_url)
+        for title, selectors in CONTRAST_TEXTS.items():
+            open_page(page, title)
+            settle(page)
+            page.screenshot(path=ARTIFACTS / f"contrast-{scheme}-{PAGES[title]}.png")
+            for selector in selectors:
+                page.locator(selector).first.wait_for()
+                found = page.evaluate(CONTRASTS, selector)
+                assert found and all(ratio >= 4.5 for _, ratio in found), (title, selector, found)
+            violations = [v for v in axe_violations(page, script) if v["id"] == "color-contrast"]
+            assert not violations, (title, violations)
 
 
 def test_every_page_passes_axe_and_fits_1280_pixels(app_url):

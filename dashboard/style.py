@@ -1,0 +1,42 @@
+"""Style rules for four texts Streamlit draws below the 4.5:1 contrast of WCAG 2 AA.
+
+In the dark theme, the selected option of a segmented control (3.6:1), the selected tab and the value
+over a slider's thumb (3.9:1) are in the primary colour on a dark background: a lighter primary colour
+in the theme would fix them and break the white text of every primary button, so only these texts are
+drawn lighter. In both
+themes, the label of a control that cannot be changed (the day-ahead market's switch) is the text colour
+at 40 % (2.8:1 light, 3.8:1 dark): it is drawn at 62 % instead, still lighter than an enabled label.
+
+``light-dark()`` picks the colour of the scheme Streamlit draws in (the theme follows the viewer's
+preference, ``.streamlit/config.toml``); the light theme's own colours come from its settings.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import streamlit as st
+
+LIGHT_RED = "#FF7B72"  # dark theme: 6.6:1 on a selected option's background (#291a1a), 7.2:1 on the page's
+DISABLED_SHARE = 62    # [%] of the text colour in a disabled control's label: 6.2:1 light, 7.5:1 dark
+
+_RULES = """<style>
+[data-testid="stButtonGroup"] button[data-selected="true"] p, [data-testid="stTab"][aria-selected="true"] p,
+[data-testid="stSliderThumbValue"] p { color: light-dark(PRIMARY, LIGHT_RED); }
+.stApp label[data-disabled="true"] { color: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent),
+                                                color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
+.stApp label[data-disabled="true"] p { color: inherit; }
+</style>"""
+
+
+@cache
+def rules() -> str:
+    """The style element, with the theme's colours (built once per server process)."""
+    return (_RULES.replace("LIGHT_RED", LIGHT_RED).replace("PRIMARY", st.get_option("theme.light.primaryColor"))
+            .replace("LIGHT_TEXT", st.get_option("theme.light.textColor"))
+            .replace("DARK_TEXT", st.get_option("theme.dark.textColor")).replace("SHARE", str(DISABLED_SHARE)))
+
+
+def contrast() -> None:
+    """Put the rules in the sidebar (a style element alone takes no room)."""
+    st.sidebar.html(rules())
