@@ -37,6 +37,7 @@ LABEL_CHARS = LABEL_LENGTH  # a saved run's label is shown whole (the library ke
 # ":" syntax (emoji names, ":color[...]" directives, ":material/...:" icons, whose ":material/" Streamlit
 # reads before markdown undoes the escapes: hence "/" too).
 MARKDOWN_SPECIAL = re.compile(r"[\\`*_\[\]()#+\-.!|<>~$:/&]")
+ADDED = re.compile(r" added \(")  # a unit added, in the words of rvpp.data.edits: "BAT1 added (20 MW)"
 
 
 def eur(value: float | None) -> str:
@@ -333,8 +334,9 @@ def changes(before: Case, after: Case) -> list[str]:
 
 def _added_or_removed(new: str, old: str) -> bool:
     """Whether a pair of edit words tells a unit added or removed (``BAT1 added (20 MW)`` against
-    ``BAT1 removed``): it says so itself and has no old value."""
-    return new.endswith(" removed") or old.endswith(" removed")
+    ``BAT1 removed``, or a unit renamed: ``B1 added (20 MW)`` against ``BAT1 added (20 MW)``): it says so
+    itself and has no old value."""
+    return any(words.endswith(" removed") or ADDED.search(words) for words in (new, old))
 
 
 def _was(old: str, new: str) -> str:

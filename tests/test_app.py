@@ -273,6 +273,20 @@ def test_an_added_or_removed_unit_is_named_without_a_was():
     assert [u.name for u in case_of(at).battery] == []
 
 
+def test_a_new_unit_renamed_is_named_without_a_was():
+    # A newcomer types a name into the table's empty row: the row comes in with its default name (BAT1), then
+    # takes the typed one; the page said "B1 added (20 MW) (was BAT1 added (20 MW)); BAT1 removed".
+    at = open_app("portfolio")
+    at.session_state["portfolio_battery_0"] = {"edited_rows": {}, "added_rows": [new_row(at, "battery")],
+                                               "deleted_rows": []}
+    at.run()
+    key = next(e.key for e in at.data_editor if e.key.startswith("portfolio_battery_"))
+    at.session_state[key] = {"edited_rows": {0: {"name": "B1"}}, "added_rows": [], "deleted_rows": []}
+    at.run()
+    assert [s.value for s in at.success] == [accepted("B1 added \\(20 MW\\); BAT1 removed")]
+    assert [u.name for u in case_of(at).battery] == ["B1"]
+
+
 def test_units_added_in_two_tables_both_stay_in_the_case():
     # The browser sends a new row as its column defaults, number cells as text; a new unit's default
     # name then moves on (BAT2), which gave the table a new identity: its added row was dropped on the
