@@ -538,3 +538,20 @@ def test_the_study_names_the_command_line_offers_are_the_studies():
 
     assert tuple(STUDIES) == STUDY_NAMES
     assert {"case1", "backtest", "out-of-sample"} <= set(STUDY_NAMES)
+
+
+def test_a_profit_of_zero_and_a_loss_under_half_a_cent_are_printed_without_a_minus():
+    from types import SimpleNamespace
+
+    from rvpp.cli.solve import _describe, _describe_parts
+
+    result = SimpleNamespace(status="optimal", objective_eur=0.0, cost_keur=-0.0, mip_gap=0.0, build_s=0.1,
+                             solve_s=0.2, parts={"revenue_dam_eur": 1234.5, "cost_opex_eur": -0.004},
+                             protection_eur={"price_da": 1234.5})
+    assert _describe(result) == ("status optimal; profit 0 EUR (cost 0.0 kEUR); MIP gap 0.00e+00; "
+                                 "build 0.10 s, solve 0.20 s")
+    assert _describe_parts(result) == (
+        "  parts [EUR]: DAM revenue 1,234.50; SR revenue 0.00; HPA cost 0.00; operating cost 0.00; "
+        "price protection DAM 1,234.50, SR up 0.00, SR down 0.00; profit 0.00")
+    result.objective_eur, result.cost_keur = -1_234.56, 1.23456
+    assert "profit -1,235 EUR (cost 1.2 kEUR)" in _describe(result)

@@ -133,7 +133,7 @@ class SearchStop:
                 self.say(f"search {search.seconds:.0f} s: no plan yet")
             else:
                 gap = f"{search.gap:.2%}" if search.gap is not None else "n/a"
-                self.say(f"search {search.seconds:.0f} s: best plan so far, profit {search.objective:,.0f} EUR, "
+                self.say(f"search {search.seconds:.0f} s: best plan so far, profit {_amount(search.objective, 0)} EUR, "
                          f"gap {gap} ({search.nodes} nodes); Ctrl-C keeps it")
         return self.requested
 
@@ -153,9 +153,16 @@ class SearchStop:
             signal.signal(signal.SIGINT, previous)
 
 
+def _amount(value: float, digits: int) -> str:
+    """``value`` with thousands separators and ``digits`` decimals, never "-0" (a profit of exactly
+    0 is a cost of -0.0 in floating point, and a loss of a tenth of a cent rounds to it)."""
+    return f"{round(value, digits) + 0.0:,.{digits}f}"
+
+
 def _describe(result) -> str:
     gap = f"{result.mip_gap:.2e}" if result.mip_gap is not None else "n/a"
-    return (f"status {result.status}; profit {result.objective_eur:,.0f} EUR (cost {result.cost_keur:.1f} kEUR); "
+    return (f"status {result.status}; profit {_amount(result.objective_eur, 0)} EUR "
+            f"(cost {_amount(result.cost_keur, 1)} kEUR); "
             f"MIP gap {gap}; build {result.build_s:.2f} s, solve {result.solve_s:.2f} s")
 
 
@@ -164,9 +171,10 @@ def _describe_parts(result) -> str:
     tool's accounts: ``objective = DAM revenue + SR revenue − HPA cost − operating cost − protection``."""
     parts, protection = result.parts, result.protection_eur
     kept = parts.get("value_heat_kept_eur", 0.0)
-    return ("  parts [EUR]: " + "; ".join([
-        f"DAM revenue {parts.get('revenue_dam_eur', 0.0):,.2f}", f"SR revenue {parts.get('revenue_sr_eur', 0.0):,.2f}",
-        f"HPA cost {parts.get('cost_hpa_eur', 0.0):,.2f}", f"operating cost {parts.get('cost_opex_eur', 0.0):,.2f}",
-        f"price protection DAM {protection.get('price_da', 0.0):,.2f}, "
-        f"SR up {protection.get('price_sr_up', 0.0):,.2f}, SR down {protection.get('price_sr_dn', 0.0):,.2f}",
-        *([f"heat kept {kept:,.2f}"] if kept else []), f"profit {result.objective_eur:,.2f}"]))
+    cents = [("DAM revenue", parts.get("revenue_dam_eur", 0.0)), ("SR revenue", parts.get("revenue_sr_eur", 0.0)),
+             ("HPA cost", parts.get("cost_hpa_eur", 0.0)), ("operating cost", parts.get("cost_opex_eur", 0.0)),
+             ("price protection DAM", protection.get("price_da", 0.0)), ("SR up", protection.get("price_sr_up", 0.0)),
+             ("SR down", protection.get("price_sr_dn", 0.0)), *([("heat kept", kept)] if kept else []),
+             ("profit", result.objective_eur)]
+    said = [f"{name} {_amount(value, 2)}" for name, value in cents]
+    return "  parts [EUR]: " + "; ".join(said[:4] + [", ".join(said[4:7])] + said[7:])
