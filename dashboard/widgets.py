@@ -13,7 +13,7 @@ import streamlit as st
 
 from rvpp import Case, CaseError, Result, RvppError
 from rvpp import service
-from rvpp.service import EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, excerpt, plain_message
+from rvpp.service import EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, amount, excerpt, plain_message
 
 from . import library, state
 
@@ -42,13 +42,13 @@ ADDED = re.compile(r" added \(")  # a unit added, in the words of rvpp.data.edit
 
 def eur(value: float | None) -> str:
     """``−124,035 EUR``: whole euros with a true minus sign (none on an amount that rounds to 0)."""
-    return "–" if value is None else f"{round(value) + 0:,.0f} EUR".replace("-", "−")
+    return "–" if value is None else f"{amount(value, 0)} EUR".replace("-", "−")
 
 
 def keur(value_eur: float | None) -> str:
     """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables; an amount that rounds
     to 0.0 shows no sign (``−0.0`` read as a loss)."""
-    return "–" if value_eur is None else f"{round(value_eur / KILO, 1) + 0.0:,.1f}".replace("-", "−")
+    return "–" if value_eur is None else amount(value_eur / KILO, 1).replace("-", "−")
 
 
 def in_keur(frame: pd.DataFrame) -> pd.DataFrame:

@@ -40,7 +40,7 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .outputs.compare import MARKET_SETS, cost_table, flexibility_table, kpi_table
     from .outputs.economics import economics, explanation, waterfall_figure
     from .outputs.export import plan_workbook_bytes
-    from .outputs.money import IN_KEUR
+    from .outputs.money import IN_KEUR, amount
     from .outputs.plots import (SOURCE_TITLES, TRADE_NAMES, band_overlays, bands_figure, compare_trades_figure,
                                 curve_figure, deviating_periods, exposure_figure, idle_trades, tariff_figure,
                                 thin_clock_ticks, trades_figure)
@@ -128,6 +128,7 @@ _WHERE = {
     "waterfall_figure": ".outputs.economics",
     "plan_workbook_bytes": ".outputs.export",
     "IN_KEUR": ".outputs.money",
+    "amount": ".outputs.money",
     "SOURCE_TITLES": ".outputs.plots",
     "TRADE_NAMES": ".outputs.plots",
     "band_overlays": ".outputs.plots",
@@ -197,7 +198,7 @@ __all__ = [
     "PERFECT", "PERIOD_NAMES", "PRESET", "PRICE_COLUMNS", "PRICE_MODELS", "RecordKey", "RunInfo", "RunLibrary",
     "SavedRun", "SERIES_COLORS", "SERIES_FIELDS", "SOURCE_TITLES", "SourceKind", "STORE_ERRORS", "StoredRecommendation", "STRATEGIES",
     "STRATEGY_BUDGETS_H", "STUDIES", "StudyOutput", "StudySettings", "TRADE_NAMES", "UNIT_KINDS", "UnitKind", "Variant",
-    "Verdict", "band_overlays", "band_specs", "bands_figure", "beats_presets_on_training", "case_data",
+    "Verdict", "amount", "band_overlays", "band_specs", "bands_figure", "beats_presets_on_training", "case_data",
     "case_workbook_bytes", "case_zip_bytes", "compare_trades_figure", "cost_table", "cumulative_figure", "curve_figure",
     "day_summary", "default_url", "delivery_periods", "describe_edits", "deviating_periods", "distribution_figure", "economics",
     "evaluation_days", "excerpt", "explanation", "export_zip", "exposure_figure", "field_words", "figures",

@@ -14,6 +14,7 @@ from ..data.files import check_replaceable, excerpt
 from ..data.periods import ALLOWED_DT_H
 from ..data.variants import describe, with_options
 from ..errors import RvppError
+from ..outputs.money import amount
 from ..uncertainty.problem import tied_budgets
 from .options import DEFAULT_CASE, FAILURE, Number, choice_of, date_option, market_list, path_option
 
@@ -133,7 +134,7 @@ class SearchStop:
                 self.say(f"search {search.seconds:.0f} s: no plan yet")
             else:
                 gap = f"{search.gap:.2%}" if search.gap is not None else "n/a"
-                self.say(f"search {search.seconds:.0f} s: best plan so far, profit {_amount(search.objective, 0)} EUR, "
+                self.say(f"search {search.seconds:.0f} s: best plan so far, profit {amount(search.objective, 0)} EUR, "
                          f"gap {gap} ({search.nodes} nodes); Ctrl-C keeps it")
         return self.requested
 
@@ -153,16 +154,10 @@ class SearchStop:
             signal.signal(signal.SIGINT, previous)
 
 
-def _amount(value: float, digits: int) -> str:
-    """``value`` with thousands separators and ``digits`` decimals, never "-0" (a profit of exactly
-    0 is a cost of -0.0 in floating point, and a loss of a tenth of a cent rounds to it)."""
-    return f"{round(value, digits) + 0.0:,.{digits}f}"
-
-
 def _describe(result) -> str:
     gap = f"{result.mip_gap:.2e}" if result.mip_gap is not None else "n/a"
-    return (f"status {result.status}; profit {_amount(result.objective_eur, 0)} EUR "
-            f"(cost {_amount(result.cost_keur, 1)} kEUR); "
+    return (f"status {result.status}; profit {amount(result.objective_eur, 0)} EUR "
+            f"(cost {amount(result.cost_keur, 1)} kEUR); "
             f"MIP gap {gap}; build {result.build_s:.2f} s, solve {result.solve_s:.2f} s")
 
 
@@ -176,5 +171,5 @@ def _describe_parts(result) -> str:
              ("price protection DAM", protection.get("price_da", 0.0)), ("SR up", protection.get("price_sr_up", 0.0)),
              ("SR down", protection.get("price_sr_dn", 0.0)), *([("heat kept", kept)] if kept else []),
              ("profit", result.objective_eur)]
-    said = [f"{name} {_amount(value, 2)}" for name, value in cents]
+    said = [f"{name} {amount(value, 2)}" for name, value in cents]
     return "  parts [EUR]: " + "; ".join(said[:4] + [", ".join(said[4:7])] + said[7:])

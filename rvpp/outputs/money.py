@@ -30,7 +30,14 @@ class MoneyUnit:
 
     def words(self, amount_eur: float) -> str:
         """``58,469 EUR`` or ``58.5 kEUR``: ``amount_eur`` written in this unit."""
-        return f"{self.of(amount_eur):,.{self.decimals}f} {self.symbol}"
+        return f"{amount(self.of(amount_eur), self.decimals)} {self.symbol}"
+
+
+def amount(value: float, decimals: int) -> str:
+    """``value`` with thousands separators and ``decimals`` digits after the point, and no sign on an
+    amount that rounds to 0 (a profit of exactly 0 is a cost of -0.0 in floating point; "-0.0" reads
+    as a loss)."""
+    return f"{round(value, decimals) + 0.0:,.{decimals}f}"
 
 
 # A money axis written as the tables write money: with thousands separators, not 2M or 500k.
