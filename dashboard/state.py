@@ -36,6 +36,7 @@ SOURCE = "case_source"     # where the case came from, for display
 CSP_ON = "csp_on"          # False: solve without the CSP plants (paper Table 11)
 REQUESTED = "requested"    # keys of the run cases this session asked to solve (done or under way)
 OPENED_RUN = "opened_run"  # id of the saved run this session opened from a link (?run=ID)
+SAVED_RUN = "results_saved"  # (id, label, case key, how) of the run last saved or opened
 DEEP_LINK = "deep_link"    # the page asked for before app.py had set the session up
 APP = "app.py"
 

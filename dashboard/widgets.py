@@ -429,6 +429,9 @@ def open_run(saved) -> None:
     state.open_saved(saved)
     if saved.result is not None:
         solving.solver().remember(saved.result)
+    # Results says which saved run it shows: a toast sent before a page switch (a link) is never drawn
+    how = "opened" if saved.result is not None else "opened without a plan"
+    st.session_state[state.SAVED_RUN] = (saved.info.id, saved.info.label, state.case_key(state.run_case()), how)
     st.toast(f"Opened the saved run \"{literal(saved.info.label, LABEL_CHARS)}\".", icon=":material/bookmark:")
 
 

@@ -30,11 +30,11 @@ def save(result, edited, run) -> None:
     try:
         info = library.save(label, edited, result)
     except RvppError as err:
-        st.session_state["results_saved"] = None
+        st.session_state[state.SAVED_RUN] = None
         st.session_state["results_save_problem"] = str(err)
         return
     st.session_state["results_save_problem"] = None
-    st.session_state["results_saved"] = (info.id, info.label, state.case_key(run))
+    st.session_state[state.SAVED_RUN] = (info.id, info.label, state.case_key(run), "saved")
 
 
 def what_changed(result, run) -> None:
@@ -76,11 +76,12 @@ def plan(result, edited, run) -> None:
         if st.session_state.get("results_save_problem"):
             widgets.problems([widgets.literal(st.session_state["results_save_problem"], limit=None)], "Not saved",
                              note="Nothing was changed.")
-        elif (st.session_state.get("results_saved") or (None, None, None))[2] == key:  # saved for this case
-            run_id, label, _ = st.session_state["results_saved"]
-            st.success(f"Saved as **{widgets.literal(label, widgets.LABEL_CHARS)}**. It stays in the library across "
-                       f"reloads and restarts; [open it by link]({library.link(run_id)}) or see it on Saved runs.",
-                       icon=":material/check:")
+        elif (st.session_state.get(state.SAVED_RUN) or (None,) * 4)[2] == key:  # saved or opened for this case
+            run_id, label, _, how = st.session_state[state.SAVED_RUN]
+            shown = widgets.literal(label, widgets.LABEL_CHARS)
+            said = f"Saved as **{shown}**" if how == "saved" else f"This plan is the saved run **{shown}**, opened from the library"
+            st.success(f"{said}. It stays in the library across reloads and restarts; "
+                       f"[open it by link]({library.link(run_id)}) or see it on Saved runs.", icon=":material/check:")
         st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
 
     st.subheader("Bids")
@@ -133,6 +134,12 @@ else:
         st.caption(backtests.recommendation_note(recommendation))
         edited, run = (backtests.recommended_case(c, recommendation) for c in (edited, run))
 st.markdown(f"Plan for **{run.delivery_date:%A %d %B %Y}** · {state.default_label(edited)}")
+opened = st.session_state.get(state.SAVED_RUN) or (None,) * 4
+if opened[3] in ("opened", "opened without a plan") and opened[2] == state.case_key(run):
+    said = ("its plan as saved, shown without a solve" if opened[3] == "opened"
+            else "it was saved without a plan; Solve computes one")
+    st.caption(f":material/bookmark: The saved run **{widgets.literal(opened[1], widgets.LABEL_CHARS)}**, "
+               f"opened from the library: {said}.")
 clicked = st.button("Solve", type="primary", key="results_solve", icon=":material/play_arrow:")
 if not (clicked or state.is_requested(run)):
     cancelled = "The last solve was cancelled." if solving.cancelled() else ""

@@ -67,6 +67,8 @@ def test_a_hostile_label_and_case_name_show_as_text_where_a_saved_run_is_opened(
         assert_inert(toast, "Opened the saved run", "Session expired")
     for line in bodies(at.sidebar.markdown, "x` [Session"):
         assert_inert(line)
+    for line in bodies(at.caption):  # Results says which saved run it shows (a link's toast is never drawn)
+        assert_inert(line.removeprefix(":material/bookmark: "), "opened from the library", "saved without a plan")
 
     at.switch_page("pages/home.py").run()
     assert not at.exception, at.exception
@@ -109,6 +111,10 @@ def test_a_label_saved_on_results_shows_as_text(run_library, paper_solve):
     result = paper_solve()
     seed = RunLibrary(run_library).save("seed", result.case, result, settings={"csp": True})
     at = open_app(run=seed.id)  # its plan shows on Results without a solve
+    (opened,) = [c.value for c in at.caption if "opened from the library" in c.value]
+    assert "The saved run **seed**" in opened and "shown without a solve" in opened
+    (notice,) = [s.value for s in at.success if "library" in s.value]
+    assert "This plan is the saved run **seed**" in notice and f"(/?run={seed.id})" in notice
     at.text_input(key="results_run_label").input(HOSTILE).run()
     click(at, "results_save")
     for notice in bodies(at.success):

@@ -683,6 +683,9 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
         net = page.get_by_test_id("stMetric").filter(has_text="Net cost").inner_text()
         assert f"{-expected.objective_eur / 1000:,.1f}".replace("-", "−") in net
         assert page.get_by_role("button", name="Cancel").count() == 0  # shown from the library, not solved
+        opened = page.get_by_test_id("stCaptionContainer").filter(has_text="opened from the library")
+        assert f"The saved run {labels[0]}" in opened.inner_text()  # the link's reader is told what it shows
+        assert opened.bounding_box()["y"] < 800  # on the first screen
         page.screenshot(path=ARTIFACTS / "results-from-link.png")
 
 
