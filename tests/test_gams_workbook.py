@@ -247,6 +247,25 @@ def _without_sheet(book):
     del book["Energy_Forecast"]
 
 
+def _storage_value(unit: str, header: str, value: float):
+    def change(book):
+        sheet = book["ESS"]
+        sheet.cell(_row_of(sheet, 1, unit), _header_column(sheet, header)).value = value
+    return change
+
+
+def _first_dam_price(value: float):
+    def change(book):
+        sheet = book["Price_Forecast"]
+        sheet.cell(_row_of(sheet, 1, "T1"), _header_column(sheet, "DAM Price [Euro/MWh]")).value = value
+    return change
+
+
+def _huge_availability(book):
+    sheet = book["Energy_Forecast"]
+    sheet.cell(16, _header_column(sheet, "Pavailable DAM [MW]")).value = 1e300
+
+
 def _not_a_number(book):
     sheet = book["DRES"]
     sheet.cell(_row_of(sheet, 6, "U1"), _header_column(sheet, "Max energy [MWh]")).value = "lots"
@@ -267,8 +286,26 @@ def _not_a_number(book):
      r'sheet "DRES" unit "U1" column "Min down time \[hour\]": 30 must lie in 0..24 h'),
     (_dispatchable_value("U1", "Min power production [MW]", 60),
      r'sheet "DRES" unit "U1": Min power production 60 MW must be <= Max power production 50 MW'),
+    # refused in the workbook's words, not in the case's (battery "U10": self_discharge_per_h=-0.00208333)
+    (_dispatchable_value("U1", "Startup cost [Euro]", -100),
+     r'sheet "DRES" unit "U1" column "Startup cost \[Euro\]": -100 must be >= 0'),
+    (_storage_value("U10", "Self degradation coefficient [-]", -5),
+     r'sheet "ESS" unit "U10" column "Self degradation coefficient \[-\]": -5 must be >= 0'),
+    (_storage_value("U10", "Self degradation coefficient [-]", 3000),
+     r'sheet "ESS" unit "U10" column "Self degradation coefficient \[-\]": 3000 must be < 2400'),
+    # not in history.csv's words, nor as the band's end 999999987.8
+    (_dispatchable_value("U1", "Max power production [MW]", 1e12),
+     r'sheet "DRES" row \d+ column "Max power production \[MW\]": 1e\+12 must lie within ±1e\+06'),
+    (_first_dam_price(1e9), r'sheet "Price_Forecast" row \d+ column "DAM Price \[Euro/MWh\]": 1e\+09 must lie '
+                            r"within ±1e\+06"),
+    (_huge_availability, r'sheet "Energy_Forecast" row 16 column "Pavailable DAM \[MW\]": 1e\+300 must lie within'),
+    # the period and the band's end are named, and the number written as one, not as np.float64(32.9234567)
+    (_first_dam_price(45.1234567), r'sheet "Price_Forecast" column "DAM Price \[Euro/MWh\]" period T1: the band\'s '
+                                   r"lower end 32.9234567 needs more than 6 significant digits"),
 ], ids=["missing column", "unit named twice", "row named twice", "missing sheet", "unknown dispatchable",
-        "not a number", "fuel short of the minimum run", "minimum time longer than the day", "minimum above maximum"])
+        "not a number", "fuel short of the minimum run", "minimum time longer than the day", "minimum above maximum",
+        "negative cost", "negative self-discharge", "self-discharge above the tool's divisor", "huge power",
+        "huge price", "huge availability", "too many digits"])
 def test_a_bad_workbook_is_refused_by_name_and_nothing_is_written(small_copy, tmp_path, change, message):
     path = _copy(small_copy, tmp_path, change)
     out = tmp_path / "case"

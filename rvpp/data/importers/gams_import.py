@@ -43,7 +43,7 @@ from ..case import CASE_FILE, Case, parse_case
 from ..case_yaml import check_case_folder, write_case_folder
 from ..history import History
 from ..kinds import UnitKind
-from .gams_workbook import Workbook, WorkbookError, read_workbook
+from .gams_workbook import SELF_DISCHARGE_DIVISOR, Workbook, WorkbookError, read_workbook
 
 HISTORY_FILE = "history.csv"
 WRITTEN = (CASE_FILE, HISTORY_FILE)
@@ -179,7 +179,8 @@ def _battery(storage) -> dict[str, Any]:
     throughput = storage.lifecycle_slope * storage.cost_eur / storage.e_max_mwh  # per MWh charged or discharged
     return {"name": storage.name, "enabled": storage.enabled, "e_min_mwh": storage.e_min_mwh,
             "e_max_mwh": storage.e_max_mwh, "p_ch_max_mw": storage.p_ch_max_mw, "p_dis_max_mw": storage.p_dis_max_mw,
-            "eta_ch": storage.eta_ch, "eta_dis": storage.eta_dis, "self_discharge_per_h": storage.self_discharge / 2400,
+            "eta_ch": storage.eta_ch, "eta_dis": storage.eta_dis,
+            "self_discharge_per_h": storage.self_discharge / SELF_DISCHARGE_DIVISOR,
             # per MWh discharged: what the throughput cost comes to on a cyclic day without self-discharge
             "degradation_eur_per_mwh": throughput * (1 + 1 / (storage.eta_ch * storage.eta_dis)),
             "ramp_mw_per_min": storage.sr_ramp_up_mw_per_min, "reserve_share": 1.0}
@@ -291,14 +292,16 @@ def _window(series: dict[str, Band], date: dt.date) -> History:
             raise WorkbookError(sheet, f"{where} period T{t}",
                                 f"the deviation makes the band's upper end {hi[t - 1]:g} lie below its lower end "
                                 f"{lo[t - 1]:g}; deviations must be >= 0")
+        for end, values in (("lower end", lo), ("middle", mid), ("upper end", hi)):
+            for t, value in enumerate(values, start=1):
+                kept = float(f"{value:.{CSV_DIGITS}g}")  # as the history CSV keeps it
+                if not math.isclose(kept, value, rel_tol=1e-9, abs_tol=1e-9):
+                    raise WorkbookError(sheet, f"{where} period T{t}",
+                                        f"the band's {end} {value:.12g} needs more than {CSV_DIGITS} significant "
+                                        f"digits; the case's history keeps {CSV_DIGITS}, so its band would not be "
+                                        "the workbook's")
         days = np.stack([lo, lo, mid, mid, hi, hi]).ravel()  # [day, hour]
-        written = np.array([float(f"{value:.{CSV_DIGITS}g}") for value in days])  # as the history CSV keeps them
-        for value, kept in zip(days, written, strict=True):
-            if not math.isclose(kept, value, rel_tol=1e-9, abs_tol=1e-9):
-                raise WorkbookError(sheet, where,
-                                    f"value {value!r} needs more than {CSV_DIGITS} significant digits; the case's "
-                                    f"history keeps {CSV_DIGITS}, so its band would not be the workbook's")
-        columns[column] = written
+        columns[column] = np.array([float(f"{value:.{CSV_DIGITS}g}") for value in days])
     start = pd.Timestamp(date - dt.timedelta(days=WINDOW_DAYS), tz=TIMEZONE)
     stamps = pd.date_range(start, periods=WINDOW_DAYS * 24, freq="h")
     frame = pd.DataFrame({"timestamp": stamps, **columns})

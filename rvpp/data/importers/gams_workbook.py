@@ -40,6 +40,7 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 from openpyxl.utils.exceptions import InvalidFileException
 
 from ...errors import DataImportError
+from ..history import MAX_QUANTITY
 
 HEADER_ROW = 15  # every range of the tool starts with its header on this row
 LAST_ROW = 1000  # and ends on this one
@@ -47,6 +48,7 @@ PERIODS = 24  # the tool closes its storage balances at period 24
 DISPATCHABLE_KINDS = {"U1": "hydro", "U2": "biomass"}
 NON_DISPATCHABLE_KINDS = {"U3": "wind", "U4": "pv"}
 UNIT_TYPES = ("DRES", "NDRES", "STH", "D", "TES", "ES")
+SELF_DISCHARGE_DIVISOR = 2400  # the tool keeps 1 - coefficient / 2400 of a battery's energy per hour
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,39}")
 
 
@@ -250,13 +252,19 @@ class _Table:
     rows: Mapping[tuple[str, ...], Mapping[str, object]]
     cells: Mapping[tuple[str, ...], int]  # the sheet row of each key
 
-    def number(self, key: tuple[str, ...], column: str, *, blank: float = 0.0) -> float:
+    def number(self, key: tuple[str, ...], column: str, *, blank: float = 0.0,
+               limit: float | None = MAX_QUANTITY) -> float:
+        """The cell's number; ``limit`` bounds its size (None: a sum of money, which may be larger)."""
         value = self.rows[key][column]
         if value is None:
             return blank
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise WorkbookError(self.sheet, f'row {self.cells[key]} column "{column}"',
                                 f"{value!r} is not a finite number")
+        if limit is not None and abs(value) > limit:
+            raise WorkbookError(self.sheet, f'row {self.cells[key]} column "{column}"',
+                                f"{value:g} must lie within ±{limit:g}: no quantity of a virtual power plant comes "
+                                "near, so it is a typo")
         return float(value)
 
 
@@ -539,6 +547,7 @@ def _dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bo
     for name in names:
         key = _row_of(table, name, "DRES", "dispatchable unit")
         v = [table.number(key, c) for c in columns]
+        _check_not_negative("DRES", name, dict(zip(columns, v)))
         _check_dispatchable(name, dict(zip(columns, v)))
         kind = DISPATCHABLE_KINDS.get(name, "dispatchable")
         switch = {"hydro": "sHydro_exists", "biomass": "sBiomass_exists"}.get(kind)
@@ -550,6 +559,13 @@ def _dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bo
                                 sr_ramp_up_mw_per_min=v[11], sr_ramp_dn_mw_per_min=v[12], hours_on_before=v[13],
                                 hours_off_before=v[14], min_up_h=v[15], min_down_h=v[16], e_max_mwh=v[17]))
     return tuple(out)
+
+
+def _check_not_negative(sheet: str, name: str, values: dict[str, float]) -> None:
+    """Costs, powers, energies, ramps, hours and coefficients of a unit's row are never below 0."""
+    for column, value in values.items():
+        if value < 0:
+            raise WorkbookError(sheet, f'unit "{name}" column "{column}"', f"{value:g} must be >= 0")
 
 
 def _check_dispatchable(name: str, values: dict[str, float]) -> None:
@@ -642,8 +658,13 @@ def _storages(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool])
     out = []
     for name in names:
         key = _row_of(table, name, "ESS", "storage")
-        v = [table.number(key, c) for c in columns]
+        v = [table.number(key, c, limit=None if c == "ESS cost [Euro]" else MAX_QUANTITY) for c in columns]
+        _check_not_negative("ESS", name, dict(zip(columns, v)))
         thermal = units[name] == "TES"
+        if not thermal and v[0] >= SELF_DISCHARGE_DIVISOR:
+            raise WorkbookError("ESS", f'unit "{name}" column "{columns[0]}"',
+                                f"{v[0]:g} must be < {SELF_DISCHARGE_DIVISOR:g}: the tool keeps 1 - coefficient / "
+                                f"{SELF_DISCHARGE_DIVISOR:g} of the energy each hour")
         for column, eta in ((columns[6], v[6]), (columns[7], v[7])):
             if not 0 < eta <= 1:  # the header says [%] but the tool divides by it as a fraction
                 raise WorkbookError("ESS", f'unit "{name}" column "{column}"', f"{eta:g} must be a fraction in (0, 1]")
