@@ -180,3 +180,20 @@ def test_a_case_whose_every_unit_is_switched_off_is_refused():
                                    "would hold no unit and trade nothing; switch one on"]
     data["units"]["hydro"][0]["enabled"] = True
     assert [u.name for _, u in parse_case(data, base.history).units()] == ["H1"]
+
+
+def test_a_unit_switched_off_for_a_dry_day_loads_and_its_twin_switched_on_is_refused():
+    # docs/case-format.md: "to keep it off, set enabled: false"; a day with an empty reservoir has no water at all
+    dry = {**HY, "energy_max_mwh": 0.0, "min_up_h": 4.0, "initial_online": True, "p_init_mw": 30.0,
+           "ramp_dn_mw_per_h": 5.0, "shutdown_ramp_mw_per_h": 10.0}
+    base = tiny_case(battery_units=[{**BAT, "name": "OK"}])
+    data = base.to_data()
+    data["units"]["hydro"] = [{**dry, "enabled": False}]
+    case = parse_case(data, base.history)
+    assert [(u.name, u.enabled, u.energy_max_mwh) for u in case.hydro] == [("H1", False, 0.0)]
+    assert [u.name for _, u in case.units()] == ["OK"]  # left out of the plan
+    problems = refused(hydro=[dry])
+    assert any(p.startswith('hydro "H1": energy_max_mwh=0 is below the 20 MWh of a run at p_min_mw=5 for '
+                            "min_up_h=4") for p in problems), problems
+    problems = refused(hydro=[{**dry, "min_up_h": 0.0}])
+    assert any(p.startswith('hydro "H1": energy_max_mwh=0 is below the 5 MWh of one period') for p in problems), problems

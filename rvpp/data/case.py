@@ -625,7 +625,7 @@ class DispatchableUnit(_Unit):
                                  "(initial_online=false): an offline unit produces nothing")
             if self.initial_online:
                 _require_within("p_init_mw", self.p_init_mw, "p_min_mw", self.p_min_mw, "p_max_mw", self.p_max_mw)
-        if self.energy_max_mwh is not None and self.energy_max_mwh < self.p_min_mw * self.min_up_h:
+        if self.enabled and self.energy_max_mwh is not None and self.energy_max_mwh < self.p_min_mw * self.min_up_h:
             raise ValueError(f"energy_max_mwh={self.energy_max_mwh:g} is below the {self.p_min_mw * self.min_up_h:g} "
                              f"MWh of a run at p_min_mw={self.p_min_mw:g} for min_up_h={self.min_up_h:g}: "
                              "once started, the unit could not run its minimum up time at its minimum output")
@@ -1047,7 +1047,7 @@ class Case(_Frozen):
 
     def _dispatchable_problems(self) -> list[str]:
         """Hours of hydro and biomass units in whole periods, and a day's energy that allows one period and
-        the run a unit online before the day is committed to."""
+        the run a unit online before the day is committed to (for a unit switched on)."""
         problems = []
         periods = len(delivery_periods(self.delivery_date, self.timezone, self.dt_h))
         for kind in DISPATCHABLE_KINDS:
@@ -1059,11 +1059,13 @@ class Case(_Frozen):
                                         f"dt_h={self.dt_h:g}")
                 problems += _ramp_problems(kind, unit, self.dt_h)
                 least = unit.p_min_mw * self.dt_h
-                if unit.energy_max_mwh is not None and unit.energy_max_mwh < least:
+                if not unit.enabled or unit.energy_max_mwh is None:  # a unit switched off may have no water or fuel
+                    continue
+                if unit.energy_max_mwh < least:
                     problems.append(f'{kind} "{unit.name}": energy_max_mwh={unit.energy_max_mwh:g} is below the '
                                     f"{least:g} MWh of one period (dt_h={self.dt_h:g}) at p_min_mw={unit.p_min_mw:g}: "
                                     "the unit could never run")
-                elif unit.energy_max_mwh is not None:
+                else:
                     committed, run = unit.committed_run(self.dt_h, periods)
                     if unit.energy_max_mwh < committed - 1e-9:
                         problems.append(_committed_problem(kind, unit, committed, run, self.dt_h))
