@@ -9,11 +9,11 @@ import streamlit as st
 from dashboard import backtests as bt
 from dashboard import solving, state, widgets
 from rvpp import RvppError
-from rvpp.service import (BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, MIN_TEST_DAYS, MIN_TRAIN_DAYS,
-                          IN_KEUR, PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict, beats_presets_on_training,
-                          cumulative_figure, day_summary, distribution_figure, export_zip, intraday_days, launch,
-                          metrics, parse_numbers, recommendation_from, reopen_case, robustness_figure, session_table,
-                          shortfalls, trading_day_figure, variants_of, verdict_words)
+from rvpp.service import (BacktestInfo, BacktestSettings, BacktestVariant, CARRY, CRITERION_NAMES, MIN_TEST_DAYS,
+                          MIN_TRAIN_DAYS, IN_KEUR, PERFECT, RecordKey, STORE_ERRORS, STRATEGIES, Verdict,
+                          beats_presets_on_training, cumulative_figure, day_summary, distribution_figure, export_zip,
+                          intraday_days, launch, metrics, parse_numbers, recommendation_from, reopen_case,
+                          robustness_figure, session_table, shortfalls, trading_day_figure, variants_of, verdict_words)
 
 state.through_app("pages/backtest.py")
 
@@ -107,6 +107,7 @@ def launch_backtest(run, first, last, strategies, fractions_text, perfect, end_t
     try:
         settings = BacktestSettings(first, last, variants_of(strategies, fractions, perfect),
                                     storage_end=CARRY if end_target is None else float(end_target))
+        stored = {info.id: info for info in bt.store().list()}
         launched = launch.start(run, settings, bt.store(), label=label.strip())
     except launch.AlreadyRunning as err:
         already_running(err)
@@ -118,9 +119,23 @@ def launch_backtest(run, first, last, strategies, fractions_text, perfect, end_t
     st.session_state[CHOSEN] = launched.backtest_id
     title = label.strip() or f"{run.name} backtest"
     st.session_state[PENDING] = (launched.backtest_id, f"{title} · {first} .. {last}")
-    st.session_state["backtest_notice"] = (
-        f"Started in the background (process {launched.pid}). It shows below with its progress; you may leave "
-        "this page meanwhile.")
+    st.session_state["backtest_notice"] = started_notice(launched, stored.get(launched.backtest_id), label.strip())
+
+
+def started_notice(launched: launch.Launched, before: BacktestInfo | None, label: str) -> str:
+    """What starting a backtest did: a new one, or one the store already held with the same case, days and
+    strategies (``before``), which keeps its label and its settled days."""
+    if before is None:
+        return (f"Started in the background (process {launched.pid}). It shows below with its progress; you may "
+                "leave this page meanwhile.")
+    same = (f"The store already holds this backtest (the same case, days and strategies) as "
+            f"“{widgets.literal(before.label, widgets.LABEL_CHARS)}”")
+    kept = "" if label in ("", before.label) else " It keeps that label."
+    if before.keys_done >= before.keys_total:
+        return (f"{same}, all {before.keys_total:,} days × strategies settled: nothing is computed again; it is "
+                f"shown below.{kept}")
+    return (f"{same}, with {before.keys_done:,} of {before.keys_total:,} days × strategies settled: it goes on "
+            f"from there in the background (process {launched.pid}) and shows below with its progress.{kept}")
 
 
 def already_running(err: launch.AlreadyRunning) -> None:

@@ -53,7 +53,7 @@ if TYPE_CHECKING:  # what a reader and the import contracts see; at run time a n
     from .solving.sweep import sweep_gamma
     from .store import (STORE_ERRORS, BacktestStore, RecordKey, RunInfo, RunLibrary, SavedRun, StoredRecommendation,
                         default_url)
-    from .store.backtests import BacktestProgress
+    from .store.backtests import BacktestInfo, BacktestProgress
     from .store.codec import case_data
     from .studies import STUDIES, StudyOutput, StudySettings, figures, markets, sensitivity
     from .studies.evaluation import evaluation_days, realizations_used, training_days
@@ -163,6 +163,7 @@ _WHERE = {
     "STORE_ERRORS": ".store",
     "StoredRecommendation": ".store",
     "default_url": ".store",
+    "BacktestInfo": ".store.backtests",
     "BacktestProgress": ".store.backtests",
     "case_data": ".store.codec",
     "LABEL_LENGTH": ".data.edits",
@@ -191,7 +192,7 @@ _WHERE = {
 }
 
 __all__ = [
-    "BacktestProgress", "BacktestSettings", "BacktestStore", "BacktestVariant", "CARRY", "CasePathError",
+    "BacktestInfo", "BacktestProgress", "BacktestSettings", "BacktestStore", "BacktestVariant", "CARRY", "CasePathError",
     "CRITERION_NAMES", "EXCERPT_CHARS", "FIELDS", "FRACTION", "GREY", "HPA_FLAT_PRICES", "IN_KEUR", "KIND_LABELS",
     "KINDS",
     "LABEL_LENGTH", "MARKET_SETS", "MARKET_SETS_WITHOUT_CSP", "MIN_TEST_DAYS", "MIN_TRAIN_DAYS", "Outcome", "Penalties",

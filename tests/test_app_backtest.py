@@ -227,6 +227,30 @@ def test_a_backtest_started_on_the_page_runs_in_its_own_process(data_dir):
         stop(ident, store)
 
 
+def test_starting_a_backtest_the_store_already_holds_says_so_and_keeps_its_label(stored):
+    """The same case, days and strategies give the same backtest: starting it again computes nothing
+    and the page says which stored backtest it is, not "Started" under a label that never shows."""
+    store, ident = stored
+    at = one_day_backtest_form(open_app("backtest"), FIRST, "again")
+    at.date_input(key="backtest_last").set_value(LAST)
+    at.text_input(key="backtest_fractions").input(f"{FRACTION}")
+    at.checkbox(key="backtest_perfect").check()  # as recorded: deterministic, Γ 0.25 and perfect information
+    click(at, "backtest_start")
+    try:
+        assert not at.error, [e.value for e in at.error]
+        notice = at.info[0].value
+        assert "Started in the background" not in notice, notice
+        assert "already holds this backtest" in notice and "“three May days”" in notice, notice
+        assert "all 9 days × strategies settled: nothing is computed again" in notice, notice
+        assert "It keeps that label." in notice, notice
+        assert [(b.id, b.label) for b in store.list()] == [(ident, "three May days")]
+    finally:
+        deadline = time.monotonic() + TIMEOUT_S
+        while (progress := status(ident, store)) is not None and progress.running:
+            assert time.monotonic() < deadline, "the backtest's process did not end"
+            time.sleep(0.5)
+
+
 # ----------------------------------------------------------------------------- money in kEUR
 
 KEUR_UNITS = ("[kEUR]", "[kEUR/day]")
