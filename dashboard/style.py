@@ -1,4 +1,5 @@
-"""Style rules for four texts Streamlit draws below the 4.5:1 contrast of WCAG 2 AA.
+"""Style rules for four texts Streamlit draws below the 4.5:1 contrast of WCAG 2 AA, and for tables in a
+caption (Home's case at a glance) in a narrow column.
 
 In the dark theme, the selected option of a segmented control (3.6:1), the selected tab and the value
 over a slider's thumb (3.9:1) are in the primary colour on a dark background: a lighter primary colour
@@ -9,6 +10,11 @@ at 40 % (2.8:1 light, 3.8:1 dark): it is drawn at 62 % instead, still lighter th
 
 ``light-dark()`` picks the colour of the scheme Streamlit draws in (the theme follows the viewer's
 preference, ``.streamlit/config.toml``); the light theme's own colours come from its settings.
+
+In a window at most NARROW_PX wide, a row of columns holding a table in a caption (Home's case at a
+glance) puts its columns one below the other: the table cannot break its unit names (ED_residential) nor its
+capacities (1,100 MWh_th), and beside Home's question, at 1024 px, it ran 54 px past the window's edge, its
+last column cut off.
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ import streamlit as st
 
 LIGHT_RED = "#FF7B72"  # dark theme: 6.6:1 on a selected option's background (#291a1a), 7.2:1 on the page's
 DISABLED_SHARE = 62    # [%] of the text colour in a disabled control's label: 6.2:1 light, 7.5:1 dark
+NARROW_PX = 1199       # [px] in a window at most this wide, Home's case goes below its question
 
 _RULES = """<style>
 [data-testid="stButtonGroup"] button[data-selected="true"] p, [data-testid="stTab"][aria-selected="true"] p,
@@ -26,6 +33,11 @@ _RULES = """<style>
 .stApp label[data-disabled="true"] { color: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent),
                                                 color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
 .stApp label[data-disabled="true"] p { color: inherit; }
+@media (max-width: NARROW_PXpx) {
+  [data-testid="stHorizontalBlock"]:has([data-testid="stCaptionContainer"] table) { flex-wrap: wrap; }
+  [data-testid="stHorizontalBlock"]:has([data-testid="stCaptionContainer"] table) > [data-testid="stColumn"] {
+    min-width: 100%; }
+}
 </style>"""
 
 
@@ -34,7 +46,8 @@ def rules() -> str:
     """The style element, with the theme's colours (built once per server process)."""
     return (_RULES.replace("LIGHT_RED", LIGHT_RED).replace("PRIMARY", st.get_option("theme.light.primaryColor"))
             .replace("LIGHT_TEXT", st.get_option("theme.light.textColor"))
-            .replace("DARK_TEXT", st.get_option("theme.dark.textColor")).replace("SHARE", str(DISABLED_SHARE)))
+            .replace("DARK_TEXT", st.get_option("theme.dark.textColor")).replace("SHARE", str(DISABLED_SHARE))
+            .replace("NARROW_PX", str(NARROW_PX)))
 
 
 def contrast() -> None:

@@ -307,6 +307,19 @@ def test_homes_first_screen_holds_the_question_the_solve_button_and_the_case():
             assert box["x"] + box["width"] <= 1280, (name, box)
 
 
+def test_homes_case_table_is_whole_in_a_1024_pixel_window(app_url):
+    # Beside the question, the case's table ran 54 px past the window's edge, its "Installed" column cut off.
+    with chromium_page({"width": 1024, "height": 800}) as page:
+        page.goto(app_url)
+        case = page.get_by_role("table").filter(has=page.get_by_role("columnheader", name="Installed")).first
+        case.wait_for()
+        settle(page)
+        page.screenshot(path=ARTIFACTS / "home-1024.png")
+        right = case.evaluate("table => table.getBoundingClientRect().right")
+        main = page.get_by_test_id("stMain").evaluate("main => [main.scrollWidth, main.clientWidth]")
+        assert right <= 1024 and main[0] <= main[1], (right, main)
+
+
 @pytest.mark.slow
 def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_path):
     """Started on the page, the backtest appears there without a reload and its progress is
