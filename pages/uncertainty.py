@@ -186,8 +186,9 @@ with right:
     st.caption("Paper mode is the published method and the default. In the planner-chosen variant the "
                "optimiser may pick the Γ periods where a deviation hurts least: useful to show why the "
                "published constraints matter, not for bidding.")
-    st.caption("Prices deviate where the plan loses most (exact); units deviate in their largest-deviation "
-               "periods (paper mode). Neither searches the hours that hurt the profit most.")
+    st.caption("Prices deviate in the periods where that costs the plan's trades most (found exactly); units "
+               "deviate in their periods of largest deviation in MW (paper mode), which need not be the periods "
+               "that cost the plan most.")
     paper_fast_path = case.budgets.mode == "paper" and case.solver.budget_encoding == "top_gamma"
     st.radio("Equal deviations at the Γ boundary", list(TIES), format_func=TIES.get,
              index=list(TIES).index(case.budgets.ties), key="uncertainty_ties", disabled=not paper_fast_path,

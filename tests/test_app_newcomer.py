@@ -280,6 +280,15 @@ def test_saved_runs_says_how_many_to_tick_in_words(paper_solve):
     assert "tick two, three or 4 to compare" in said and "two to 4" not in said
 
 
+def test_uncertainty_says_where_prices_and_units_deviate_without_contradicting_itself():
+    # It said prices deviate "where the plan loses most", then "Neither searches the hours that hurt the profit most".
+    said = " ".join(c.value for c in open_app("uncertainty").caption)
+    assert "Neither searches" not in said
+    assert ("Prices deviate in the periods where that costs the plan's trades most (found exactly); units deviate "
+            "in their periods of largest deviation in MW (paper mode), which need not be the periods that cost the "
+            "plan most.") in said
+
+
 # ----------------------------------------------------------------------------- recommendations
 
 
