@@ -117,8 +117,10 @@ def test_the_reserve_chart_says_when_a_plan_offers_no_up_reserve(paper_solve):
     assert not paper_solve().market["r_sr_up_mw"].any()  # the default day offers none
     at = click(open_app("results"), "results_solve")
     layout = figures(at)["Reserve by unit kind"]["layout"]
-    assert [a["text"] for a in layout.get("annotations", [])] == ["No up reserve in this plan"]
-    assert list(layout["yaxis"]["range"]) == [0, 1]
+    # Both up panels say so: the day's total beside the periods was an empty frame from 0 to 1.
+    said = {(a["xref"], a["yref"]): a["text"] for a in layout.get("annotations", [])}
+    assert said == {("x domain", "y domain"): "No up reserve in this plan", ("x2 domain", "y2 domain"): "0 MWh"}
+    assert list(layout["yaxis"]["range"]) == list(layout["yaxis2"]["range"]) == [0, 1]
 
 
 def test_an_amount_that_rounds_to_zero_shows_no_minus(paper_case, paper_solve):

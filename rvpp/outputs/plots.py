@@ -203,12 +203,14 @@ def reserve_share_figure(result: Result) -> go.Figure:
             yaxis4="Down, day total [MWh]", xaxis3=CLOCK_TITLE)
     layout.update(barmode="stack", hovermode="closest", margin={**layout["margin"], "r": TOTALS_MARGIN_R})
     figure = go.Figure(data=traces, layout=layout)
-    for direction, band, axes in (("up", "r_sr_up_mw", ("x", "y", "yaxis", "yaxis2")),
-                                  ("down", "r_sr_dn_mw", ("x3", "y3", "yaxis3", "yaxis4"))):
-        if not result.market[band].to_numpy(float).any():  # an empty panel says so, from 0, not −1 to 1
+    for direction, band, axes in (("up", "r_sr_up_mw", ("x", "y", "x2", "y2", "yaxis", "yaxis2")),
+                                  ("down", "r_sr_dn_mw", ("x3", "y3", "x4", "y4", "yaxis3", "yaxis4"))):
+        if not result.market[band].to_numpy(float).any():  # both empty panels say so, from 0, not −1 to 1
             figure.add_annotation(text=f"No {direction} reserve in this plan", xref=f"{axes[0]} domain",
                                   yref=f"{axes[1]} domain", x=0.5, y=0.5, showarrow=False)
-            figure.update_layout({axes[2]: {"range": [0, 1]}, axes[3]: {"range": [0, 1]}})
+            figure.add_annotation(text="0 MWh", xref=f"{axes[2]} domain", yref=f"{axes[3]} domain", x=0.5, y=0.5,
+                                  showarrow=False)
+            figure.update_layout({axes[4]: {"range": [0, 1]}, axes[5]: {"range": [0, 1]}})
     return figure
 
 
