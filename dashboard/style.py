@@ -11,6 +11,10 @@ at 40 % (2.8:1 light, 3.8:1 dark): it is drawn at 62 % instead, still lighter th
 ``light-dark()`` picks the colour of the scheme Streamlit draws in (the theme follows the viewer's
 preference, ``.streamlit/config.toml``); the light theme's own colours come from its settings.
 
+A page's link in the sidebar, reached by the keyboard, is outlined in the primary colour: Streamlit marks it
+only with the faint grey it gives a link under the mouse (15 % grey over the sidebar), fainter than the mark of
+the page shown, so a keyboard user could not tell where the focus was.
+
 In a window at most NARROW_PX wide, a row of columns holding a table in a caption (Home's case at a
 glance) puts its columns one below the other: the table cannot break its unit names (ED_residential) nor its
 capacities (1,100 MWh_th), and beside Home's question, at 1024 px, it ran 54 px past the window's edge, its
@@ -33,6 +37,7 @@ _RULES = """<style>
 .stApp label[data-disabled="true"] { color: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent),
                                                 color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
 .stApp label[data-disabled="true"] p { color: inherit; }
+[data-testid="stSidebarNav"] a:focus-visible { outline: 2px solid light-dark(PRIMARY, LIGHT_RED); outline-offset: -2px; }
 @media (max-width: NARROW_PXpx) {
   [data-testid="stHorizontalBlock"]:has([data-testid="stCaptionContainer"] table) { flex-wrap: wrap; }
   [data-testid="stHorizontalBlock"]:has([data-testid="stCaptionContainer"] table) > [data-testid="stColumn"] {
