@@ -271,6 +271,29 @@ def test_an_upload_is_refused_for_its_first_problem_in_file_order():
     assert any("history" in p for p in problems[1:])
 
 
+def test_an_upload_with_a_bad_history_cell_is_refused_for_the_case_files_problems_first(paper_case):
+    # A non-numeric cell of the history was the only problem named: κ = 1.5 and a P max of "fifty" above it
+    # in case.yaml showed only once the history was mended and the files uploaded again.
+    folder = Path(__file__).resolve().parent.parent / "data" / "cases" / "paper"
+    settings = (folder / "case.yaml").read_text()
+    assert settings.count("kappa: 0.3") == 1 and "{name: WF2, p_max_mw: 50," in settings
+    settings = settings.replace("kappa: 0.3", "kappa: 1.5").replace("{name: WF2, p_max_mw: 50,", "{name: WF2, p_max_mw: fifty,")
+    lines = (folder / "history.csv").read_text().splitlines()
+    header, row = lines[0].split(","), lines[5].split(",")
+    row[header.index("price_sr_up")] = "abc"
+    history = "\n".join([*lines[:5], ",".join(row), *lines[6:]]) + "\n"
+    at = open_app()
+    at.file_uploader(key="home_upload").set_value([("case.yaml", settings.encode(), "text/yaml"),
+                                                   ("history.csv", history.encode(), "text/csv")]).run()
+    click(at, "home_load_upload")
+    problems = [line for line in errors(at).splitlines() if line.startswith("- ")]
+    assert len(problems) == 3, problems
+    assert problems[0].startswith("- κ") and "1.5" in problems[0], problems
+    assert "P max" in problems[1] and "fifty" in problems[1], problems
+    assert problems[2].startswith('- history.csv: column "price_sr_up" has a non-numeric value \'abc\''), problems
+    assert case_of(at).markets.kappa == paper_case.markets.kappa  # the current case is unchanged
+
+
 # ----------------------------------------------------------------------------- wording
 
 

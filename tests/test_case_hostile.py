@@ -355,3 +355,18 @@ def test_a_unit_cannot_follow_a_price_column(paper_case, field):
     with pytest.raises(CaseError, match="^wind \"WF1\": follows the price column 'price_da'; a unit follows a "
                                         "column of output, demand or heat"):
         paper_case.replace(wind=wind)
+
+
+def test_a_case_folder_with_a_bad_history_cell_names_the_case_files_problems_first(tmp_path):
+    folder = tmp_path / "case"
+    shutil.copytree(PAPER, folder)
+    settings = (folder / "case.yaml").read_text()
+    (folder / "case.yaml").write_text(settings.replace("kappa: 0.3", "kappa: 1.5"))
+    history = (folder / "history.csv").read_text().splitlines()
+    history[3] = history[3].replace(",", ",x", 1)  # the day-ahead price of the file's third hour, 02:00
+    (folder / "history.csv").write_text("\n".join(history) + "\n")
+    with pytest.raises(CaseError) as refused:
+        load_case(folder)
+    problems = refused.value.problems
+    assert problems == ["markets: kappa=1.5 must be <= 1", 'history.csv: column "price_da" has a non-numeric value '
+                        f"'x{history[3].split(',')[1][1:]}' at 2024-12-01T02:00:00+01:00"], problems

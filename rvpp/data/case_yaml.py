@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -63,7 +63,8 @@ def load_case(path: str | Path) -> Case:
                             "into the folder")
     data = read_case_yaml(read_file(target, file.name, max_bytes=MAX_CASE_YAML_BYTES), file.name)
     relative = history_path(data, file.name)
-    history = History.read_csv(inside_folder(file.parent, relative, "history", file.name), source=str(relative))
+    history = history_of(data, lambda: History.read_csv(inside_folder(file.parent, relative, "history", file.name),
+                                                        source=str(relative)))
     return parse_case(data, history)
 
 
@@ -78,6 +79,22 @@ def history_path(data: Mapping[str, Any], file: str) -> PurePosixPath:
         problems: list[str] = []
         settings_of(data, problems)
         raise CasePathError(in_file_order([*problems, *err.problems], data)) from None
+
+
+def history_of(data: Mapping[str, Any], read: Callable[[], History]) -> History:
+    """The history ``read()`` gives for the case settings ``data``; a history refused for its problems
+    is refused after every problem of the case file found without it, the case file's first (it is read
+    first), in file order, so a bad cell of the history does not hide a κ of 1.5 above it."""
+    try:
+        return read()
+    except CaseError as err:
+        if type(err) is not CaseError:  # too large, or a path: the history itself was not read
+            raise
+        problems: list[str] = []
+        settings_of(data, problems)
+        if not problems:
+            raise
+        raise CaseError([*in_file_order(problems, data), *err.problems]) from None
 
 
 def read_case_yaml(data: bytes, file: str) -> dict[str, Any]:

@@ -22,7 +22,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path, PurePosixPath
 
 from ..data.case import Case, CASE_FILE, parse_case
-from ..data.case_yaml import history_path, read_case_yaml, save_case
+from ..data.case_yaml import history_of, history_path, read_case_yaml, save_case
 from ..data.files import UploadBudget, UploadLimits, excerpt, open_zip, unzip, upload_path
 from ..data.history import History
 from ..errors import CaseError, UploadError, UploadLimitError
@@ -107,8 +107,8 @@ def _from_files(case_file: PurePosixPath, read: Callable[[PurePosixPath], bytes]
     if target not in present:
         raise CaseError(missing(relative))
     limits = budget.limits
-    history = History.from_csv(read(target), str(relative), max_rows=limits.history_rows,
-                               max_columns=limits.history_columns)
+    history = history_of(data, lambda: History.from_csv(read(target), str(relative), max_rows=limits.history_rows,
+                                                        max_columns=limits.history_columns))
     budget.check_time(f"reading {excerpt(relative, 80)}")
     case = parse_case(data, history)
     budget.check_time(f"checking {case_file.name}")
