@@ -91,7 +91,7 @@ if case.csp:
     name = st.segmented_control("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp",
                                 default=case.csp[0].name, required=True) \
         if len(case.csp) > 1 else case.csp[0].name
-    left, right = st.columns([2, 3])
+    left, right = st.columns([3, 4])  # the table's two columns and row markers whole at 1280 px (327 px)
     with left:
         widgets.table_editor(
             f"portfolio_curve_{name}",

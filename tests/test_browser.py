@@ -320,6 +320,19 @@ def test_homes_case_table_is_whole_in_a_1024_pixel_window(app_url):
         assert right <= 1024 and main[0] <= main[1], (right, main)
 
 
+def test_the_conversion_curve_table_is_whole_at_1280_pixels(app_url):
+    # Its two columns and row markers (327 px) had 320 px beside the chart: the efficiencies ran under the edge.
+    with chromium_page({"width": 1280, "height": 800}) as page:
+        page.goto(app_url)
+        open_page(page, "Portfolio")
+        page.get_by_role("heading", name="Power-block conversion curve").wait_for()
+        settle(page)
+        widths = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stDataFrame]')]
+            .filter(d => d.textContent.includes('Efficiency [-]'))
+            .map(d => [d.querySelector('.dvn-scroller').scrollWidth, d.querySelector('.dvn-scroller').clientWidth])""")
+        assert len(widths) == 1 and widths[0][0] <= widths[0][1], widths
+
+
 @pytest.mark.slow
 def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_path):
     """Started on the page, the backtest appears there without a reload and its progress is
