@@ -131,11 +131,21 @@ BID_COLUMNS = {  # market.csv column -> (header, format, help); short headers: t
 }
 
 
+# The CSV has room the table has not: the DAM sign and the reserve prices' hour, in plain ASCII for Excel
+CSV_HEADERS = {"DAM [MW]": "DAM [MW] (+ sell / - buy)", "Up [EUR/MW]": "Up [EUR/MW per h]",
+               "Down [EUR/MW]": "Down [EUR/MW per h]"}
+
+
 def bids_table(result: Result) -> pd.DataFrame:
     """The bids of a plan as an operator submits them: one row per period, the quantities [MW]
     and the forecast prices they are bid against, under readable headers."""
     market = result.market[list(BID_COLUMNS)]
     return market.rename(columns={column: header for column, (header, _, _) in BID_COLUMNS.items()})
+
+
+def bids_csv(table: pd.DataFrame) -> str:
+    """The bids table as CSV text, under :data:`CSV_HEADERS`."""
+    return table.rename(columns=CSV_HEADERS).to_csv(index=False, float_format="%.3f")
 
 
 def bids(result: Result, key: str) -> None:
@@ -148,10 +158,11 @@ def bids(result: Result, key: str) -> None:
               for header, fmt, help_text in BID_COLUMNS.values()}
     st.dataframe(table, hide_index=True, column_config=config, width="stretch", height=BIDS_HEIGHT_PX,
                  key=f"{key}_bids_table")
-    st.download_button("Bids as shown (CSV)", table.to_csv(index=False, float_format="%.3f"),
+    st.download_button("Bids as shown (CSV)", bids_csv(table),
                        file_name=f"{result.case.name}_{result.day:%Y%m%d}_{result.case.budgets.strategy}_bids_table.csv",
                        mime="text/csv", on_click="ignore", key=f"{key}_bids_table_csv", icon=":material/download:",
-                       help="This table as a CSV file, with its headers")
+                       help="This table as a CSV file; its headers also say the DAM sign and that reserve "
+                            "prices are per MW and hour")
 
 
 def number_formats(frame: pd.DataFrame) -> dict:
