@@ -51,6 +51,12 @@ def keur(value_eur: float | None) -> str:
     return "–" if value_eur is None else amount(value_eur / KILO, 1).replace("-", "−")
 
 
+def tenths(value: float) -> str:
+    """``−11.3``: a number already in its unit (kEUR, %) with one decimal, thousands separators and a true
+    minus, for text tables (:func:`keur` converts from EUR)."""
+    return amount(value, 1).replace("-", "−")
+
+
 def in_keur(frame: pd.DataFrame) -> pd.DataFrame:
     """A copy of ``frame`` to show: every money column ``*_eur`` [EUR] becomes ``*_keur`` [kEUR]
     (prices ``*_eur_per_mwh`` and other columns as they are)."""

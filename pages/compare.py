@@ -13,11 +13,6 @@ state.through_app("pages/compare.py")
 KEUR = st.column_config.NumberColumn(format="%,.1f")
 MODES = ("Strategies of the current case", "Saved runs")
 RUNS_MAX = 4
-NARROW_PX = 84  # a short header's column [px]
-# Short headers (the full name is each one's help), so the table of parts fits beside the sidebar.
-SHORT_HEADERS = {"Operating cost [kEUR]": "O&M [kEUR]", "Robust protection [kEUR]": "Prot. [kEUR]",
-                 "DAM revenue [kEUR]": "DAM [kEUR]", "SR revenue [kEUR]": "SR [kEUR]",
-                 "HPA cost [kEUR]": "HPA [kEUR]"}
 # The flexibility table's headers as Results names them (the full name is each one's help), so it fits too.
 FLEXIBILITY_HEADERS = {"Upward reserve [MWh]": "Up reserve [MWh]", "Downward reserve [MWh]": "Down reserve [MWh]",
                        "Upward reserve to capacity [h]": "Up / capacity [h]",
@@ -46,15 +41,12 @@ def side_by_side(results: dict, baseline: str | None) -> None:
                    "safe plan; a positive number is more cost. A percentage is given only when that plan's net cost "
                    "is at least 5 % of the day's money flows; otherwise the absolute difference says more.")
     kpis = kpi_table(results, baseline=baseline)
-    config = widgets.number_formats(kpis)
-    for column, setting in list(config.items()):  # short headers, the full name in their help: the table fits
-        short = SHORT_HEADERS.get(column) or ("Extra [kEUR]" if column.endswith("[kEUR]") and column.startswith(
-            "Extra cost vs") else "Extra [%]" if column.startswith("Extra cost vs") else None)
-        if short:
-            config[column] = st.column_config.NumberColumn(short, format=setting["type_config"].get("format"),
-                                                           help=column, width=NARROW_PX)
     hidden = ["Solve time [s]"] + (["Status"] if (kpis["Status"] == "optimal").all() else [])
-    st.dataframe(kpis, column_config=config, column_order=[c for c in kpis.columns if c not in hidden])
+    # A table that wraps: a run's whole label and every part of the net cost in view at 1280 px (a grid cut the
+    # labels short or hid the last part), the amounts written as the cards write them.
+    shown = kpis.drop(columns=hidden)
+    money = [c for c in shown.columns if c != "Status"]
+    st.table(shown.style.format(widgets.tenths, subset=money, na_rep="–"))
     st.caption("Solve times: " + ", ".join(f"{widgets.literal(run)} {seconds:.1f} s"
                                            for run, seconds in kpis["Solve time [s]"].items())
                + (" (every plan optimal)." if "Status" in hidden else "."))
