@@ -57,16 +57,11 @@ MONTHLY_COLUMNS = {
     "mean_net_cost_keur": st.column_config.NumberColumn("Mean net cost [kEUR/day]", format=KEUR),
     "regret_keur": st.column_config.NumberColumn("Regret [kEUR]", format=KEUR),
 }
-WORST_COLUMNS = {  # the plan's status beside the day: a day without a plan is in view at 1280 px
-    "day": st.column_config.DateColumn("Delivery day"),
-    "plan_status": st.column_config.TextColumn("Plan"),
-    "net_cost_keur": st.column_config.NumberColumn("Net cost [kEUR]", format=KEUR),
-    "market_cost_keur": st.column_config.NumberColumn("Market cost [kEUR]", format=KEUR),
-    "penalty_keur": st.column_config.NumberColumn("Penalty [kEUR]", format=KEUR),
-    "regret_keur": st.column_config.NumberColumn("Regret [kEUR]", format=KEUR),
-    "deficit_mwh": st.column_config.NumberColumn("Energy short [MWh]", format="%.1f"),
-    "surplus_mwh": st.column_config.NumberColumn("Energy surplus [MWh]", format="%.1f"),
-    "unserved_heat_mwh": st.column_config.NumberColumn("Heat not served [MWh_th]", format="%.1f"),
+WORST_COLUMNS = {  # records' column -> header; a text table, whose headers wrap, so every column is in view at 1280 px
+    "day": "Delivery day", "plan_status": "Plan", "net_cost_keur": "Net cost [kEUR]",
+    "market_cost_keur": "Market cost [kEUR]", "penalty_keur": "Penalty [kEUR]", "regret_keur": "Regret [kEUR]",
+    "deficit_mwh": "Energy short [MWh]", "surplus_mwh": "Energy surplus [MWh]",
+    "unserved_heat_mwh": "Heat not served [MWh_th]",
 }
 COST_HELP = "Cost: positive when the plant pays, negative when it earns"
 TRADING_COLUMNS = {
@@ -375,8 +370,11 @@ if variants:
         st.caption("No settled day for this strategy yet.")
     else:
         shown_worst = widgets.in_keur(worst)
-        st.dataframe(shown_worst[[c for c in WORST_COLUMNS if c in shown_worst]], hide_index=True, width="stretch",
-                     column_config=WORST_COLUMNS)
+        table = shown_worst[[c for c in WORST_COLUMNS if c in shown_worst]].rename(columns=WORST_COLUMNS)
+        # The day on one line: its hyphens are non-breaking (the table draws no style that would keep it whole)
+        table = table.assign(**{"Delivery day": [str(d).replace("-", "\u2011") for d in table["Delivery day"]]})
+        numbers = [c for c in table.columns if c not in ("Delivery day", "Plan")]
+        st.table(table.style.hide(axis="index").format(widgets.tenths, subset=numbers, na_rep="–"))
         days = [str(d) for d in worst["day"]]
         costs = dict(zip(days, worst["net_cost_eur"]))
         left, right = st.columns([3, 2], vertical_alignment="bottom")

@@ -1,6 +1,7 @@
 """Compare: the four strategies of the current case in one click (the paper's cost and
 flexibility tables), or any two to four runs of the library side by side."""
 
+import pandas as pd
 import streamlit as st
 
 from dashboard import backtests, library, solving, state, sweeps, widgets
@@ -46,7 +47,11 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     # labels short or hid the last part), the amounts written as the cards write them.
     shown = kpis.drop(columns=hidden)
     money = [c for c in shown.columns if c != "Status"]
-    st.table(shown.style.format(widgets.tenths, subset=money, na_rep="–"))
+    # A text table draws its cells and headers as markdown: the labels (the user's words) are escaped to show as typed
+    styled = shown.style.format(widgets.tenths, subset=money, na_rep="–")
+    styled.data.index = pd.Index([widgets.literal(label, widgets.LABEL_CHARS) for label in shown.index], name="Run")
+    styled.data.columns = [widgets.literal(column, limit=None) for column in shown.columns]
+    st.table(styled)
     st.caption("Solve times: " + ", ".join(f"{widgets.literal(run)} {seconds:.1f} s"
                                            for run, seconds in kpis["Solve time [s]"].items())
                + (" (every plan optimal)." if "Status" in hidden else "."))

@@ -147,3 +147,15 @@ def one_day_backtest_form(at, day, label: str):
     at.checkbox(key="backtest_perfect").uncheck()
     at.text_input(key="backtest_label").input(label)
     return at
+
+
+def shown_table(element) -> pd.DataFrame:
+    """A text table (``st.table``) as the page shows it: its index and headers, which the page writes as
+    markdown with backslash escapes, read without them."""
+    import re
+
+    frame = element.value.copy()
+    unescape = lambda text: re.sub(r"\\(.)", r"\1", str(text))  # noqa: E731
+    frame.index = [unescape(label) for label in frame.index]
+    frame.columns = [unescape(column) for column in frame.columns]
+    return frame

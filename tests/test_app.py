@@ -27,7 +27,7 @@ from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.data.case import STRATEGIES
 from rvpp.data.variants import Variant
 from rvpp.store import RunLibrary
-from tests.factories import click, open_app, wait_for
+from tests.factories import click, open_app, shown_table, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent
 APP = str(ROOT / "app.py")
@@ -733,7 +733,7 @@ def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_sol
     at.button_group(key="compare_mode").set_value("Saved runs").run()
     at.multiselect(key="compare_runs").set_value([first.id, second.id]).run()
     assert not at.exception, at.exception
-    kpis = at.table[0].value
+    kpis = shown_table(at.table[0])
     assert list(kpis.index) == [first.label, second.label]
     # Read forwards: the extra cost of the safer (pessimistic) run over the least safe (balanced) one,
     # positive when it costs more.

@@ -24,7 +24,7 @@ import rvpp
 from rvpp.backtest import BacktestSettings, variants_of
 from rvpp.backtest.engine import run_backtest
 from rvpp.store import BacktestStore, RunLibrary
-from tests.factories import click, one_day_backtest_form, open_app, wait_for
+from tests.factories import click, one_day_backtest_form, open_app, shown_table, wait_for
 from tests.test_app import NET, TIMEOUT_S, case_of, edit_capacity, errors, figures, number, shown_kpis
 
 pytestmark = pytest.mark.usefixtures("run_library")  # every test writes into a data folder of its own
@@ -42,10 +42,8 @@ def headers(at) -> list[str]:
         config = json.loads(frame.proto.columns or "{}")
         shown = {name: settings.get("label") for name, settings in config.items() if settings.get("label")}
         found += [shown.get(str(c), str(c)) for c in value.columns] + [str(n) for n in value.index.names if n]
-    for table in at.table:  # text tables show their columns' own names
-        found += [str(c) for c in table.value.columns] + [str(n) for n in table.value.index.names if n]
-    for table in at.table:
-        found += [str(c) for c in table.value.columns]
+    for table in at.table:  # text tables: their headers as shown, without the markdown escapes
+        found += [str(c) for c in shown_table(table).columns]
     return found
 
 
@@ -110,7 +108,7 @@ def test_the_compare_cost_table_is_the_net_cost(paper_solve):
     at = click(open_app("compare"), "compare_solve")
     cost = at.dataframe[0].value
     assert cost.loc["Balanced", "DAM+SRM+HPA"] == pytest.approx(-paper_solve().objective_eur / 1000)
-    kpis = at.table[0].value
+    kpis = shown_table(at.table[0])
     extra = kpis["Extra cost vs deterministic [kEUR]"]
     assert extra["deterministic"] == 0 and (extra.drop("deterministic") > 0).all()  # safer costs more
 
