@@ -231,8 +231,19 @@ def _row_named_twice(book):
     sheet.cell(_row_of(sheet, 1, "U4"), 1).value = "U3"
 
 
+def _type_disagrees(book):
+    sheet = book["VPP_Units"]
+    sheet.cell(_row_of(sheet, 5, "U3"), 6).value = "DRES"  # E:F, the tool's second list of unit types
+
+
+def _type_left_out(book):
+    sheet = book["VPP_Units"]
+    row = _row_of(sheet, 5, "U4")
+    sheet.cell(row, 5).value = sheet.cell(row, 6).value = None
+
+
 def _dispatchable_renamed(book):
-    for sheet, column in (("VPP_Units", 1), ("DRES", 6)):
+    for sheet, column in (("VPP_Units", 1), ("VPP_Units", 5), ("DRES", 6)):
         book[sheet].cell(_row_of(book[sheet], column, "U1"), column).value = "U7"
 
 
@@ -276,6 +287,8 @@ def _not_a_number(book):
     (_without_column, r'sheet "NDRES" range A15:F1000: column "Max power \[MW\]" is missing \(header row 15\)'),
     (_unit_named_twice, r'sheet "VPP_Units" cell A\d+: U3 B5 NDRES is written twice \(first on row \d+\)'),
     (_row_named_twice, r'sheet "NDRES" cell A\d+: U3 is written twice \(first on row \d+\)'),
+    (_type_disagrees, r'sheet "VPP_Units" cell E\d+: unit "U3" of type "DRES" is of type "NDRES" in column C'),
+    (_type_left_out, r'sheet "VPP_Units" column E: lists no type for unit "U4" of column A'),
     (_without_sheet, r'sheet "Energy_Forecast": is missing; the tool\'s workbook has it'),
     (_dispatchable_renamed, r'sheet "VPP_Units" unit "U7": the tool knows a dispatchable unit as hydro \(U1\)'),
     (_not_a_number, r'sheet "DRES" row \d+ column "Max energy \[MWh\]": \'lots\' is not a finite number'),
@@ -302,7 +315,7 @@ def _not_a_number(book):
     # the period and the band's end are named, and the number written as one, not as np.float64(32.9234567)
     (_first_dam_price(45.1234567), r'sheet "Price_Forecast" column "DAM Price \[Euro/MWh\]" period T1: the band\'s '
                                    r"lower end 32.9234567 needs more than 6 significant digits"),
-], ids=["missing column", "unit named twice", "row named twice", "missing sheet", "unknown dispatchable",
+], ids=["missing column", "unit named twice", "row named twice", "types disagree", "type left out", "missing sheet", "unknown dispatchable",
         "not a number", "fuel short of the minimum run", "minimum time longer than the day", "minimum above maximum",
         "negative cost", "negative self-discharge", "self-discharge above the tool's divisor", "huge power",
         "huge price", "huge availability", "too many digits"])

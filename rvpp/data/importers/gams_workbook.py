@@ -419,6 +419,19 @@ def _unit_list(sheets: _Sheets) -> dict[str, str]:
         units[name] = kind
     if not units:
         raise WorkbookError("VPP_Units", "column A", "lists no unit")
+    # The tool reads each unit's type a second time from E:F (its set uy): both tables must say the same
+    typed = sheets.table("VPP_Units", "E", "F", 2, ())
+    seen: set[str] = set()
+    for (name, kind), row in typed.cells.items():
+        if name in seen:
+            raise WorkbookError("VPP_Units", f"cell E{row}", f'unit "{name}" is named twice')
+        seen.add(name)
+        if units.get(name) != kind:
+            said = f'is of type "{units[name]}" in column C' if name in units else "is not listed in column A"
+            raise WorkbookError("VPP_Units", f"cell E{row}", f'unit "{name}" of type "{kind}" {said}')
+    missing = [name for name in units if name not in seen]
+    if missing:
+        raise WorkbookError("VPP_Units", "column E", f'lists no type for unit "{missing[0]}" of column A')
     return units
 
 
