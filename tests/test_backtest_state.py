@@ -114,6 +114,18 @@ def test_the_end_of_day_rule_gives_the_battery_its_target_as_the_tank(storage_en
     assert day.battery[0].end_floor_mwh == (30.0 if battery is None else min(battery, 30.0))
 
 
+def test_a_unit_switched_off_has_no_state_to_carry():
+    # records.csv had start_D_e_mwh for a battery switched off, filled on the first day only (no end_D_e_mwh):
+    # the first day's state named it, the settlement of an idle unit does not
+    from rvpp.backtest.state import initial_state, with_state
+    unit = {"name": "B", "e_min_mwh": 4.0, "e_max_mwh": 40.0, "p_ch_max_mw": 10.0, "p_dis_max_mw": 10.0,
+            "e_init_mwh": 12.0, "ramp_mw_per_min": 5.0}
+    case = tiny_case(csp_units=[csp_unit(e_init=600)], battery_units=[unit, {**unit, "name": "D", "enabled": False}])
+    assert initial_state(case) == {"C": {"e_mwh_th": 600.0, "online": False, "status_h": None}, "B": {"e_mwh": 12.0}}
+    day = with_state(case, {"C": {"e_mwh_th": 700.0, "online": False, "status_h": None}, "B": {"e_mwh": 30.0}})
+    assert [(b.name, b.e_init_mwh, b.enabled) for b in day.battery] == [("B", 30.0, True), ("D", 12.0, False)]
+
+
 def test_the_settlement_reports_the_end_of_day_state_counting_into_the_day_before():
     # A settled day whose turbine never switches hands on its hours plus those carried in
     # (selling at 10 EUR/MWh does not pay the 50 EUR/MWh operating cost: it stays off).

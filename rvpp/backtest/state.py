@@ -29,9 +29,10 @@ def initial_state(case: Case) -> State:
         ts, pb = csp.storage, csp.power_block
         energy = ts.e_init_mwh_th if ts.e_init_mwh_th is not None else ts.e_min_mwh_th
         state[csp.name] = {"e_mwh_th": float(energy), "online": pb.initially_on, "status_h": pb.initial_status_h}
-    for bat in case.battery:  # MODEL_SPEC §13: at e_init, or at E min on a cyclic case
+    # Units switched off (enabled: false) are out of the model: no state, as the settlement reports none for them
+    for bat in (b for b in case.battery if b.enabled):  # MODEL_SPEC §13: at e_init, or at E min on a cyclic case
         state[bat.name] = {"e_mwh": float(bat.e_min_mwh if bat.e_init_mwh is None else bat.e_init_mwh)}
-    for unit in (*case.hydro, *case.biomass):
+    for unit in (u for u in (*case.hydro, *case.biomass) if u.enabled):
         state[unit.name] = {"online": unit.initial_online, "status_h": unit.initial_hours_in_status,
                             "p_mw": unit.p_init_mw}
     return state
