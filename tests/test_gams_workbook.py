@@ -254,6 +254,13 @@ def _dispatchable_value(unit: str, header: str, value: float):
     return change
 
 
+def _unit_value(sheet_name: str, key_column: int, unit: str, header: str, value: float):
+    def change(book):
+        sheet = book[sheet_name]
+        sheet.cell(_row_of(sheet, key_column, unit), _header_column(sheet, header)).value = value
+    return change
+
+
 def _without_sheet(book):
     del book["Energy_Forecast"]
 
@@ -306,6 +313,12 @@ def _not_a_number(book):
      r'sheet "ESS" unit "U10" column "Self degradation coefficient \[-\]": -5 must be >= 0'),
     (_storage_value("U10", "Self degradation coefficient [-]", 3000),
      r'sheet "ESS" unit "U10" column "Self degradation coefficient \[-\]": 3000 must be < 2400'),
+    (_unit_value("NDRES", 1, "U3", "Max power [MW]", -5),
+     r'sheet "NDRES" unit "U3" column "Max power \[MW\]": -5 must be >= 0'),
+    (_unit_value("STH", 6, "U5", "Machine capacity [MW]", -1),
+     r'sheet "STH" unit "U5" column "Machine capacity \[MW\]": -1 must be >= 0'),
+    (_unit_value("Demand", 15, "U6", "Max Demand [MW]", -2),
+     r'sheet "Demand" unit "U6" column "Max Demand \[MW\]": -2 must be >= 0'),
     # not in history.csv's words, nor as the band's end 999999987.8
     (_dispatchable_value("U1", "Max power production [MW]", 1e12),
      r'sheet "DRES" row \d+ column "Max power production \[MW\]": 1e\+12 must lie within ±1e\+06'),
@@ -315,10 +328,11 @@ def _not_a_number(book):
     # the period and the band's end are named, and the number written as one, not as np.float64(32.9234567)
     (_first_dam_price(45.1234567), r'sheet "Price_Forecast" column "DAM Price \[Euro/MWh\]" period T1: the band\'s '
                                    r"lower end 32.9234567 needs more than 6 significant digits"),
-], ids=["missing column", "unit named twice", "row named twice", "types disagree", "type left out", "missing sheet", "unknown dispatchable",
+], ids=["missing column", "unit named twice", "row named twice", "types disagree", "type left out", "missing sheet",
+        "unknown dispatchable",
         "not a number", "fuel short of the minimum run", "minimum time longer than the day", "minimum above maximum",
-        "negative cost", "negative self-discharge", "self-discharge above the tool's divisor", "huge power",
-        "huge price", "huge availability", "too many digits"])
+        "negative cost", "negative self-discharge", "self-discharge above the tool's divisor", "negative wind power",
+        "negative turbine input", "negative demand", "huge power", "huge price", "huge availability", "too many digits"])
 def test_a_bad_workbook_is_refused_by_name_and_nothing_is_written(small_copy, tmp_path, change, message):
     path = _copy(small_copy, tmp_path, change)
     out = tmp_path / "case"

@@ -621,6 +621,7 @@ def _non_dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str
         kind = NON_DISPATCHABLE_KINDS[name]
         enabled = switches["sNDRES_exists"] and switches["sWF_exists" if kind == "wind" else "sPV_exists"]
         v = [table.number(key, c) for c in columns]
+        _check_not_negative("NDRES", name, dict(zip(columns, v)))
         out.append(NonDispatchable(name, kind, enabled, p_min_mw=v[0], p_max_mw=v[4], cost_eur_per_mwh=v[1],
                                    sr_ramp_up_mw_per_min=v[2], sr_ramp_dn_mw_per_min=v[3],
                                    forecast=_forecast(sheets, name, periods)))
@@ -642,6 +643,7 @@ def _solar_thermal(sheets: _Sheets, units: dict[str, str], switches: dict[str, b
     for name in names:
         key = _row_of(table, name, "STH", "solar thermal plant")
         v = [table.number(key, c) for c in columns]
+        _check_not_negative("STH", name, dict(zip(columns, v)))
         # The tool's names are swapped: "breakpoint" holds the thermal input, "bounds" the efficiency.
         points = tuple((curve.number(k, "Powerblock breakpoint [MW]"), curve.number(k, "Piecewise bounds [pu]"))
                        for k in curve.rows if k[0] == name)
@@ -707,6 +709,7 @@ def _demands(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool],
     for name in names:
         key = _row_of(table, name, "Demand", "demand")
         v = [table.number(key, c) for c in columns]
+        _check_not_negative("Demand", name, dict(zip(columns, v)))
         chosen = [lp for (u, lp) in costs.rows if u == name]
         if not chosen:
             raise WorkbookError("Demand", "columns F:H", f'demand "{name}" has no load profile')
