@@ -48,7 +48,7 @@ def eur(value: float | None) -> str:
 def keur(value_eur: float | None) -> str:
     """``−124.0``: an amount in kEUR with one decimal, as in the paper's tables; an amount that rounds
     to 0.0 shows no sign (``−0.0`` read as a loss)."""
-    return "–" if value_eur is None else amount(value_eur / KILO, 1).replace("-", "−")
+    return "–" if value_eur is None else tenths(value_eur / KILO)
 
 
 def tenths(value: float) -> str:

@@ -1,7 +1,6 @@
 """Compare: the four strategies of the current case in one click (the paper's cost and
 flexibility tables), or any two to four runs of the library side by side."""
 
-import pandas as pd
 import streamlit as st
 
 from dashboard import backtests, library, solving, state, sweeps, widgets
@@ -45,13 +44,11 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     hidden = ["Solve time [s]"] + (["Status"] if (kpis["Status"] == "optimal").all() else [])
     # A table that wraps: a run's whole label and every part of the net cost in view at 1280 px (a grid cut the
     # labels short or hid the last part), the amounts written as the cards write them.
-    shown = kpis.drop(columns=hidden)
-    money = [c for c in shown.columns if c != "Status"]
     # A text table draws its cells and headers as markdown: the labels (the user's words) are escaped to show as typed
-    styled = shown.style.format(widgets.tenths, subset=money, na_rep="–")
-    styled.data.index = pd.Index([widgets.literal(label, widgets.LABEL_CHARS) for label in shown.index], name="Run")
-    styled.data.columns = [widgets.literal(column, limit=None) for column in shown.columns]
-    st.table(styled)
+    shown = kpis.drop(columns=hidden).rename(index=lambda label: widgets.literal(label, widgets.LABEL_CHARS),
+                                             columns=lambda column: widgets.literal(column, limit=None))
+    money = [c for c in shown.columns if c != "Status"]
+    st.table(shown.style.format(widgets.tenths, subset=money, na_rep="–"))
     st.caption("Solve times: " + ", ".join(f"{widgets.literal(run)} {seconds:.1f} s"
                                            for run, seconds in kpis["Solve time [s]"].items())
                + (" (every plan optimal)." if "Status" in hidden else "."))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import re
 import time
 from pathlib import Path
 
@@ -149,13 +150,15 @@ def one_day_backtest_form(at, day, label: str):
     return at
 
 
+def shown(text: str) -> str:
+    """What markdown shows of ``text``: its backslash escapes undone."""
+    return re.sub(r"\\(.)", r"\1", text)
+
+
 def shown_table(element) -> pd.DataFrame:
     """A text table (``st.table``) as the page shows it: its index and headers, which the page writes as
     markdown with backslash escapes, read without them."""
-    import re
-
     frame = element.value.copy()
-    unescape = lambda text: re.sub(r"\\(.)", r"\1", str(text))  # noqa: E731
-    frame.index = [unescape(label) for label in frame.index]
-    frame.columns = [unescape(column) for column in frame.columns]
+    frame.index = [shown(str(label)) for label in frame.index]
+    frame.columns = [shown(str(column)) for column in frame.columns]
     return frame

@@ -13,7 +13,7 @@ from streamlit.testing.v1 import AppTest
 
 from rvpp.outputs.bundle import case_zip_bytes
 from rvpp.store import RunLibrary, StoreError
-from tests.factories import click, open_app
+from tests.factories import click, open_app, shown
 
 # A label that would draw a sign-in link, a remote image, an icon, coloured text, an autolink and LaTeX.
 HOSTILE = ("x` [Session expired: sign in again](https://evil.example/login) ![](https://evil.example/p.png) `y "
@@ -32,11 +32,6 @@ def tick(at: AppTest, *rows: int) -> AppTest:
     at.run()
     assert not at.exception, at.exception
     return at
-
-
-def shown(text: str) -> str:
-    """What markdown shows of ``text``: its backslash escapes undone."""
-    return re.sub(r"\\(.)", r"\1", text)
 
 
 def assert_inert(text: str, *words: str) -> None:

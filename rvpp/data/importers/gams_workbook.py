@@ -267,6 +267,16 @@ class _Table:
                                 "near, so it is a typo")
         return float(value)
 
+    def unit_numbers(self, key: tuple[str, ...], columns: tuple[str, ...], unit: str, *,
+                     unlimited: tuple[str, ...] = ()) -> list[float]:
+        """The numbers of ``unit``'s row in ``columns`` (``unlimited``: sums of money, of any size): costs,
+        powers, energies, ramps, hours and coefficients, never below 0."""
+        values = [self.number(key, c, limit=None if c in unlimited else MAX_QUANTITY) for c in columns]
+        for column, value in zip(columns, values):
+            if value < 0:
+                raise WorkbookError(self.sheet, f'unit "{unit}" column "{column}"', f"{value:g} must be >= 0")
+        return values
+
 
 class _Sheets:
     """The cell values of the sheets read so far (one pass per sheet, values only)."""
@@ -559,8 +569,7 @@ def _dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bo
     out = []
     for name in names:
         key = _row_of(table, name, "DRES", "dispatchable unit")
-        v = [table.number(key, c) for c in columns]
-        _check_not_negative("DRES", name, dict(zip(columns, v)))
+        v = table.unit_numbers(key, columns, name)
         _check_dispatchable(name, dict(zip(columns, v)))
         kind = DISPATCHABLE_KINDS.get(name, "dispatchable")
         switch = {"hydro": "sHydro_exists", "biomass": "sBiomass_exists"}.get(kind)
@@ -572,13 +581,6 @@ def _dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str, bo
                                 sr_ramp_up_mw_per_min=v[11], sr_ramp_dn_mw_per_min=v[12], hours_on_before=v[13],
                                 hours_off_before=v[14], min_up_h=v[15], min_down_h=v[16], e_max_mwh=v[17]))
     return tuple(out)
-
-
-def _check_not_negative(sheet: str, name: str, values: dict[str, float]) -> None:
-    """Costs, powers, energies, ramps, hours and coefficients of a unit's row are never below 0."""
-    for column, value in values.items():
-        if value < 0:
-            raise WorkbookError(sheet, f'unit "{name}" column "{column}"', f"{value:g} must be >= 0")
 
 
 def _check_dispatchable(name: str, values: dict[str, float]) -> None:
@@ -620,8 +622,7 @@ def _non_dispatchable(sheets: _Sheets, units: dict[str, str], switches: dict[str
                                 "the tool knows a non-dispatchable unit as wind (U3) or PV (U4) only by these names")
         kind = NON_DISPATCHABLE_KINDS[name]
         enabled = switches["sNDRES_exists"] and switches["sWF_exists" if kind == "wind" else "sPV_exists"]
-        v = [table.number(key, c) for c in columns]
-        _check_not_negative("NDRES", name, dict(zip(columns, v)))
+        v = table.unit_numbers(key, columns, name)
         out.append(NonDispatchable(name, kind, enabled, p_min_mw=v[0], p_max_mw=v[4], cost_eur_per_mwh=v[1],
                                    sr_ramp_up_mw_per_min=v[2], sr_ramp_dn_mw_per_min=v[3],
                                    forecast=_forecast(sheets, name, periods)))
@@ -642,8 +643,7 @@ def _solar_thermal(sheets: _Sheets, units: dict[str, str], switches: dict[str, b
     out = []
     for name in names:
         key = _row_of(table, name, "STH", "solar thermal plant")
-        v = [table.number(key, c) for c in columns]
-        _check_not_negative("STH", name, dict(zip(columns, v)))
+        v = table.unit_numbers(key, columns, name)
         # The tool's names are swapped: "breakpoint" holds the thermal input, "bounds" the efficiency.
         points = tuple((curve.number(k, "Powerblock breakpoint [MW]"), curve.number(k, "Piecewise bounds [pu]"))
                        for k in curve.rows if k[0] == name)
@@ -673,8 +673,7 @@ def _storages(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool])
     out = []
     for name in names:
         key = _row_of(table, name, "ESS", "storage")
-        v = [table.number(key, c, limit=None if c == "ESS cost [Euro]" else MAX_QUANTITY) for c in columns]
-        _check_not_negative("ESS", name, dict(zip(columns, v)))
+        v = table.unit_numbers(key, columns, name, unlimited=("ESS cost [Euro]",))
         thermal = units[name] == "TES"
         if not thermal and v[0] >= SELF_DISCHARGE_DIVISOR:
             raise WorkbookError("ESS", f'unit "{name}" column "{columns[0]}"',
@@ -708,8 +707,7 @@ def _demands(sheets: _Sheets, units: dict[str, str], switches: dict[str, bool],
     out = []
     for name in names:
         key = _row_of(table, name, "Demand", "demand")
-        v = [table.number(key, c) for c in columns]
-        _check_not_negative("Demand", name, dict(zip(columns, v)))
+        v = table.unit_numbers(key, columns, name)
         chosen = [lp for (u, lp) in costs.rows if u == name]
         if not chosen:
             raise WorkbookError("Demand", "columns F:H", f'demand "{name}" has no load profile')
