@@ -1,8 +1,8 @@
 """Dashboard timings, printed as JSON and written to ``benchmarks/results/dashboard.json``.
 
 * ``solve_s_by_case``: wall time of ``rvpp.solve`` on the default case per period length
-  and strategy (in this process, after a warm-up); Home reads it to say how long a
-  solve of the current case takes before this server has solved it.
+  and strategy (in this process, after a warm-up). No page reads it: the dashboard's
+  estimates come from the running server's own solves.
 * ``draw_*``: after the solve returns, what the Results page still does: build every
   figure of the plan (``first``; ``cached``: the figures are kept per plan) and turn
   them into the JSON the browser receives.
@@ -29,7 +29,7 @@
   solve (once: a server has one); ``warm`` the median of later solves of the
   ``WARM_STRATEGIES``, each in ``drawn_after_solve_warm_all_s``.
 * ``sweep_s_by_case``: wall time of ``sweep_gamma`` over Γ = 0..NT on the default case
-  (in this process); the dashboard quotes it before its first sweep of such a case.
+  (in this process), for comparison with the sweep timed in the browser below.
 * ``gamma_sweep_warmup_s``: on Learn, from clicking "Compute the plans for every Γ" until
   the cost curve is drawn (the sweep in a solver process, then the page).
 * ``gamma_slider_redraw_*``: once the sweep is warm, from pressing an arrow key on the
