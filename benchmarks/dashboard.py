@@ -45,8 +45,9 @@
 * ``load_average``: the host's one-minute load average before and after (the numbers
   are only comparable on a quiet machine).
 
-Every browser timing is measured ``REPEAT`` times on the same server; the JSON keeps
-each measurement and the median. Needs Chromium at ``/usr/bin/chromium`` for the
+Every browser timing is measured ``REPEAT`` times on the same server (the first chart's
+later sessions ``FIRST_CHART_SESSIONS`` times of each kind); the JSON keeps each
+measurement and the median. Needs Chromium at ``/usr/bin/chromium`` for the
 browser timings: ``python benchmarks/dashboard.py``; ``--first-chart`` measures only
 Home's first chart (fresh server and later sessions), prints it and writes it to
 ``benchmarks/results/dashboard-first-chart.json``; ``--port N`` runs the server on port N.
@@ -98,6 +99,7 @@ WAIT_MS = 180_000
 CHARTS_ON_RESULTS = 6
 LIBRARY_RUNS = 200
 REPEAT = 3
+FIRST_CHART_SESSIONS = 5  # later sessions per kind: the first after a server start meets the fork server's imports
 WARM_STRATEGIES = ("Pessimistic", "Optimistic", "Deterministic")  # later solves: strategies not solved before
 GAMMA_MOVES = 6
 KEY_TAKEN_MS = 5_000  # a key press the Γ slider has not taken by then is taken as lost
@@ -357,11 +359,11 @@ def open_first_chart(context, url: str) -> tuple[float, object, float]:
 
 
 def first_chart_sessions(browser, url: str, prefix: str) -> dict:
-    """The first chart of ``url``: a first session, then ``REPEAT`` later ones each in a new browser
-    profile and ``REPEAT`` more in one profile that has opened the page before (see the module's notes)."""
+    """The first chart of ``url``: a first session, then :data:`FIRST_CHART_SESSIONS` later ones each in a
+    new browser profile and as many more in one profile that has opened the page before (see the module's notes)."""
     timings: dict = {}
     fresh, same = [], []
-    for _ in range(REPEAT + 1):
+    for _ in range(FIRST_CHART_SESSIONS + 1):
         context = browser.new_context(viewport={"width": 1280, "height": 2400})
         seconds, page, top = open_first_chart(context, url)
         fresh.append(seconds)
@@ -369,7 +371,7 @@ def first_chart_sessions(browser, url: str, prefix: str) -> dict:
         context.close()
     returning = browser.new_context(viewport={"width": 1280, "height": 2400})
     open_first_chart(returning, url)[1].close()  # this profile's first visit fills its cache
-    for _ in range(REPEAT):
+    for _ in range(FIRST_CHART_SESSIONS):
         seconds, page, _ = open_first_chart(returning, url)
         same.append(seconds)
         page.close()
