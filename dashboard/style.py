@@ -8,6 +8,11 @@ drawn lighter. In both
 themes, the label of a control that cannot be changed (the day-ahead market's switch) is the text colour
 at 40 % (2.8:1 light, 3.8:1 dark): it is drawn at 62 % instead, still lighter than an enabled label.
 
+Streamlit's theme for Plotly charts draws their axis titles, tick labels, the texts beside bars and in
+annotations and legend texts without a colour of their own in its grey #808495: 3.7:1 on the light background
+(4.9:1 on the dark one). In the light theme that grey is drawn as the text colour at 62 % (6.2:1); a colour the
+figure sets itself is left alone.
+
 ``light-dark()`` picks the colour of the scheme Streamlit draws in (the theme follows the viewer's
 preference, ``.streamlit/config.toml``); the light theme's own colours come from its settings.
 
@@ -29,6 +34,7 @@ import streamlit as st
 
 LIGHT_RED = "#FF7B72"  # dark theme: 6.6:1 on a selected option's background (#291a1a), 7.2:1 on the page's
 DISABLED_SHARE = 62    # [%] of the text colour in a disabled control's label: 6.2:1 light, 7.5:1 dark
+PLOTLY_GREY = "rgb(128, 132, 149)"  # Streamlit's chart text (#808495), as the browser writes it in a text's style
 NARROW_PX = 1199       # [px] in a window at most this wide, Home's case goes below its question
 
 _RULES = """<style>
@@ -37,6 +43,8 @@ _RULES = """<style>
 .stApp label[data-disabled="true"] { color: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent),
                                                 color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
 .stApp label[data-disabled="true"] p { color: inherit; }
+.js-plotly-plot .main-svg text[style*="fill: PLOTLY_GREY"] {
+  fill: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent), PLOTLY_GREY) !important; }
 [data-testid="stSidebarNav"] a:focus-visible { outline: 2px solid light-dark(PRIMARY, LIGHT_RED); outline-offset: -2px; }
 @media (max-width: NARROW_PXpx) {
   [data-testid="stHorizontalBlock"]:has([data-testid="stCaptionContainer"] table) { flex-wrap: wrap; }
@@ -49,7 +57,8 @@ _RULES = """<style>
 @cache
 def rules() -> str:
     """The style element, with the theme's colours (built once per server process)."""
-    return (_RULES.replace("LIGHT_RED", LIGHT_RED).replace("PRIMARY", st.get_option("theme.light.primaryColor"))
+    return (_RULES.replace("LIGHT_RED", LIGHT_RED).replace("PLOTLY_GREY", PLOTLY_GREY)
+            .replace("PRIMARY", st.get_option("theme.light.primaryColor"))
             .replace("LIGHT_TEXT", st.get_option("theme.light.textColor"))
             .replace("DARK_TEXT", st.get_option("theme.dark.textColor")).replace("SHARE", str(DISABLED_SHARE))
             .replace("NARROW_PX", str(NARROW_PX)))
