@@ -6,7 +6,9 @@ over a slider's thumb (3.9:1) are in the primary colour on a dark background: a 
 in the theme would fix them and break the white text of every primary button, so only these texts are
 drawn lighter. In both
 themes, the label of a control that cannot be changed (the day-ahead market's switch) is the text colour
-at 40 % (2.8:1 light, 3.8:1 dark): it is drawn at 62 % instead, still lighter than an enabled label.
+at 40 % (2.8:1 light, 3.8:1 dark): it is drawn at 62 % instead, still lighter than an enabled label. A
+disabled button's label (Home's "Load the uploaded case" before a file is chosen) had the same 40 % and is
+drawn at the same 62 %.
 
 Streamlit's theme for Plotly charts draws their axis titles, tick labels, the texts beside bars and in
 annotations and legend texts without a colour of their own in its grey #808495: 3.7:1 on the light background
@@ -43,6 +45,8 @@ _RULES = """<style>
 .stApp label[data-disabled="true"] { color: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent),
                                                 color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
 .stApp label[data-disabled="true"] p { color: inherit; }
+.stApp button:disabled { color: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent),
+                                        color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
 .js-plotly-plot .main-svg text[style*="fill: PLOTLY_GREY"] {
   fill: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent), PLOTLY_GREY) !important; }
 [data-testid="stSidebarNav"] a:focus-visible { outline: 2px solid light-dark(PRIMARY, LIGHT_RED); outline-offset: -2px; }
