@@ -16,8 +16,22 @@ import pytest
 
 import rvpp
 from rvpp.store import RunLibrary
-from tests.test_browser import (ARTIFACTS, GRID_HEADER_PX, GRID_ROW_PX, STREAMLIT_KNOWN, axe_script,
-                                chromium_page, open_page, require_browser, settle, streamlit_server)
+from tests.test_browser import (
+    ARTIFACTS,
+    EDIT_TRIES,
+    EDIT_WAIT_MS,
+    GRID_HEADER_PX,
+    GRID_ROW_PX,
+    P_MAX_X_PX,
+    PlaywrightTimeout,
+    axe_script,
+    chromium_page,
+    edit_grid_cell,
+    open_page,
+    require_browser,
+    settle,
+    streamlit_server,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -70,6 +84,7 @@ STREAMLIT_MARKUP = {
 }
 # Streamlit draws st.subheader as <h3> under a page's st.title (<h1>): a best-practice rule, kept (docs/dashboard.md).
 PROJECT_KNOWN = ("heading-order",)
+QUIET_MS = 400  # a state counts as drawn once Streamlit's running indicator stays off twice this long
 
 
 def axe_all(page, script: str) -> list[dict]:
@@ -86,7 +101,7 @@ def axe_all(page, script: str) -> list[dict]:
 
 def check(page, script: str, state: str, scheme: str) -> None:
     """axe-core's whole rule set and the contrast of every chart text and disabled button label in ``state``."""
-    settle(page)
+    quiet(page)
     page.screenshot(path=ARTIFACTS / f"state-{scheme}-{re.sub(r'[^a-z0-9]+', '-', state.lower())}.png")
     for violation in axe_all(page, script):
         if violation["id"] in PROJECT_KNOWN:
@@ -96,6 +111,13 @@ def check(page, script: str, state: str, scheme: str) -> None:
     assert all(ratio >= 4.5 for *_, ratio in charts), (state, [c for c in charts if c[-1] < 4.5][:5])
     disabled = page.evaluate(DISABLED_LABELS)
     assert all(ratio >= 4.5 for _, ratio in disabled), (state, disabled)
+
+
+def quiet(page) -> None:
+    """Wait until Streamlit's running indicator has stayed off for a moment (a shorter :func:`settle`)."""
+    for _ in range(2):
+        page.wait_for_function("() => !document.querySelector('[data-testid=stStatusWidget]')")
+        page.wait_for_timeout(QUIET_MS)
 
 
 def every_tab(page, script: str, state: str, scheme: str) -> None:
@@ -184,3 +206,70 @@ def test_the_states_past_each_first_screen_pass_axe_and_their_chart_and_disabled
         page.get_by_role("heading", name="Price of robustness and the recommended Γ").wait_for()
         open_expanders(page)
         check(page, script, "Backtest, finished, recommendation", scheme)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scheme", ["light", "dark"])
+def test_refusals_open_editors_every_tab_and_a_running_backtest_pass_axe(states_url, paper_case, scheme):
+    url, data_dir = states_url
+    from rvpp.backtest import BacktestSettings, variants_of
+    from rvpp.store import BacktestStore
+
+    day = paper_case.delivery_date
+    store = BacktestStore(f"sqlite:///{data_dir / 'rvpp.sqlite3'}")
+    running = store.open(paper_case, BacktestSettings(day, day, variants_of(["balanced"], [])).stored(), keys_total=2,
+                         label=f"running {scheme}")
+    store.set_progress(running, "running", 0, 2)  # this process plays the backtest's own
+    script = axe_script()
+    try:
+        with chromium_page({"width": 1280, "height": 800}, scheme) as page:
+            page.goto(url)
+            open_page(page, "Uncertainty")
+            every_tab(page, script, "Uncertainty", scheme)
+
+            open_page(page, "Portfolio")
+            page.get_by_role("heading", name="Wind farms").wait_for()
+            letters = page.get_by_text('WF1: P max [MW] "abc" is not a number')
+            for _ in range(EDIT_TRIES):  # the canvas grid sometimes drops keys typed while it redraws
+                edit_grid_cell(page, 0, 0, P_MAX_X_PX, "abc")
+                try:
+                    letters.wait_for(timeout=EDIT_WAIT_MS)
+                    break
+                except PlaywrightTimeout:
+                    continue
+            check(page, script, "Portfolio, letters refused", scheme)
+            grid = page.get_by_test_id("stDataFrame").first
+            box = grid.bounding_box()
+            page.mouse.dblclick(box["x"] + P_MAX_X_PX, box["y"] + GRID_HEADER_PX + GRID_ROW_PX / 2)
+            page.locator(".gdg-input").first.wait_for(state="visible")
+            check(page, script, "Portfolio, a cell's editor open", scheme)
+            page.keyboard.press("Escape")
+            every_tab(page, script, "Portfolio", scheme)
+
+            open_page(page, "Backtest")
+            page.get_by_test_id("stProgress").filter(has_text="running").first.wait_for()
+            check(page, script, "Backtest, one running", scheme)
+            page.get_by_test_id("stSelectbox").filter(has_text="Backtest shown below").click()
+            page.get_by_role("option").first.wait_for()
+            check(page, script, "Backtest, its list of backtests open", scheme)
+            page.keyboard.press("Escape")
+            page.get_by_text("Start a backtest of the current case").click()
+            first_day, last_day = (page.get_by_test_id("stDateInput").nth(i).locator("input") for i in (0, 1))
+            first, last = first_day.input_value(), last_day.input_value()
+            first_day.fill(last)
+            first_day.press("Enter")
+            last_day.fill(first)
+            last_day.press("Enter")
+            page.get_by_role("button", name="Start the backtest").click()
+            page.get_by_test_id("stAlert").filter(has_text="Not started").wait_for()
+            check(page, script, "Backtest, dates refused", scheme)
+
+            open_page(page, "Sensitivity to Γ")
+            page.get_by_test_id("stTextInputField").first.fill("0, 24")
+            page.get_by_role("button", name="Run").click()
+            page.get_by_test_id("stPlotlyChart").nth(1).locator(".main-svg").first.wait_for()
+            check(page, script, "Sensitivity, run", scheme)
+    finally:
+        store.set_progress(running, "stopped", 0, 2)
+        store.engine.dispose()
+
