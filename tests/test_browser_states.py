@@ -273,3 +273,53 @@ def test_refusals_open_editors_every_tab_and_a_running_backtest_pass_axe(states_
         store.set_progress(running, "stopped", 0, 2)
         store.engine.dispose()
 
+
+# The focused element's indicator: its outline (drawn, at least 2 px) or else its box-shadow ring, each colour laid
+# over the background behind the element (the first opaque one up its ancestors) and measured against it.
+FOCUS_RING = """() => {
+    const element = document.activeElement;
+    if (!element || element === document.body) return null;
+    const parse = text => { const n = text.match(/[\\d.]+/g).map(Number);
+        return text.startsWith('color(') ? [n[0] * 255, n[1] * 255, n[2] * 255, n[3] ?? 1] : [n[0], n[1], n[2], n[3] ?? 1]; };
+    const over = (top, base) => [0, 1, 2].map(i => top[3] * top[i] + (1 - top[3]) * base[i]).concat([1]);
+    const luminance = rgb => { const c = rgb.slice(0, 3).map(v => v / 255).map(v => v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
+        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+    const contrast = (a, b) => { const [high, low] = [luminance(a), luminance(b)].sort((x, y) => y - x);
+        return (high + 0.05) / (low + 0.05); };
+    let layers = [];
+    for (let e = element.parentElement; e; e = e.parentElement) {
+        const c = parse(getComputedStyle(e).backgroundColor);
+        if (c[3] > 0) layers.push(c);
+        if (c[3] >= 1) break;
+    }
+    const back = layers.reduceRight((base, layer) => over(layer, base), [255, 255, 255, 1]);
+    const style = getComputedStyle(element);
+    const rings = style.outlineStyle !== 'none' && parseFloat(style.outlineWidth) >= 2 ? [style.outlineColor]
+        : (style.boxShadow.match(/(rgba?|color)\\([^)]*\\)/g) || []);
+    return {kind: element.getAttribute('role') || element.tagName.toLowerCase(), name: element.innerText.trim().slice(0, 40),
+            ring: Math.max(0, ...rings.map(c => contrast(over(parse(c), back), back)))};
+}"""
+FOCUS_PAGES = ("Home", "Markets & tariffs", "Uncertainty")  # tabs, links, buttons, options of a segmented control
+TAB_PRESSES = 40  # per page, from its top
+
+
+@pytest.mark.parametrize("scheme", ["light", "dark"])
+def test_every_button_link_and_tab_reached_by_the_keyboard_is_marked_at_3_to_1(states_url, scheme):
+    # Streamlit ringed them in the primary colour at 50 %: 2.5:1 on the light background.
+    url, _ = states_url
+    with chromium_page({"width": 1280, "height": 800}, scheme) as page:
+        page.goto(url)
+        focused = {}
+        for title in FOCUS_PAGES:
+            if title != "Home":
+                open_page(page, title)
+            settle(page)
+            page.get_by_test_id("stMain").locator("h1").first.click()  # the keyboard starts from the page's top
+            for _ in range(TAB_PRESSES):
+                page.keyboard.press("Tab")
+                found = page.evaluate(FOCUS_RING)
+                if found and found["kind"] in ("button", "a", "tab", "radio"):
+                    focused.setdefault((title, found["kind"], found["name"]), found["ring"])
+        assert {kind for _, kind, _ in focused} == {"button", "a", "tab", "radio"}, focused
+        faint = {key: ring for key, ring in focused.items() if ring < 3}
+        assert not faint, faint
