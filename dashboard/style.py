@@ -18,9 +18,10 @@ figure sets itself is left alone.
 ``light-dark()`` picks the colour of the scheme Streamlit draws in (the theme follows the viewer's
 preference, ``.streamlit/config.toml``); the light theme's own colours come from its settings.
 
-Every button, link and tab reached by the keyboard is outlined in the primary colour (6.4:1 light, #FF7B72
+Every button, link, tab, expander header, switch and checkbox reached by the keyboard is outlined in the primary colour (6.5:1 light, #FF7B72
 7.2:1 dark), 2 px clear of its edge: Streamlit marks it with a ring of the primary colour at 50 %, 2.5:1 on the
-light background, below the 3:1 WCAG 2 asks of a focus indicator. A page's link in the sidebar, reached by the
+light background, below the 3:1 WCAG 2 asks of a focus indicator, and marks a switch or a checkbox not at all.
+A page's link in the sidebar, reached by the
 keyboard, is outlined in the primary colour too, inside its box: Streamlit marks it
 only with the faint grey it gives a link under the mouse (15 % grey over the sidebar), fainter than the mark of
 the page shown, so a keyboard user could not tell where the focus was.
@@ -52,7 +53,8 @@ _RULES = """<style>
                                         color-mix(in srgb, DARK_TEXT SHARE%, transparent)); }
 .js-plotly-plot .main-svg text[style*="fill: PLOTLY_GREY"] {
   fill: light-dark(color-mix(in srgb, LIGHT_TEXT SHARE%, transparent), PLOTLY_GREY) !important; }
-body .stApp :where(button, a, [role="tab"]):focus-visible {
+body .stApp :where(button, a, summary, [role="tab"]):focus-visible,
+body .stApp :where(label:has(input:is([type="checkbox"], [type="radio"]):focus-visible)) {
   outline: 2px solid light-dark(PRIMARY, LIGHT_RED); outline-offset: 2px; box-shadow: none; }
 [data-testid="stSidebarNav"] a:focus-visible { outline: 2px solid light-dark(PRIMARY, LIGHT_RED); outline-offset: -2px; }
 @media (max-width: NARROW_PXpx) {
