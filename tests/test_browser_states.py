@@ -78,7 +78,7 @@ STREAMLIT_MARKUP = {
     "listitem": "node.closest('[data-testid=stSidebarNav]')",
     # The data editor's cell editor, a text area without a label outside every landmark.
     "label": "node.closest('#portal') && node.matches('.gdg-input, textarea')",
-    "region": "node.closest('#portal, [data-baseweb=popover], [data-baseweb=layer]')",
+    "region": "node.closest('#portal, [data-testid=stSelectboxVirtualDropdown]')",
     # The file uploader's drop zone: role="presentation" on an element that takes the focus.
     "presentation-role-conflict": "node.closest('[data-testid=stFileUploaderDropzone]')",
 }
@@ -155,6 +155,7 @@ def states_url(tmp_path_factory, paper_case, paper_solve):
         yield url, data_dir
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheme", ["light", "dark"])
 def test_the_states_past_each_first_screen_pass_axe_and_their_chart_and_disabled_texts_reach_4_5_to_1(
         states_url, scheme):
