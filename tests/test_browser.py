@@ -765,6 +765,43 @@ def test_saved_runs_survive_a_reload_and_a_restart_and_a_capacity_edit_moves_the
 # ----------------------------------------------------------------------------- accessibility
 
 
+# The contrast of each Plotly text (ticks, axis and legend titles, texts beside bars, annotations: not the hover
+# label, drawn over its trace's colour, nor a text inside a bar) over the page's background behind the chart (the
+# figures' paper and plot area are transparent), from the fill and fill-opacity the browser drew it with.
+CHART_TEXTS = """() => {
+    const parse = text => { const n = text.match(/[\\d.]+/g).map(Number);
+        return text.startsWith('color(') ? [n[0] * 255, n[1] * 255, n[2] * 255, n[3] ?? 1] : [n[0], n[1], n[2], n[3] ?? 1]; };
+    const over = (top, base) => [0, 1, 2].map(i => top[3] * top[i] + (1 - top[3]) * base[i]);
+    const luminance = rgb => { const c = rgb.map(v => v / 255).map(v => v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
+        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+    const page = parse(getComputedStyle(document.querySelector('.stApp')).backgroundColor);
+    return [...document.querySelectorAll('.js-plotly-plot .main-svg text')]
+        .filter(t => t.textContent.trim() && !t.closest('.hoverlayer') && !t.classList.contains('bartext-inside'))
+        .map(t => { const style = getComputedStyle(t), fill = parse(style.fill);
+            const drawn = over([fill[0], fill[1], fill[2], fill[3] * parseFloat(style.fillOpacity)], page);
+            const [high, low] = [luminance(drawn), luminance(page.slice(0, 3))].sort((a, b) => b - a);
+            return [t.textContent.trim(), t.getAttribute('class') || '', style.fill, (high + 0.05) / (low + 0.05)]; });
+}"""
+# The same for the labels of the page's disabled buttons, over the background the browser drew behind them.
+DISABLED_LABELS = """() => {
+    const parse = text => { const n = text.match(/[\\d.]+/g).map(Number);
+        return text.startsWith('color(') ? [n[0] * 255, n[1] * 255, n[2] * 255, n[3] ?? 1] : [n[0], n[1], n[2], n[3] ?? 1]; };
+    const over = (top, base) => [0, 1, 2].map(i => top[3] * top[i] + (1 - top[3]) * base[i]).concat([1]);
+    const luminance = rgb => { const c = rgb.slice(0, 3).map(v => v / 255).map(v => v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
+        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+    return [...document.querySelectorAll('button:disabled p')].filter(p => p.innerText.trim()).map(p => {
+        let back = [0, 0, 0, 0], layers = [];
+        for (let e = p; e; e = e.parentElement) {
+            const c = parse(getComputedStyle(e).backgroundColor);
+            if (c[3] > 0) layers.push(c);
+            if (c[3] >= 1) break;
+        }
+        back = layers.reduceRight((base, layer) => over(layer, base), [255, 255, 255, 1]);
+        const drawn = over(parse(getComputedStyle(p).color), back);
+        const [high, low] = [luminance(drawn), luminance(back)].sort((a, b) => b - a);
+        return [p.innerText.trim(), (high + 0.05) / (low + 0.05)]; });
+}"""
+
 def axe_script() -> str:
     """axe-core's axe.min.js from tests/node (``make axe``, which ``make test`` runs); installed here by
     ``npm ci`` when missing. Without it the accessibility check fails: it never passes by not running."""
@@ -879,7 +916,7 @@ def test_the_sidebar_link_reached_by_the_keyboard_is_outlined_at_3_to_1(app_url,
 
 def test_every_page_passes_axe_and_fits_1280_pixels(app_url):
     script = axe_script()
-    found = {}
+    found, drawn = {}, {}
     with chromium_page({"width": 1280, "height": 800}) as page:
         page.goto(app_url)
         for title, slug in PAGES.items():
@@ -894,9 +931,14 @@ def test_every_page_passes_axe_and_fits_1280_pixels(app_url):
             settle(page)
             page.screenshot(path=ARTIFACTS / f"page-{slug}.png")
             found[title] = axe_violations(page, script)
+            charts, disabled = page.evaluate(CHART_TEXTS), page.evaluate(DISABLED_LABELS)
+            assert all(ratio >= 4.5 for *_, ratio in charts), (title, [c for c in charts if c[-1] < 4.5][:5])
+            assert all(ratio >= 4.5 for _, ratio in disabled), (title, disabled)
+            drawn[title] = len(charts)
             overflowing = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stPlotlyChart]')]
                 .filter(c => c.scrollWidth > c.clientWidth + 1).length""")
             assert overflowing == 0, f"{title}: {overflowing} chart(s) wider than their place"
+    assert drawn["Results"] > 50 and drawn["Compare strategies"] > 20, drawn  # the chart texts were measured
     for title, violations in found.items():
         ids = {v["id"] for v in violations}
         assert not ids & FIXABLE, f"{title}: {[v for v in violations if v['id'] in FIXABLE]}"

@@ -18,6 +18,8 @@ import rvpp
 from rvpp.store import RunLibrary
 from tests.test_browser import (
     ARTIFACTS,
+    CHART_TEXTS,
+    DISABLED_LABELS,
     EDIT_TRIES,
     EDIT_WAIT_MS,
     GRID_HEADER_PX,
@@ -35,42 +37,6 @@ from tests.test_browser import (
 
 pytestmark = pytest.mark.browser
 
-# The contrast of each Plotly text (ticks, axis and legend titles, texts beside bars, annotations: not the hover
-# label, drawn over its trace's colour, nor a text inside a bar) over the page's background behind the chart (the
-# figures' paper and plot area are transparent), from the fill and fill-opacity the browser drew it with.
-CHART_TEXTS = """() => {
-    const parse = text => { const n = text.match(/[\\d.]+/g).map(Number);
-        return text.startsWith('color(') ? [n[0] * 255, n[1] * 255, n[2] * 255, n[3] ?? 1] : [n[0], n[1], n[2], n[3] ?? 1]; };
-    const over = (top, base) => [0, 1, 2].map(i => top[3] * top[i] + (1 - top[3]) * base[i]);
-    const luminance = rgb => { const c = rgb.map(v => v / 255).map(v => v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
-        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
-    const page = parse(getComputedStyle(document.querySelector('.stApp')).backgroundColor);
-    return [...document.querySelectorAll('.js-plotly-plot .main-svg text')]
-        .filter(t => t.textContent.trim() && !t.closest('.hoverlayer') && !t.classList.contains('bartext-inside'))
-        .map(t => { const style = getComputedStyle(t), fill = parse(style.fill);
-            const drawn = over([fill[0], fill[1], fill[2], fill[3] * parseFloat(style.fillOpacity)], page);
-            const [high, low] = [luminance(drawn), luminance(page.slice(0, 3))].sort((a, b) => b - a);
-            return [t.textContent.trim(), t.getAttribute('class') || '', style.fill, (high + 0.05) / (low + 0.05)]; });
-}"""
-# The same for the labels of the page's disabled buttons, over the background the browser drew behind them.
-DISABLED_LABELS = """() => {
-    const parse = text => { const n = text.match(/[\\d.]+/g).map(Number);
-        return text.startsWith('color(') ? [n[0] * 255, n[1] * 255, n[2] * 255, n[3] ?? 1] : [n[0], n[1], n[2], n[3] ?? 1]; };
-    const over = (top, base) => [0, 1, 2].map(i => top[3] * top[i] + (1 - top[3]) * base[i]).concat([1]);
-    const luminance = rgb => { const c = rgb.slice(0, 3).map(v => v / 255).map(v => v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
-        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
-    return [...document.querySelectorAll('button:disabled p')].filter(p => p.innerText.trim()).map(p => {
-        let back = [0, 0, 0, 0], layers = [];
-        for (let e = p; e; e = e.parentElement) {
-            const c = parse(getComputedStyle(e).backgroundColor);
-            if (c[3] > 0) layers.push(c);
-            if (c[3] >= 1) break;
-        }
-        back = layers.reduceRight((base, layer) => over(layer, base), [255, 255, 255, 1]);
-        const drawn = over(parse(getComputedStyle(p).color), back);
-        const [high, low] = [luminance(drawn), luminance(back)].sort((a, b) => b - a);
-        return [p.innerText.trim(), (high + 0.05) / (low + 0.05)]; });
-}"""
 # What axe-core's whole rule set finds in Streamlit's own markup, each where it is: rule -> the test of a node.
 # Listed in docs/dashboard.md.
 STREAMLIT_MARKUP = {
