@@ -422,6 +422,16 @@ def sidebar(case: Case) -> None:
         st.caption(":material/hourglass_top: solving…")
 
 
+def lost_case_note() -> None:
+    """Say that the tab's own case is gone when a new session began where it was (the server restarted or
+    the tab was reloaded): the page would otherwise show the shipped case as if nothing had happened."""
+    if state.lost_case():
+        st.warning("This tab's case (loaded, opened or edited here) is gone: the server was restarted or the "
+                   "tab reloaded, and a tab keeps its case only while its session lasts. This is the shipped "
+                   f"case {state.DEFAULT_CASE.name} again. Saved runs are kept: open one on **Saved runs**, or "
+                   "load a case you downloaded on **Home**.", icon=":material/restart_alt:")
+
+
 def open_linked_run(page) -> None:
     """Open the saved run a link names (``?run=ID``) once per session, then show its plan."""
     run_id = st.query_params.get("run")

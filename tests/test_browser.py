@@ -377,6 +377,29 @@ def test_a_page_shown_on_a_laptop_at_150_percent_cuts_no_text(app_url, title):
         assert page.evaluate(CUT_CHART_TITLES) == []
 
 
+def test_a_tab_open_through_a_server_restart_says_its_edited_case_is_gone(tmp_path):
+    # A tab set 30-minute periods and the server restarted under it: the tab reconnected to a new session that
+    # showed the shipped case at 60 minutes without a word, "Press Solve to compute the plan of the current case".
+    require_browser()
+    port = free_port()
+    with chromium_page({"width": 1280, "height": 800}) as page:
+        with streamlit_server("streamlit-restart.log", tmp_path, port) as url:
+            page.goto(url)
+            open_page(page, "Markets & tariffs")
+            page.get_by_role("radio", name="30", exact=True).click()
+            page.wait_for_url(re.compile(r"own_case=1"))
+            open_page(page, "Results")
+            page.wait_for_url(re.compile(r"/results\?own_case=1$"))
+        with streamlit_server("streamlit-restart.log", tmp_path, port):
+            gone = page.get_by_test_id("stAlert").filter(
+                has_text="This tab's case (loaded, opened or edited here) is gone")
+            gone.wait_for()
+            settle(page)
+            page.screenshot(path=ARTIFACTS / "restart-case-gone.png")
+            assert page.get_by_role("heading", name="Results").count() == 1
+            assert "30-min" not in page.get_by_test_id("stSidebarUserContent").inner_text()
+
+
 @pytest.mark.slow
 def test_a_started_backtest_shows_up_and_its_progress_moves_until_finished(tmp_path):
     """Started on the page, the backtest appears there without a reload and its progress is
