@@ -79,9 +79,11 @@ def protection_demo() -> None:
     protection = protection_exact(exposure, gamma)
     controls.metric("Protection [kEUR]", widgets.keur(protection), width="content",
                     help=f"Sum of the Γ largest losses. Exact: {widgets.eur(protection)}.")
-    st.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma}; the model charged "
-               f"{widgets.keur(plan.protection_eur[price])} kEUR. Here the plan stays fixed and only the "
-               "adversary's budget moves; a new solve would also change the plan.")
+    st.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma} for this price; the model charged "
+               f"{widgets.keur(plan.protection_eur[price])} kEUR for it, of "
+               f"{widgets.keur(sum(plan.protection_eur.values()))} kEUR for every price (the Protection card on "
+               "Results). Here the plan stays fixed and only the adversary's budget moves; a new solve would also "
+               "change the plan.")
     st.plotly_chart(thin_clock_ticks(exposure_figure(plan, price, gamma), NARROW_TICK_HOURS), key="learn_exposure")
 
 
