@@ -48,6 +48,8 @@ def main() -> None:
     page = st.navigation(pages)
     state.resume_deep_link()
     widgets.open_linked_run(page)
+    widgets.lost_case_note()
+    state.mark_own_case()
     summary = st.sidebar.empty()
     with summary.container():  # stays if the page stops early (st.stop() ends the run)
         widgets.sidebar(state.case())
@@ -57,6 +59,7 @@ def main() -> None:
     page.run()
     with summary.container():  # drawn again after the page: the case as the page's edits left it
         widgets.sidebar(state.case())
+    state.mark_own_case()
     solving.start_fork_server()  # once the page is sent (a solve started earlier starts it itself)
 
 

@@ -37,7 +37,10 @@ CSP_ON = "csp_on"          # False: solve without the CSP plants (paper Table 11
 REQUESTED = "requested"    # keys of the run cases this session asked to solve (done or under way)
 OPENED_RUN = "opened_run"  # id of the saved run this session opened from a link (?run=ID)
 SAVED_RUN = "results_saved"  # (id, label, case key, how) of the run last saved or opened
-DEEP_LINK = "deep_link"    # the page asked for before app.py had set the session up
+DEEP_LINK = "deep_link"    # the page asked for before app.py had set the session up, and its query parameters
+LOST = "lost_case"         # True: this session began in a tab whose own case the server no longer holds
+OWN_CASE = "own_case"      # query parameter, "1": the tab's case is not the shipped case as a session opens it
+DEFAULT_SOURCE = f"the shipped case {DEFAULT_CASE.name}"
 APP = "app.py"
 
 
@@ -70,9 +73,33 @@ def _modified_ns(path: Path) -> int | None:
 
 
 def init() -> None:
-    """Set every shared key once per session (the default case on first load)."""
+    """Set every shared key once per session (the default case on first load). A session that begins in a tab
+    whose address says it held a case of its own (:func:`mark_own_case`) remembers that it was lost."""
     if CASE not in st.session_state:
-        load(_load(str(DEFAULT_CASE)), source=f"the shipped case {DEFAULT_CASE.name}")
+        load(_load(str(DEFAULT_CASE)), source=DEFAULT_SOURCE)
+        _, linked = st.session_state.get(DEEP_LINK) or (None, {})
+        st.session_state[LOST] = {**linked, **st.query_params.to_dict()}.get(OWN_CASE) == "1"
+
+
+def own_case() -> bool:
+    """Whether the tab's case is anything but the shipped case as a new session opens it: loaded, opened,
+    edited or run without its CSP. It lives in the session only, so a server restart loses it."""
+    return case() is not origin() or source() != DEFAULT_SOURCE or csp_on() != bool(case().csp)
+
+
+def mark_own_case() -> None:
+    """Say in the tab's address whether its case is its own, so that a session starting there (the server
+    restarted, the tab reloaded) can say that case is gone instead of showing the shipped case silently."""
+    if own_case():
+        st.query_params[OWN_CASE] = "1"
+        st.session_state[LOST] = False
+    elif OWN_CASE in st.query_params:
+        del st.query_params[OWN_CASE]
+
+
+def lost_case() -> bool:
+    """Whether this session began in a tab whose own case is gone, and still shows the shipped case."""
+    return st.session_state.get(LOST, False) and not own_case()
 
 
 def through_app(page: str) -> None:
@@ -85,15 +112,15 @@ def through_app(page: str) -> None:
     """
     if CASE in st.session_state:
         return
-    st.session_state[DEEP_LINK] = page
+    st.session_state[DEEP_LINK] = (page, st.query_params.to_dict())
     st.switch_page(APP)
 
 
 def resume_deep_link() -> None:
     """Called by app.py once its navigation is set: go to the page first asked for."""
-    page = st.session_state.pop(DEEP_LINK, None)
+    page, linked = st.session_state.pop(DEEP_LINK, None) or (None, {})
     if page:
-        st.switch_page(page)
+        st.switch_page(page, query_params=linked)
 
 
 def load(case: Case, source: str) -> None:
@@ -103,6 +130,7 @@ def load(case: Case, source: str) -> None:
     st.session_state[SOURCE] = source
     st.session_state[CSP_ON] = bool(case.csp)
     st.session_state[REQUESTED] = set()
+    st.session_state[LOST] = False
     for key in [k for k in st.session_state if k.startswith(("portfolio_", "markets_", "uncertainty_"))]:
         del st.session_state[key]
 

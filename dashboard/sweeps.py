@@ -64,8 +64,9 @@ def gamma_slider(run: Case, nt: int, default: int, page: str, charts: tuple[str,
     figures = [titled_figure(result, name, TITLES[name].format(gamma=gamma)) for name in charts]
     if curve:
         figures.insert(0, sweep_curve(key, gamma, grid, points))
-    for i, (column, figure) in enumerate(zip(st.columns(len(figures)), figures)):
-        column.plotly_chart(figure, key=f"{page}_sweep_chart_{i}")
+    row = st.container(horizontal=True)  # side by side, or one below the other in a narrow window
+    for i, figure in enumerate(figures):
+        row.plotly_chart(figure, key=f"{page}_sweep_chart_{i}")
 
 
 def _ties_note(run: Case, grid: list[int]) -> None:

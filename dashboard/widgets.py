@@ -18,7 +18,7 @@ from rvpp.service import EXCERPT_CHARS, KINDS, LABEL_LENGTH, Outcome, UnitKind, 
 from . import library, state
 
 KIND_TITLES = {kind: info.group for kind, info in KINDS.items()}
-KPI_COLUMNS = 4
+KPI_CARD_PX = 193  # a card's width: "Reserve revenue [kEUR]" whole, four to a row in the 820 px of 1280 px
 BIDS_HEIGHT_PX = 300  # about eight periods at a time; the table scrolls
 NET = "Net cost [kEUR]"
 # The one money convention of every page, chart, table and export label, said once.
@@ -109,16 +109,14 @@ def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
     """KPI cards; money in kEUR with the exact amount in each card's help; the net
     cost's card says in words whether the plant pays or earns."""
     values = kpis(result)
-    names = list(only or values)
-    for start in range(0, len(names), KPI_COLUMNS):
-        columns = st.columns(KPI_COLUMNS)
-        for column, name in zip(columns, names[start:start + KPI_COLUMNS]):
-            value, help_text = values[name]
-            sign = {}
-            if name == NET and result.objective_eur is not None:
-                sign = dict(delta="the plant pays" if result.objective_eur <= 0 else "the plant earns",
-                            delta_color="off", delta_arrow="off")
-            column.metric(name, value, help=help_text, border=True, **sign)
+    cards = st.container(horizontal=True)  # four to a row at 1280 px, fewer in a narrower window: each label whole
+    for name in only or values:
+        value, help_text = values[name]
+        sign = {}
+        if name == NET and result.objective_eur is not None:
+            sign = dict(delta="the plant pays" if result.objective_eur <= 0 else "the plant earns",
+                        delta_color="off", delta_arrow="off")
+        cards.metric(name, value, help=help_text, border=True, width=KPI_CARD_PX, **sign)
     if result.has_plan:
         st.caption(":material/info: " + service.explanation(service.economics(result)) + " Hover a card's question mark for the "
                    "exact amount in EUR.")
@@ -422,6 +420,16 @@ def sidebar(case: Case) -> None:
         st.caption(":material/hourglass_top: solving…")
 
 
+def lost_case_note() -> None:
+    """Say that the tab's own case is gone when a new session began where it was (the server restarted or
+    the tab was reloaded): the page would otherwise show the shipped case as if nothing had happened."""
+    if state.lost_case():
+        st.warning("This tab's case (loaded, opened or edited here) is gone: the server was restarted or the "
+                   "tab reloaded, and a tab keeps its case only while its session lasts. This is the shipped "
+                   f"case {state.DEFAULT_CASE.name} again. Saved runs are kept: open one on **Saved runs**, or "
+                   "load a case you downloaded on **Home**.", icon=":material/restart_alt:")
+
+
 def open_linked_run(page) -> None:
     """Open the saved run a link names (``?run=ID``) once per session, then show its plan."""
     run_id = st.query_params.get("run")
@@ -455,16 +463,16 @@ def open_run(saved) -> None:
 def plan_downloads(result: Result, case: Case, key: str) -> None:
     """Bids CSV, full plan workbook and the case as edited (zip and workbook)."""
     stem = f"{case.name}_{result.day:%Y%m%d}_{case.budgets.strategy}"
-    c1, c2, c3, c4 = st.columns(4)
-    c1.download_button("Bids (CSV)", result.market.to_csv(index=False, float_format="%.6f"),
-                       file_name=f"{stem}_bids.csv", mime="text/csv", on_click="ignore", key=f"{key}_bids",
-                       icon=":material/download:", help="market.csv: one row per period with the DAM, SR "
-                                                       "and HPA bids and the price bands")
-    c2.download_button("Full plan (Excel)", lambda: service.plan_workbook_bytes(result), file_name=f"{stem}_plan.xlsx",
-                       mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
-                       on_click="ignore", key=f"{key}_plan", icon=":material/download:",
-                       help="summary, market, units, csp and flexibility sheets")
-    case_downloads(case, key, (c3, c4))
+    row = st.container(horizontal=True)  # the buttons wrap in a narrow window, each label whole
+    row.download_button("Bids (CSV)", result.market.to_csv(index=False, float_format="%.6f"),
+                        file_name=f"{stem}_bids.csv", mime="text/csv", on_click="ignore", key=f"{key}_bids",
+                        icon=":material/download:", help="market.csv: one row per period with the DAM, SR "
+                                                        "and HPA bids and the price bands")
+    row.download_button("Full plan (Excel)", lambda: service.plan_workbook_bytes(result), file_name=f"{stem}_plan.xlsx",
+                        mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
+                        on_click="ignore", key=f"{key}_plan", icon=":material/download:",
+                        help="summary, market, units, csp and flexibility sheets")
+    case_downloads(case, key, (row, row))
 
 
 def case_downloads(case: Case, key: str, columns=None) -> None:

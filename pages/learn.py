@@ -9,7 +9,8 @@ from rvpp.service import (SOURCE_TITLES, SourceKind, bands_figure, deviating_per
 
 state.through_app("pages/learn.py")
 
-NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
+NARROW_TICK_HOURS = 2  # label every other hour: the charts may be 450 px wide (a laptop at 150 %)
+CONTROL_PX, SLIDER_PX = 220, 260  # a demo's choice and its Γ slider, side by side when the window allows
 
 st.title("Robust bidding explained")
 st.markdown(
@@ -36,18 +37,19 @@ st.markdown(
 
 @st.fragment
 def budget_demo() -> None:
-    left, right = st.columns([1, 3])
-    source = left.selectbox("Source", units, key="learn_source")
+    controls = st.container(horizontal=True)  # a row that wraps in a narrow window; the chart below, full width
+    source = controls.selectbox("Source", units, key="learn_source", width=CONTROL_PX)
     src = problem.sources[source]
-    gamma = left.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
-                        key="learn_gamma")
+    gamma = controls.slider(f"Γ [periods of {problem.dt_h * 60:g} min]", 0, nt, value=min(src.gamma, nt),
+                            key="learn_gamma", width=SLIDER_PX)
     y = top_gamma_deviation(src.deviation, gamma)
     energy = power_unit(src.unit_kind).replace("MW", "MWh")
-    left.metric("Energy at risk in the bound", f"{float(y.sum() * problem.dt_h):,.1f} {energy}",
-                help="Σ deviation × period length over the Γ chosen periods: how much the plan must cover.")
+    controls.metric("Energy at risk in the bound", f"{float(y.sum() * problem.dt_h):,.1f} {energy}", width="content",
+                    help="Σ deviation × period length over the Γ chosen periods: how much the plan must cover.")
     nominal, adverse = ("upper", "lower") if src.kind is SourceKind.PRODUCTION else ("lower", "upper")
-    left.caption(f"Γ = 0 plans on the {nominal} bound everywhere; Γ = {nt} on the {adverse} bound everywhere.")
-    right.plotly_chart(bands_figure(problem, source, (y > 0).astype(float)), key="learn_band")
+    st.caption(f"Γ = 0 plans on the {nominal} bound everywhere; Γ = {nt} on the {adverse} bound everywhere.")
+    st.plotly_chart(thin_clock_ticks(bands_figure(problem, source, (y > 0).astype(float)), NARROW_TICK_HOURS),
+                    key="learn_band")
 
 
 budget_demo()
@@ -68,18 +70,21 @@ if plan is None or not plan.has_plan:
 
 @st.fragment
 def protection_demo() -> None:
-    left, right = st.columns([1, 3])
-    price = left.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price")
-    gamma = left.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
-                        value=problem.sources[price].gamma, key="learn_price_gamma")
+    controls = st.container(horizontal=True)
+    price = controls.selectbox("Price", list(SOURCE_TITLES), format_func=SOURCE_TITLES.get, key="learn_price",
+                               width=CONTROL_PX)
+    gamma = controls.slider(f"Γ of this price [periods of {problem.dt_h * 60:g} min]", 0, nt,
+                            value=problem.sources[price].gamma, key="learn_price_gamma", width=SLIDER_PX)
     exposure = price_exposures(plan.problem, plan.market)[price]
     protection = protection_exact(exposure, gamma)
-    left.metric("Protection [kEUR]", widgets.keur(protection),
-                help=f"Sum of the Γ largest losses. Exact: {widgets.eur(protection)}.")
-    left.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma}; the model charged "
-                 f"{widgets.keur(plan.protection_eur[price])} kEUR. Here the plan stays fixed and only the "
-                 "adversary's budget moves; a new solve would also change the plan.")
-    right.plotly_chart(exposure_figure(plan, price, gamma), key="learn_exposure")
+    controls.metric("Protection [kEUR]", widgets.keur(protection), width="content",
+                    help=f"Sum of the Γ largest losses. Exact: {widgets.eur(protection)}.")
+    st.caption(f"This plan was made with Γ = {plan.problem.sources[price].gamma} for this price; the model charged "
+               f"{widgets.keur(plan.protection_eur[price])} kEUR for it, of "
+               f"{widgets.keur(sum(plan.protection_eur.values()))} kEUR for every price (the Protection card on "
+               "Results). Here the plan stays fixed and only the adversary's budget moves; a new solve would also "
+               "change the plan.")
+    st.plotly_chart(thin_clock_ticks(exposure_figure(plan, price, gamma), NARROW_TICK_HOURS), key="learn_exposure")
 
 
 protection_demo()
@@ -103,20 +108,22 @@ if all(state.is_requested(c) for c in variants.values()) or st.button(
         st.stop()
     paper, chosen = solved
     if paper.has_plan and chosen.has_plan:
-        c1, c2, c3 = st.columns(3)
-        source = c1.selectbox("Source", units, key="learn_mode_source")
-        c2.metric("Net cost, paper mode [kEUR]", widgets.keur(-paper.objective_eur), border=True,
-                  help=f"Positive: the plant pays. Exact: {widgets.eur(-paper.objective_eur)}.")
+        cards = st.container(horizontal=True)
+        source = cards.selectbox("Source", units, key="learn_mode_source", width=CONTROL_PX)
+        cards.metric("Net cost, paper mode [kEUR]", widgets.keur(-paper.objective_eur), border=True, width="content",
+                     help=f"Positive: the plant pays. Exact: {widgets.eur(-paper.objective_eur)}.")
         difference = paper.objective_eur - chosen.objective_eur  # the planner-chosen plan's extra cost
-        c3.metric("Net cost, planner-chosen [kEUR]", widgets.keur(-chosen.objective_eur), border=True,
-                  delta=f"{widgets.keur(difference)} kEUR vs paper mode", delta_color="off", delta_arrow="off",
-                  help="Never above paper mode: the planner picks the periods that suit it, so it is protected "
-                       f"against less, not better. Exact: {widgets.eur(-chosen.objective_eur)}.")
-        for column, (label, result) in zip(st.columns(2), (("paper mode", paper), ("planner-chosen", chosen))):
+        cards.metric("Net cost, planner-chosen [kEUR]", widgets.keur(-chosen.objective_eur), border=True,
+                     width="content", delta=f"{widgets.keur(difference)} kEUR vs paper mode", delta_color="off",
+                     delta_arrow="off",
+                     help="Never above paper mode: the planner picks the periods that suit it, so it is protected "
+                          f"against less, not better. Exact: {widgets.eur(-chosen.objective_eur)}.")
+        charts = st.container(horizontal=True)  # side by side, or one below the other in a narrow window
+        for label, result in (("paper mode", paper), ("planner-chosen", chosen)):
             figure = bands_figure(result.problem, source, deviating_periods(result, source))
             figure.update_layout(title_text=f"{source}, {label}")
             thin_clock_ticks(figure, NARROW_TICK_HOURS)
-            column.plotly_chart(figure, key=f"learn_mode_{label}")
+            charts.plotly_chart(figure, key=f"learn_mode_{label}")
 
 st.header("4 · The price of robustness")
 st.markdown(

@@ -5,7 +5,7 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import CaseError
-from rvpp.service import bands_figure, tariff_figure, with_period_length
+from rvpp.service import bands_figure, tariff_figure, thin_clock_ticks, with_period_length
 
 state.through_app("pages/markets.py")
 
@@ -13,6 +13,9 @@ HOURS = range(24)
 FLAT_PRESETS = (70.0, 60.0, 50.0)  # EUR/MWh_th, the flat tariffs of the paper's Table 12
 PERIOD_MINUTES = {60: 1.0, 30: 0.5, 15: 0.25}
 TARIFF_KEY = "markets_tariff"
+SETTING_PX = 220        # a number field's width: its label on two lines
+TARIFF_TABLE_PX = 320   # the tariff table's two columns whole (Clock hour, Tariff [EUR/MWh_th])
+NARROW_TICK_HOURS = 2   # the tariff chart beside its table: a clock label every other hour
 
 
 def apply(**changes) -> None:
@@ -57,28 +60,29 @@ case = state.case()
 markets = case.markets
 
 st.subheader("Markets")
-c1, c2, c3 = st.columns(3)
-c1.toggle("Day-ahead market (DAM)", value=True, disabled=True, key="markets_dam",
-          help="The DAM is always on: it balances the plan.")
-c2.toggle("Secondary reserve (SRM)", value=markets.srm, key="markets_srm", on_change=from_widget,
-          args=("srm", "markets_srm", "markets"), help="Off: no up or down reserve band is offered.")
-c3.toggle("Heat purchase (HPA)", value=markets.hpa, key="markets_hpa", on_change=from_widget,
-          args=("hpa", "markets_hpa", "markets"),
-          help="Heat purchase agreement. Off: thermal demands are served by the CSP alone.")
+switches = st.container(horizontal=True)  # a row that wraps: each label whole in a narrow window
+switches.toggle("Day-ahead market (DAM)", value=True, disabled=True, key="markets_dam",
+                help="The DAM is always on: it balances the plan.")
+switches.toggle("Secondary reserve (SRM)", value=markets.srm, key="markets_srm", on_change=from_widget,
+                args=("srm", "markets_srm", "markets"), help="Off: no up or down reserve band is offered.")
+switches.toggle("Heat purchase (HPA)", value=markets.hpa, key="markets_hpa", on_change=from_widget,
+                args=("hpa", "markets_hpa", "markets"),
+                help="Heat purchase agreement. Off: thermal demands are served by the CSP alone.")
 minutes = {v: k for k, v in PERIOD_MINUTES.items()}[case.dt_h]
-c1, c2, c3 = st.columns(3)
-c3.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=minutes, key="markets_dt",
-                     required=True, on_change=set_period_length, args=("markets_dt",),
-                     help="Period length; 15 minutes is the EU day-ahead market time unit (96 periods). Γ "
-                          "overrides keep their duration in hours (rounded to whole periods).")
-c1.number_input("κ: reserve band cap [-], from 0 to 1", min_value=0.0, max_value=1.0, step=0.05, value=markets.kappa,
-                key="markets_kappa", on_change=from_widget, args=("kappa", "markets_kappa", "markets"),
-                help="Each SR band is at most κ × (generation capacity − demand capacity); paper: 0.3.")
-c2.number_input("Reserve delivery time [min], at least 1", min_value=1.0, step=1.0,
-                value=markets.reserve_duration_min,
-                key="markets_duration", on_change=from_widget,
-                args=("reserve_duration_min", "markets_duration", "markets"),
-                help="A reserve band must be deliverable for this long: ramp [MW/min] × time caps each band.")
+settings = st.container(horizontal=True)
+settings.number_input("κ: reserve band cap [-], from 0 to 1", min_value=0.0, max_value=1.0, step=0.05,
+                      value=markets.kappa, key="markets_kappa", on_change=from_widget,
+                      args=("kappa", "markets_kappa", "markets"), width=SETTING_PX,
+                      help="Each SR band is at most κ × (generation capacity − demand capacity); paper: 0.3.")
+settings.number_input("Reserve delivery time [min], at least 1", min_value=1.0, step=1.0,
+                      value=markets.reserve_duration_min,
+                      key="markets_duration", on_change=from_widget,
+                      args=("reserve_duration_min", "markets_duration", "markets"), width=SETTING_PX,
+                      help="A reserve band must be deliverable for this long: ramp [MW/min] × time caps each band.")
+settings.segmented_control("Market time unit [min]", list(PERIOD_MINUTES), default=minutes, key="markets_dt",
+                           required=True, on_change=set_period_length, args=("markets_dt",),
+                           help="Period length; 15 minutes is the EU day-ahead market time unit (96 periods). Γ "
+                                "overrides keep their duration in hours (rounded to whole periods).")
 if st.session_state.get("markets_problems"):
     widgets.problems(st.session_state["markets_problems"])
 for note in st.session_state.get("markets_notes", []):
@@ -96,8 +100,8 @@ for price in FLAT_PRESETS:
 with presets.popover("Flat price…"):
     flat = st.number_input("Price [EUR/MWh_th]", min_value=0.0, value=70.0, step=5.0, key="markets_flat_price")
     st.button("Apply", key="markets_flat_apply", on_click=set_tariff, args=([flat] * 24,))
-left, right = st.columns([2, 3])
-with left:
+tariff = st.container(horizontal=True)  # the chart goes below the table in a narrow window
+with tariff.container(width=TARIFF_TABLE_PX):
     widgets.table_editor(
         TARIFF_KEY,
         build=lambda: tariff_table(state.case()),
@@ -110,8 +114,7 @@ with left:
     )
 problem = solving.prepare(state.run_case())
 if problem is not None:
-    with right:
-        st.plotly_chart(tariff_figure(problem), key="markets_tariff_chart")
+    tariff.plotly_chart(thin_clock_ticks(tariff_figure(problem), NARROW_TICK_HOURS), key="markets_tariff_chart")
     st.subheader("Price bands")
     st.caption("The DAM price may fall to its lower percentile when the plan sells and rise to its upper "
                "percentile when it buys; reserve prices are planned at their upper percentile and may fall to "

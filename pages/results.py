@@ -69,10 +69,10 @@ def plan(result, edited, run) -> None:
         if st.session_state.get(LABEL_FOR) != key:
             st.session_state[LABEL_FOR] = key
             st.session_state[LABEL_KEY] = state.default_label(edited)
-        left, right = st.columns([4, 1], vertical_alignment="bottom")
-        left.text_input("Label (unique; a taken label gets a number)", key=LABEL_KEY, max_chars=190,
-                        help="By default: strategy, market set and what you edited since the case was loaded.")
-        right.button("Save run", key="results_save", on_click=save, args=(result, edited, run), icon=":material/save:")
+        row = st.container(horizontal=True, vertical_alignment="bottom")
+        row.text_input("Label (unique; a taken label gets a number)", key=LABEL_KEY, max_chars=190,
+                       help="By default: strategy, market set and what you edited since the case was loaded.")
+        row.button("Save run", key="results_save", on_click=save, args=(result, edited, run), icon=":material/save:")
         if st.session_state.get("results_save_problem"):
             widgets.problems([widgets.literal(st.session_state["results_save_problem"], limit=None)], "Not saved",
                              note="Nothing was changed.")

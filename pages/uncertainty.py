@@ -19,6 +19,9 @@ WINDOW_DAYS = (7, 90)
 Q_LO, Q_HI = (0.05, 0.45), (0.55, 0.95)
 Q_STEP = 0.05
 BAND_COLUMNS = 2
+DATE_PX, SLIDER_PX = 170, 190  # the day, the window and the percentiles in one row from 790 px, two rows when narrower
+CHOICE_PX = 230  # the price point forecast: "same hour last week" whole
+BUDGET_TABLE_PX, VARIANT_PX = 490, 300  # the budget table beside the variant's choices from 806 px
 NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 TABLE_ROW_PX, TABLE_BORDER_PX = 35, 3  # st.data_editor row height and frame
 PRICE_LABELS = {"price_da": "DAM price", "price_sr_up": "SR up price", "price_sr_dn": "SR down price"}
@@ -115,36 +118,37 @@ if not days:
                      note="Load a case with a longer history.")
     st.stop()
 window, q = case.uncertainty.window_days, case.uncertainty
-c1, c2, c3, c4 = st.columns(4)
+row = st.container(horizontal=True)  # a row that wraps in a narrow window, each label whole
 earliest = days[0] + dt.timedelta(days=window)
-c1.date_input("Delivery day", value=case.delivery_date, min_value=min(earliest, case.delivery_date),
-              max_value=max(days[-1], case.delivery_date),
-              key="uncertainty_date", on_change=from_widget, args=(None, "delivery_date", "uncertainty_date"),
-              help=f"Any day from {earliest:%d %b %Y} (the history must cover the {window}-day window before "
-                   f"it) to {days[-1]:%d %b %Y}.")
-c2.slider("History window [days]", min(WINDOW_DAYS[0], window), max(WINDOW_DAYS[1], window), value=window,
-          key="uncertainty_window",
-          on_change=from_widget, args=("uncertainty", "window_days", "uncertainty_window"),
-          help="Days before the delivery day whose observations give the bands (paper: 30).")
-c3.slider("Lower percentile", min(Q_LO[0], q.q_lo), max(Q_LO[1], q.q_lo), value=q.q_lo, step=Q_STEP,
-          key="uncertainty_q_lo",
-          on_change=from_widget, args=("uncertainty", "q_lo", "uncertainty_q_lo"),
-          help="Bad bound of production and prices, nominal of consumption (paper: 0.2).")
-c4.slider("Upper percentile", min(Q_HI[0], q.q_hi), max(Q_HI[1], q.q_hi), value=q.q_hi, step=Q_STEP,
-          key="uncertainty_q_hi",
-          on_change=from_widget, args=("uncertainty", "q_hi", "uncertainty_q_hi"),
-          help="Nominal of production, bad bound of consumption (paper: 0.8).")
+row.date_input("Delivery day", value=case.delivery_date, min_value=min(earliest, case.delivery_date),
+               max_value=max(days[-1], case.delivery_date),
+               key="uncertainty_date", on_change=from_widget, args=(None, "delivery_date", "uncertainty_date"),
+               width=DATE_PX, help=f"Any day from {earliest:%d %b %Y} (the history must cover the {window}-day "
+                                   f"window before it) to {days[-1]:%d %b %Y}.")
+row.slider("History window [days]", min(WINDOW_DAYS[0], window), max(WINDOW_DAYS[1], window), value=window,
+           key="uncertainty_window", width=SLIDER_PX,
+           on_change=from_widget, args=("uncertainty", "window_days", "uncertainty_window"),
+           help="Days before the delivery day whose observations give the bands (paper: 30).")
+row.slider("Lower percentile", min(Q_LO[0], q.q_lo), max(Q_LO[1], q.q_lo), value=q.q_lo, step=Q_STEP,
+           key="uncertainty_q_lo", width=SLIDER_PX,
+           on_change=from_widget, args=("uncertainty", "q_lo", "uncertainty_q_lo"),
+           help="Bad bound of production and prices, nominal of consumption (paper: 0.2).")
+row.slider("Upper percentile", min(Q_HI[0], q.q_hi), max(Q_HI[1], q.q_hi), value=q.q_hi, step=Q_STEP,
+           key="uncertainty_q_hi", width=SLIDER_PX,
+           on_change=from_widget, args=("uncertainty", "q_hi", "uncertainty_q_hi"),
+           help="Nominal of production, bad bound of consumption (paper: 0.8).")
 specs = band_specs(case)
 eligible = [name for name, spec in specs.items() if has_forecast(spec)]
-b1, b2 = st.columns([3, 1])
-b1.multiselect("Sources on forecast-based bands", eligible,
-               default=[n for n in eligible if specs[n].method == "forecast"],
-               key="uncertainty_forecast_bands", on_change=set_forecast_bands, args=("uncertainty_forecast_bands",),
-               help="Forecast band: the day-ahead point forecast plus percentiles of its past errors (units with a "
-                    "forecast column; prices from a naive model). Others keep the paper's climatology.")
-b2.selectbox("Price point forecast", PRICE_MODELS, index=PRICE_MODELS.index(q.price_forecast),
-             format_func=lambda m: m.replace("_", " "), key="uncertainty_price_forecast",
-             on_change=from_widget, args=("uncertainty", "price_forecast", "uncertainty_price_forecast"))
+row = st.container(horizontal=True)
+row.multiselect("Sources on forecast-based bands", eligible,
+                default=[n for n in eligible if specs[n].method == "forecast"],
+                key="uncertainty_forecast_bands", on_change=set_forecast_bands, args=("uncertainty_forecast_bands",),
+                help="Forecast band: the day-ahead point forecast plus percentiles of its past errors (units with a "
+                     "forecast column; prices from a naive model). Others keep the paper's climatology.")
+row.selectbox("Price point forecast", PRICE_MODELS, index=PRICE_MODELS.index(q.price_forecast),
+              format_func=lambda m: m.replace("_", " "), key="uncertainty_price_forecast",
+              on_change=from_widget, args=("uncertainty", "price_forecast", "uncertainty_price_forecast"),
+              width=CHOICE_PX)
 if case.provenance_summary():
     st.caption(case.provenance_summary())
 if st.session_state.get("uncertainty_problems"):
@@ -162,8 +166,8 @@ st.segmented_control("Strategy preset", STRATEGIES, default=case.budgets.strateg
 st.caption("Presets in hours — " + "; ".join(
     f"{s}: prices {b['price']}, wind {b['wind']}, PV {b['pv']}, CSP {b['csp']}, demands {b['ed']}"
     for s, b in STRATEGY_BUDGETS_H.items()))
-left, right = st.columns([3, 2])
-with left:
+budgets = st.container(horizontal=True)  # the variant goes below the table in a narrow window
+with budgets.container(width=BUDGET_TABLE_PX):
     widgets.table_editor(
         BUDGETS_KEY,
         build=lambda: budget_table(state.case()),
@@ -180,7 +184,7 @@ with left:
         column_order=["source", "kind", "preset", "gamma"] + (["hours"] if case.dt_h < 1 else []),
         hide_index=True, height=TABLE_ROW_PX * (len(case.sources()) + 1) + TABLE_BORDER_PX,
     )
-with right:
+with budgets.container(width=VARIANT_PX):
     st.radio("Budget variant", list(MODES), format_func=MODES.get, index=list(MODES).index(case.budgets.mode),
              key="uncertainty_mode", on_change=set_mode, args=("uncertainty_mode",))
     st.caption("Paper mode is the published method and the default. In the planner-chosen variant the "
@@ -220,10 +224,9 @@ if problem is not None:
     groups = {g: members for g, members in groups.items() if members}
     for tab, (group, members) in zip(st.tabs(list(groups)), groups.items()):
         with tab:
-            columns = st.columns(BAND_COLUMNS)
             for i, source in enumerate(members):
+                if i % BAND_COLUMNS == 0:  # a row of charts, one below the other in a narrow window
+                    row = st.container(horizontal=True)
                 chi = deviating_periods(result, source) if result is not None and result.has_plan else None
-                with columns[i % BAND_COLUMNS]:
-                    figure = bands_figure(problem, source, chi, **band_overlays(problem, source))
-                    figure = thin_clock_ticks(figure, NARROW_TICK_HOURS)
-                    st.plotly_chart(figure, key=f"uncertainty_band_{source}")
+                figure = bands_figure(problem, source, chi, **band_overlays(problem, source))
+                row.plotly_chart(thin_clock_ticks(figure, NARROW_TICK_HOURS), key=f"uncertainty_band_{source}")

@@ -529,6 +529,12 @@ def test_learn_moves_the_adversary_live(paper_solve):
     assert number(protection.value) == pytest.approx(plan.protection_eur["price_da"] / 1000, abs=0.051)
     assert number(protection.proto.help.split("Exact: ")[1]) == pytest.approx(plan.protection_eur["price_da"],
                                                                              abs=0.51)
+    # The plan's protection for this price and for every price, the total the Protection card on Results shows
+    # (it said only "the model charged 3.7 kEUR", beside a card on Results of 4.2).
+    this, every = plan.protection_eur["price_da"] / 1000, sum(plan.protection_eur.values()) / 1000
+    assert every > this + 0.1  # the reserve prices' protection too
+    assert f"charged {this:,.1f} kEUR for it, of {every:,.1f} kEUR for every price (the Protection card on Results)" \
+        in "\n".join(c.value for c in at.caption)
     at.slider(key="learn_price_gamma").set_value(3).run()
     protection = [m for m in at.metric if m.label == "Protection [kEUR]"][0]
     assert number(protection.value) == pytest.approx(sum(sorted(np.maximum(loss, 0.0))[-3:]) / 1000, abs=0.051)

@@ -24,7 +24,7 @@ import rvpp
 from rvpp.backtest import BacktestSettings, variants_of
 from rvpp.backtest.engine import run_backtest
 from rvpp.store import BacktestStore, RunLibrary
-from tests.factories import click, one_day_backtest_form, open_app, shown_table, wait_for
+from tests.factories import APP, click, one_day_backtest_form, open_app, shown_table, wait_for
 from tests.test_app import NET, TIMEOUT_S, case_of, edit_capacity, errors, figures, number, shown_kpis
 
 pytestmark = pytest.mark.usefixtures("run_library")  # every test writes into a data folder of its own
@@ -292,6 +292,28 @@ def test_an_upload_with_a_bad_history_cell_is_refused_for_the_case_files_problem
     assert "P max" in problems[1] and "fifty" in problems[1], problems
     assert problems[2].startswith('- history.csv: column "price_sr_up" has a non-numeric value \'abc\''), problems
     assert case_of(at).markets.kappa == paper_case.markets.kappa  # the current case is unchanged
+
+
+# ----------------------------------------------------------------------------- a restart
+
+
+def warnings_of(at) -> str:
+    return "\n".join(w.value for w in at.warning)
+
+
+def test_a_tab_whose_case_the_server_lost_says_so():
+    # A tab edits its case (its address then says it holds a case of its own, own_case=1; tests/test_browser.py
+    # restarts a server under such a tab); the tab's new session showed the shipped case as if nothing happened.
+    assert not open_app().warning  # a new tab without a case of its own: nothing to say
+    from streamlit.testing.v1 import AppTest
+
+    restarted = AppTest.from_file(APP, default_timeout=TIMEOUT_S)
+    restarted.query_params["own_case"] = "1"  # the tab's address, its session gone
+    restarted.run()
+    assert not restarted.exception, restarted.exception
+    assert case_of(restarted).dt_h == 1.0 and case_of(restarted).name == "paper"
+    assert "This tab's case (loaded, opened or edited here) is gone" in warnings_of(restarted)
+    assert "own_case" not in restarted.query_params  # the shipped case is not the tab's own
 
 
 # ----------------------------------------------------------------------------- wording
