@@ -291,7 +291,7 @@ with st.expander(f"Start a backtest of the current case ({widgets.literal(run.na
 if notice := st.session_state.pop("backtest_notice", None):
     st.info(notice, icon=":material/info:")
 
-st.subheader("Backtests in the store")
+st.header("Backtests in the store")
 try:
     listed = bt.store().list()
 except (RvppError, *STORE_ERRORS) as err:
@@ -339,13 +339,13 @@ if records.empty:
 if progresses[ident] is not None and progresses[ident].running:
     st.button("Redraw with the days settled so far", key="backtest_redraw", icon=":material/refresh:")
 
-st.subheader("Cost over the period")
+st.header("Cost over the period")
 st.plotly_chart(cumulative_figure(records, IN_KEUR), key="backtest_cumulative")
 st.caption("Each line adds up the net cost of the days settled so far: a steeper line is a costlier strategy; a "
            "jump is a bad day. The boxes below show how the daily net cost spreads.")
 st.plotly_chart(distribution_figure(records, IN_KEUR), key="backtest_distribution")
 
-st.subheader("Per strategy")
+st.header("Per strategy")
 table = widgets.in_keur(metrics.aggregates(records))
 table["penalty_share_pct"] = table["penalty_share"].astype(float) * PERCENT
 for columns in AGGREGATE_TABLES:
@@ -356,7 +356,7 @@ with st.expander("Per month", icon=":material/calendar_month:"):
     st.dataframe(monthly[[c for c in MONTHLY_COLUMNS if c in monthly]], hide_index=True, width="stretch",
                  column_config=MONTHLY_COLUMNS)
 
-st.subheader("Worst days")
+st.header("Worst days")
 st.caption("The costliest settled days of one strategy. Open one to see its plan on Results: the day's case "
            "(its date, its budgets, the storage and turbine state it started from) becomes the current case and "
            "is solved again, giving the plan that was settled.")
@@ -396,7 +396,7 @@ def trading_day(ident: str, records) -> None:
     traded = intraday_days(records)
     if traded.empty:
         return
-    st.subheader("Trading day: the intraday sessions of one day")
+    st.header("Trading day: the intraday sessions of one day")
     st.caption("After the day-ahead market each intraday session corrects the position as the forecasts change: "
                "the lines show the position after each session, the bars what each session sold (+) or bought "
                "(−), the bottom panel the forecast change seen at its gate closure. The settlement measures the "
@@ -432,7 +432,7 @@ st.download_button("Export records and inputs (zip)", lambda: export_zip(bt.stor
                    help="records, bids, settled dispatch, aggregates and months as CSV (opens in Excel) and "
                         "Parquet; the case with its exact history; manifest.json with the settings")
 
-st.subheader("Price of robustness and the recommended Γ")
+st.header("Price of robustness and the recommended Γ")
 grid = bt.fractions_of(settings)
 days = [dt.date.fromisoformat(settings["from"]) + dt.timedelta(days=k)
         for k in range((dt.date.fromisoformat(settings["to"]) - dt.date.fromisoformat(settings["from"])).days + 1)]

@@ -32,9 +32,9 @@ def save_all(cases: dict, results: dict) -> None:
 
 def side_by_side(results: dict, baseline: str | None) -> None:
     """Economics, KPI table, trades and flexibility of labelled plans."""
-    st.subheader("The day's economics")
+    st.header("The day's economics")
     st.plotly_chart(waterfall_figure(results), key=f"compare_economics_{len(results)}")
-    st.subheader("Net cost and its parts")
+    st.header("Net cost and its parts")
     st.caption(widgets.MONEY + " DAM and SR are the revenues; HPA, O&M and protection the costs.")
     if baseline:
         st.caption(f"What being safer costs: each plan's extra cost over **{widgets.literal(baseline)}**, the least "
@@ -52,13 +52,13 @@ def side_by_side(results: dict, baseline: str | None) -> None:
     st.caption("Solve times: " + ", ".join(f"{widgets.literal(run)} {seconds:.1f} s"
                                            for run, seconds in kpis["Solve time [s]"].items())
                + (" (every plan optimal)." if "Status" in hidden else "."))
-    st.subheader("Trades")
+    st.header("Trades")
     idle = idle_trades(results)
     if idle:
         st.caption("Not drawn, zero all day in every plan: " + ", ".join(TRADE_NAMES[c] for c in idle)
                    + (" (no heat bought)" if "h_hpa_mw" in idle else "") + ".")
     st.plotly_chart(compare_trades_figure(results), key=f"compare_trades_{len(results)}")
-    st.subheader("Flexibility")
+    st.header("Flexibility")
     st.caption("Paper Table 9 layout: reserve energy over the day and the same divided by installed capacity [h].")
     flexibility = flexibility_table(results)
     config = widgets.number_formats(flexibility)
@@ -151,7 +151,7 @@ if cases and (clicked or ready):
         st.warning("Not proven optimal, so compare them with care; press the button above to search on:\n\n"
                    + "\n".join(f"- {u}" for u in unproven), icon=":material/done_all:")
 
-    st.subheader("Net cost [kEUR]")
+    st.header("Net cost [kEUR]")
     st.caption("Net cost, positive when the plant pays, as in the paper's Tables 10 and 11; lower is better.")
     st.dataframe(cost_table(results), column_config={m: KEUR for m in market_sets})
 
@@ -169,7 +169,7 @@ if cases and (clicked or ready):
         elif notice:
             widgets.problems([notice[1]], "Not saved", note="Nothing was changed.")
 
-st.subheader("One Γ for every source")
+st.header("One Γ for every source")
 st.markdown("Between the strategies: give every source the same budget Γ, from 0 (the forecast) to every period "
             "going wrong, and see the plan and its economics for each. The plans are solved once for every Γ; "
             "then moving Γ shows them at once.")

@@ -71,7 +71,7 @@ st.title("Robust day-ahead bids for a renewable virtual power plant")
 case = state.case()
 ask, about = st.columns([3, 2], gap="large")
 with ask:
-    st.subheader("What should I bid tomorrow?")
+    st.header("What should I bid tomorrow?")
     balanced = Variant(strategy="balanced").apply(state.run_case())
     clicked = st.button("Solve the balanced strategy", type="primary", key="home_solve",
                         icon=":material/play_arrow:")
@@ -86,7 +86,7 @@ with ask:
         if problem is not None:
             svg.draw(svg.price_band_svg(problem, "home-price-band"))  # drawn with the page: no chart code to load
 with about:
-    st.subheader("The case")
+    st.header("The case")
     st.markdown(f"**{widgets.literal(case.name)}** · {case.delivery_date:%a %d %b %Y} · "
                 f"{case.budgets.strategy} · {case.markets.label} · {case.dt_h * 60:g}-min periods  \n"
                 f"loaded from {widgets.literal(state.source(), widgets.LABEL_CHARS)}")
@@ -110,7 +110,7 @@ if requested:
             st.page_link("pages/results.py", label="Every chart and download of the current case",
                          icon=":material/insights:")
 
-st.subheader("About rvpp")
+st.header("About rvpp")
 st.markdown(
     "**rvpp** plans tomorrow's bids of a virtual power plant made of a concentrated solar power plant "
     "with thermal storage, wind farms, PV plants and flexible electrical and thermal demands: energy in the "
@@ -125,7 +125,7 @@ for column, (page, title, description) in zip(st.columns(3) * 2, LINKS):
         st.page_link(page, label=title, icon=":material/arrow_forward:")
         st.caption(description)
 
-st.subheader("Load another case")
+st.header("Load another case")
 folders = state.server_folders_allowed()  # off unless the server was started with RVPP_ALLOW_SERVER_FOLDERS=1
 shipped, upload_tab, download_tab, *folder_tab = st.tabs(["Shipped cases", "Upload", "Download",
                                                           *(["Folder"] if folders else [])])

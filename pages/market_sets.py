@@ -90,7 +90,7 @@ for name, figure, heading, columns in TABLES:
     table = out.tables[name]
     if table.columns.empty:
         continue
-    st.subheader(heading)
+    st.header(heading)
     shown, config = cost_table(table.rename_axis(index="Strategy", columns=columns))
     st.dataframe(shown, column_config=config)
     st.plotly_chart(out.figures[figure], key=f"market_sets_{figure}")
@@ -98,5 +98,5 @@ for name, figure, heading, columns in TABLES:
 with st.expander("Every plan: trades and reserve", icon=":material/table_rows:"):
     st.dataframe(out.tables["market_plans"], hide_index=True, column_config=PLAN_COLUMNS)
 st.caption(f"Computed in {out.seconds:.1f} s.")
-st.subheader("Downloads")
+st.header("Downloads")
 studies.downloads([out], f"{run.name}_{run.delivery_date:%Y%m%d}_market_sets", key="market_sets_download")

@@ -59,7 +59,7 @@ st.title("Markets & tariffs")
 case = state.case()
 markets = case.markets
 
-st.subheader("Markets")
+st.header("Markets")
 switches = st.container(horizontal=True)  # a row that wraps: each label whole in a narrow window
 switches.toggle("Day-ahead market (DAM)", value=True, disabled=True, key="markets_dam",
                 help="The DAM is always on: it balances the plan.")
@@ -88,7 +88,7 @@ if st.session_state.get("markets_problems"):
 for note in st.session_state.get("markets_notes", []):
     st.caption(note)
 
-st.subheader("Heat purchase agreement tariff")
+st.header("Heat purchase agreement tariff")
 st.caption("One price per clock hour [EUR/MWh_th]; with 15-minute periods each quarter-hour takes its hour's "
            "price. Presets: the time-of-use tariff of the loaded case and the flat prices of the paper's "
            "Table 12.")
@@ -115,7 +115,7 @@ with tariff.container(width=TARIFF_TABLE_PX):
 problem = solving.prepare(state.run_case())
 if problem is not None:
     tariff.plotly_chart(thin_clock_ticks(tariff_figure(problem), NARROW_TICK_HOURS), key="markets_tariff_chart")
-    st.subheader("Price bands")
+    st.header("Price bands")
     st.caption("The DAM price may fall to its lower percentile when the plan sells and rise to its upper "
                "percentile when it buys; reserve prices are planned at their upper percentile and may fall to "
                "the lower one.")

@@ -116,7 +116,7 @@ summaries = pd.concat([robust.tables["table13_out_of_sample"], stochastic.tables
 for warning in robust.warnings + stochastic.warnings:
     st.warning(warning, icon=":material/warning:")
 
-st.subheader("Same days for every method")
+st.header("Same days for every method")
 used = realizations_used(evaluations)
 sets = sorted({robust.facts["realization_set"], stochastic.facts["realization_set"]})
 if len(sets) == 1 and used["day"].is_unique:
@@ -129,15 +129,15 @@ with st.expander("Test days and their fingerprints"):
         "day": st.column_config.TextColumn("Test day"), "fingerprint": st.column_config.TextColumn("Fingerprint"),
         "methods": st.column_config.NumberColumn("Methods settled on it")})
 
-st.subheader("Robust strategies (paper Table 13)")
+st.header("Robust strategies (paper Table 13)")
 st.dataframe(robust.tables["table13_out_of_sample"][TABLE13], hide_index=True, column_config=SUMMARY_COLUMNS)
-st.subheader("Stochastic benchmark (paper Table 14)")
+st.header("Stochastic benchmark (paper Table 14)")
 st.dataframe(stochastic.tables["table14_stochastic"][TABLE14], hide_index=True, column_config=SUMMARY_COLUMNS)
 st.caption("Averages over the test days. Net cost = market cost + penalty; a negative penalty is surplus energy "
            "bought back at m_sur × the DAM price. Solve time: the plan's own solve (shared study process).")
 
 st.plotly_chart(figures.out_of_sample_figure(summaries), key="out_of_sample_cost")
-st.subheader("Where the penalties come from")
+st.header("Where the penalties come from")
 st.caption("The average penalty per test day split by cause. A plan made for one day meets other days' wind, sun "
            "and prices, so penalties can exceed the market cost: every MWh short of the bid costs m_def times the "
            "DAM price, and reserve that cannot be delivered costs m_sr times its price.")
@@ -145,6 +145,6 @@ st.plotly_chart(figures.penalty_causes_figure(evaluations), key="out_of_sample_p
 st.plotly_chart(figures.net_cost_by_day_figure(evaluations), key="out_of_sample_days")
 st.plotly_chart(figures.solve_time_figure(summaries), key="out_of_sample_solve_time")
 st.caption(f"Computed in {robust.seconds:.1f} s (robust) and {stochastic.seconds:.1f} s (stochastic), side by side.")
-st.subheader("Downloads")
+st.header("Downloads")
 studies.downloads([robust, stochastic], f"{run.name}_{run.delivery_date:%Y%m%d}_out_of_sample",
                   key="out_of_sample_download")

@@ -68,7 +68,7 @@ if case.csp:
                    "are kept and come back when you switch it on again.")
 
 for kind in UNIT_KINDS:
-    st.subheader(widgets.KIND_TITLES[kind])
+    st.header(widgets.KIND_TITLES[kind])
     if kind == UnitKind.CSP and not state.csp_on():
         st.info("Switched off: the plan is made without the CSP plants. Their parameters are kept below.",
                 icon=":material/power_off:")
@@ -85,7 +85,7 @@ for kind in UNIT_KINDS:
 
 case = state.case()
 if case.csp:
-    st.subheader("Power-block conversion curve")
+    st.header("Power-block conversion curve")
     st.caption("Electrical output = thermal input × efficiency at each breakpoint, linear in between "
                "(paper Figure 5). Inputs must increase and the output must not fall.")
     name = st.segmented_control("CSP plant", [c.name for c in case.csp], key="portfolio_curve_csp",
@@ -105,7 +105,7 @@ if case.csp:
         unit = next(c for c in state.case().csp if c.name == name)
         st.plotly_chart(curve_figure(unit.power_block.breakpoints, unit.p_max_mw), key="portfolio_curve_chart")
 
-st.subheader("Forecast bands of the delivery day")
+st.header("Forecast bands of the delivery day")
 run = state.run_case()
 q = run.uncertainty
 st.caption(f"Per clock hour over the {q.window_days} days before {run.delivery_date:%d %b %Y}: the "

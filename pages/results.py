@@ -84,40 +84,40 @@ def plan(result, edited, run) -> None:
                        f"[open it by link]({library.link(run_id)}) or see it on Saved runs.", icon=":material/check:")
         st.page_link("pages/runs.py", label="Saved runs: rename, delete, export, compare", icon=":material/bookmarks:")
 
-    st.subheader("Bids")
+    st.header("Bids")
     widgets.bids(result, key="results")
     st.plotly_chart(figures["trades"], key="results_trades")
-    st.subheader("Heat")
+    st.header("Heat")
     if figures.get("heat") is None:
         st.caption("No thermal demand in this case: no heat to show.")
     else:
         if not heat_bought(result):
             st.caption("No heat bought through the HPA: the CSP covers the thermal demands all day.")
         st.plotly_chart(figures["heat"], key="results_heat")
-    st.subheader("Electrical dispatch")
+    st.header("Electrical dispatch")
     st.plotly_chart(figures["dispatch"], key="results_dispatch")
     if result.case.csp:
-        st.subheader("Thermal storage")
+        st.header("Thermal storage")
         st.caption("The margins above the minimum and below the maximum (σ) are kept free so the CSP can deliver "
                    "the up and down reserve it offers (paper constraints TS9-TS11).")
         for csp in result.case.csp:
             st.plotly_chart(figures[f"storage {csp.name}"], key=f"results_storage_{csp.name}")
     batteries = [name.removeprefix("battery ") for name in figures if name.startswith("battery ")]
     if batteries:
-        st.subheader("Batteries")
+        st.header("Batteries")
         st.caption("State of charge; the margins (σ) are kept free so the battery can deliver the reserve it offers.")
         for name in batteries:
             st.plotly_chart(figures[f"battery {name}"], key=f"results_battery_{name}")
-    st.subheader("Reserve by unit kind")
+    st.header("Reserve by unit kind")
     st.plotly_chart(figures["reserve"], key="results_reserve")
 
-    st.subheader("Flexibility")
+    st.header("Flexibility")
     st.caption("Reserve energy over the day per unit kind, and the same divided by installed capacity "
                "(paper Table 9; the paper's \"%\" columns are this ratio in hours).")
     flexibility = result.flexibility.assign(kind=result.flexibility["kind"].map(KIND_LABELS))
     st.dataframe(flexibility, hide_index=True, column_config=FLEXIBILITY_COLUMNS)
 
-    st.subheader("Downloads")
+    st.header("Downloads")
     widgets.plan_downloads(result, run, key="results")
 
 

@@ -129,7 +129,7 @@ if not chosen:
 ids = [r.id for r in chosen]
 if len(chosen) == 1:
     run = chosen[0]
-    st.subheader(widgets.literal(run.label, widgets.LABEL_CHARS))
+    st.header(widgets.literal(run.label, widgets.LABEL_CHARS))
     st.caption(widgets.literal(f"{run.strategy} strategy · {run.markets} · case {run.case_name} · delivery day "
                                f"{run.delivery_date} · saved {saved(run)} UTC", limit=None))
     first, second, third = st.columns(3, vertical_alignment="bottom")

@@ -79,16 +79,16 @@ if not without_plan.empty:
     st.warning("Not optimal: " + "; ".join(f"{r.sources}, Γ = {r.gamma}: {r.status}"
                                            for r in without_plan.itertuples()), icon=":material/warning:")
 
-st.subheader("Cost and traded energy (paper Figure 15)")
+st.header("Cost and traded energy (paper Figure 15)")
 st.plotly_chart(out.figures["sensitivity_trades"], key="sensitivity_trades")
-st.subheader("Reserve by unit kind (paper Figure 16)")
+st.header("Reserve by unit kind (paper Figure 16)")
 groups = list(dict.fromkeys(table["sources"]))
 shown = groups[0] if len(groups) == 1 else st.segmented_control(
     "Sweep shown", groups, default=groups[0], required=True, key="sensitivity_shown")
 st.plotly_chart(figures.sensitivity_reserve_figure(table, shown), key="sensitivity_reserve")
-st.subheader("Table")
+st.header("Table")
 st.caption("One row per plan. Energies are sums over the day; reserve is the band offered per unit kind. "
            f"Computed in {out.seconds:.1f} s.")
 st.dataframe(table, hide_index=True, column_config=COLUMNS)
-st.subheader("Downloads")
+st.header("Downloads")
 studies.downloads([out], f"{run.name}_{run.delivery_date:%Y%m%d}_sensitivity", key="sensitivity_download")

@@ -111,7 +111,7 @@ st.title("Uncertainty")
 case = state.case()
 nt = period_count(case)
 
-st.subheader("Delivery day and forecast bands")
+st.header("Delivery day and forecast bands")
 days = case.history.local_days(case.timezone)
 if not days:
     widgets.problems([f"{case.history.source}: the history does not cover one whole day"], "No delivery day",
@@ -154,7 +154,7 @@ if case.provenance_summary():
 if st.session_state.get("uncertainty_problems"):
     widgets.problems(st.session_state["uncertainty_problems"])
 
-st.subheader("Budgets Γ")
+st.header("Budgets Γ")
 st.markdown(f"A budget Γ is the number of **periods** in which a source may deviate to its bad bound. "
             f"This day has **{nt} periods of {case.dt_h * 60:g} minutes**"
             + (f", so Γ = {round(1 / case.dt_h)} is one hour" if case.dt_h < 1 else "") + ". "
@@ -202,7 +202,7 @@ with budgets.container(width=VARIANT_PX):
                   "of them deviate, in the plan's favour, or takes the earliest. The earliest is one fixed "
                   "pattern: faster on such days, and a plan protected against other periods. Paper mode only.")
 
-st.subheader("Where each source deviates")
+st.header("Where each source deviates")
 run = state.run_case()
 problem = solving.prepare(run)
 if problem is not None:

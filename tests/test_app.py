@@ -932,7 +932,7 @@ def test_the_first_page_loads_neither_the_store_nor_the_workbook_nor_the_solver(
         "import sys", "from streamlit.testing.v1 import AppTest",
         "at = AppTest.from_file('app.py', default_timeout=120).run()",
         "assert not at.exception, [e.value for e in at.exception]",
-        "assert any('What should I bid tomorrow' in m.value for m in at.subheader), 'no Home'",
+        "assert any('What should I bid tomorrow' in m.value for m in at.header), 'no Home'",
         "print(sorted(m for m in ('sqlalchemy', 'openpyxl', 'scipy.interpolate', 'pyomo', 'highspy') if m in sys.modules))",
         "from dashboard.serve import FIRST_PAGE",
         "print(sorted(m for m in FIRST_PAGE if m not in sys.modules))"])

@@ -72,7 +72,7 @@ def test_a_hostile_label_and_case_name_show_as_text_where_a_saved_run_is_opened(
 
     at.switch_page("pages/runs.py").run()
     tick(at, 0)
-    for header in bodies(at.subheader):
+    for header in bodies(at.header):
         assert_inert(header, "sign in again")
     at.text_input(key=f"runs_label_{saved.id}").input(HOSTILE + " renamed").run()
     click(at, "runs_rename")
@@ -146,18 +146,18 @@ def test_a_ticked_run_stays_the_run_ticked_when_another_session_saves_one(run_li
     alpha = library.save("alpha", paper_case, None)
     beta = library.save("beta", paper_case, None)
     at = tick(open_app("runs"), 1)  # newest first: beta, alpha
-    assert [h.value for h in at.subheader] == ["alpha"]
+    assert [h.value for h in at.header] == ["alpha"]
     library.save("gamma", paper_case, None)  # another session: the rows move down by one
     at.run()
     assert not at.exception, at.exception
-    assert "beta" not in [h.value for h in at.subheader]
+    assert "beta" not in [h.value for h in at.header]
     for button in [b for b in at.button if b.key == "runs_delete"]:
         button.click().run()  # whatever the page still offers acts on alpha alone
     assert {r.id for r in library.list()} >= {beta.id}
     assert {r.label for r in library.list()} >= {"beta", "gamma"}
 
     at = tick(open_app("runs"), 2)  # the list as it is now: gamma, beta, alpha
-    assert [h.value for h in at.subheader] == ["alpha"]
+    assert [h.value for h in at.header] == ["alpha"]
     click(at, "runs_delete")
     assert [r.label for r in library.list()] == ["gamma", "beta"]
     assert alpha.id not in {r.id for r in library.list()}

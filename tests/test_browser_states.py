@@ -48,8 +48,6 @@ STREAMLIT_MARKUP = {
     # The file uploader's drop zone: role="presentation" on an element that takes the focus.
     "presentation-role-conflict": "node.closest('[data-testid=stFileUploaderDropzone]')",
 }
-# Streamlit draws st.subheader as <h3> under a page's st.title (<h1>): a best-practice rule, kept (docs/dashboard.md).
-PROJECT_KNOWN = ("heading-order",)
 QUIET_MS = 400  # a state counts as drawn once Streamlit's running indicator stays off twice this long
 
 
@@ -70,8 +68,6 @@ def check(page, script: str, state: str, scheme: str) -> None:
     quiet(page)
     page.screenshot(path=ARTIFACTS / f"state-{scheme}-{re.sub(r'[^a-z0-9]+', '-', state.lower())}.png")
     for violation in axe_all(page, script):
-        if violation["id"] in PROJECT_KNOWN:
-            continue
         assert violation["id"] in STREAMLIT_MARKUP and all(n["streamlit"] for n in violation["nodes"]), (state, violation)
     charts = page.evaluate(CHART_TEXTS)
     assert all(ratio >= 4.5 for *_, ratio in charts), (state, [c for c in charts if c[-1] < 4.5][:5])

@@ -193,5 +193,5 @@ def test_the_backtest_page_without_intraday_shows_no_trading_day(paper_case, dat
 
     store_with(paper_case, data_dir, [plain_day()])
     at = open_app("backtest")
-    assert not [h for h in at.subheader if h.value.startswith("Trading day")]
+    assert not [h for h in at.header if h.value.startswith("Trading day")]
     assert not [k for k in ("backtest_trading_day",) if any(s.key == k for s in at.selectbox)]
