@@ -301,4 +301,4 @@ def downloads(outputs: Sequence[StudyOutput], stem: str, key: str) -> None:
     chosen = second.selectbox("Table", list(tables), key=f"{key}_csv_table")
     third.download_button("Table (CSV)", table_csv(tables[chosen]), file_name=f"{stem}_{chosen}.csv",
                           mime="text/csv", on_click="ignore", key=f"{key}_csv", icon=":material/download:",
-                          help="The chosen table as CSV, full precision")
+                          help="The chosen table as CSV, full precision" + widgets.CSV_NOTE)

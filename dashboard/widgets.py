@@ -122,6 +122,10 @@ def kpi_cards(result: Result, only: tuple[str, ...] | None = None) -> None:
                    "exact amount in EUR.")
 
 
+# Said by every CSV download: an Excel set to a decimal comma splits or misreads such a file
+CSV_NOTE = (". Commas separate its values and a point marks decimals, which an Excel set to a decimal comma "
+            "(as in Spain) misreads: there, use an Excel download")
+
 BID_COLUMNS = {  # market.csv column -> (header, format, help); short headers: the table fits 1280 px
     "clock": ("Period", None, "Start of the period, local time of the delivery day"),
     "p_da_mw": ("DAM [MW]", "%.1f", "Day-ahead energy bid: positive sells, negative buys"),
@@ -166,7 +170,7 @@ def bids(result: Result, key: str) -> None:
                        file_name=f"{result.case.name}_{result.day:%Y%m%d}_{result.case.budgets.strategy}_bids_table.csv",
                        mime="text/csv", on_click="ignore", key=f"{key}_bids_table_csv", icon=":material/download:",
                        help="This table as a CSV file; its headers also say the DAM sign and that reserve "
-                            "prices are per MW and hour")
+                            "prices are per MW and hour" + CSV_NOTE + " (the full plan's, on Results)")
 
 
 def number_formats(frame: pd.DataFrame) -> dict:
@@ -467,7 +471,7 @@ def plan_downloads(result: Result, case: Case, key: str) -> None:
     row.download_button("Bids (CSV)", result.market.to_csv(index=False, float_format="%.6f"),
                         file_name=f"{stem}_bids.csv", mime="text/csv", on_click="ignore", key=f"{key}_bids",
                         icon=":material/download:", help="market.csv: one row per period with the DAM, SR "
-                                                        "and HPA bids and the price bands")
+                                                        "and HPA bids and the price bands" + CSV_NOTE)
     row.download_button("Full plan (Excel)", lambda: service.plan_workbook_bytes(result), file_name=f"{stem}_plan.xlsx",
                         mime="application/vnd.openxmlformats-officedocument.spreadsheetml.sheet",
                         on_click="ignore", key=f"{key}_plan", icon=":material/download:",

@@ -457,6 +457,8 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     np.testing.assert_allclose(flexibility["r_dn_mwh"], expected.flexibility["r_dn_mwh"])
     assert [b.label for b in at.get("download_button")] == ["Bids as shown (CSV)", "Bids (CSV)", "Full plan (Excel)",
                                                            "Case as edited (zip)", "Case as edited (Excel)"]
+    for button in at.get("download_button"):  # a CSV says how it reads in an Excel set to a decimal comma
+        assert ("decimal comma" in button.proto.help) == button.label.endswith("(CSV)"), button.label
     texts = [e.value for e in (*at.markdown, *at.caption)]
     assert not [text for text in texts if EMOJI_NAME.search(text)]
 
