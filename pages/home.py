@@ -12,7 +12,9 @@ from rvpp.service import Variant
 state.through_app("pages/home.py")
 
 UPLOAD_TYPES = ["zip", "yaml", "yml", "csv", "xlsx"]
-DESCRIPTION_CHARS = 1000  # of a case's description, shown on one line
+DESCRIPTION_CHARS = 1000
+LINK_PX = 250  # [px] a page's link and what it is for: "Robust bidding explained" whole
+GAP_PX = 32    # [px] Streamlit's "medium" gap between them  # of a case's description, shown on one line
 HEADLINE = ("Net cost [kEUR]", "DAM revenue [kEUR]", "Reserve revenue [kEUR]", "Protection [kEUR]")
 LINKS = (
     ("pages/portfolio.py", "Portfolio", "edit wind, PV, CSP and demands; see each unit's forecast band"),
@@ -120,8 +122,9 @@ st.markdown(
     "The plan is the solution of a robust mixed-integer program. " + widgets.MONEY)
 if case.description:
     st.caption(widgets.literal(case.description, DESCRIPTION_CHARS))
-for column, (page, title, description) in zip(st.columns(3) * 2, LINKS):
-    with column:
+links = st.container(horizontal=True, gap="medium", width=3 * LINK_PX + 2 * GAP_PX)  # three to a row at most
+for page, title, description in LINKS:
+    with links.container(width=LINK_PX):
         st.page_link(page, label=title, icon=":material/arrow_forward:")
         st.caption(description)
 
