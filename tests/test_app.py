@@ -438,11 +438,11 @@ def test_results_charts_and_kpis_match_the_library(paper_solve):
     expected = paper_solve()
     assert_kpis_match(at, expected)
     specs = figures(at)
-    assert set(specs) == {"The day's economics: from revenues and costs to the net cost (balanced)",
+    assert set(specs) == {"The day's economics, part by part (balanced)",
                           "Day-ahead energy and secondary-reserve bands", "Heat supply against thermal demand",
                           "Electrical dispatch by unit (consumption negative)", "CSP1: thermal storage",
                           "Reserve by unit kind"}
-    waterfall = specs["The day's economics: from revenues and costs to the net cost (balanced)"]["data"][0]
+    waterfall = specs["The day's economics, part by part (balanced)"]["data"][0]
     np.testing.assert_allclose(values(waterfall["y"])[-1], -expected.objective_eur / 1000)
     market = expected.market
     trades = specs["Day-ahead energy and secondary-reserve bands"]
@@ -748,7 +748,7 @@ def test_the_saved_runs_page_renames_deletes_and_compares(run_library, paper_sol
     extra = kpis.loc[first.label, f"Extra cost vs {second.label} [kEUR]"]
     assert extra == pytest.approx((balanced.objective_eur - pessimistic.objective_eur) / 1000)
     assert extra > 0 and kpis.loc[second.label, f"Extra cost vs {second.label} [kEUR]"] == 0
-    economics = figures(at)["The day's economics: from revenues and costs to the net cost"]
+    economics = figures(at)["The day's economics, part by part"]
     assert [values(t["y"])[-1] for t in economics["data"]] == pytest.approx(
         [-pessimistic.objective_eur / 1000, -balanced.objective_eur / 1000])
     library.delete(first.id)

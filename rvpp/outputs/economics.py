@@ -149,7 +149,7 @@ def waterfall_figure(results: Mapping[str, Result]) -> go.Figure:
         elif name.startswith("yaxis"):
             axis.update(gridcolor=GRID_COLOR, zerolinecolor=GRID_COLOR)
     layout["yaxis"]["title"] = {"text": "Cost [kEUR], positive: the plant pays"}
-    title = "The day's economics: from revenues and costs to the net cost" + (
+    title = "The day's economics, part by part" + (
         f" ({labels[0]})" if len(labels) == 1 else "")
     layout.update(title=dict(text=title, y=0.98, yanchor="top"), height=FIGURE_HEIGHT + 40,
                   paper_bgcolor=TRANSPARENT, plot_bgcolor=TRANSPARENT,
