@@ -5,7 +5,12 @@ import streamlit as st
 
 from dashboard import solving, state, widgets
 from rvpp import CaseError
-from rvpp.service import bands_figure, tariff_figure, thin_clock_ticks, with_period_length
+from rvpp.service import (
+    bands_figure,
+    tariff_figure,
+    thin_clock_ticks,
+    with_period_length,
+)
 
 state.through_app("pages/markets.py")
 

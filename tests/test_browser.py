@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import datetime as dt
 import io
+import itertools
 import os
 import re
 import shutil
@@ -1010,7 +1011,7 @@ def test_every_page_passes_axe_and_fits_1280_pixels(app_url):
             drawn[title] = len(charts)
             levels = page.evaluate("() => [...document.querySelectorAll('[data-testid=stMain] :is(h1, h2, h3, h4, h5, h6)')]"
                                    ".map(h => Number(h.tagName[1]))")
-            assert levels[0] == 1 and all(b <= a + 1 for a, b in zip(levels, levels[1:])), (title, levels)
+            assert levels[0] == 1 and all(b <= a + 1 for a, b in itertools.pairwise(levels)), (title, levels)
             overflowing = page.evaluate("""() => [...document.querySelectorAll('[data-testid=stPlotlyChart]')]
                 .filter(c => c.scrollWidth > c.clientWidth + 1).length""")
             assert overflowing == 0, f"{title}: {overflowing} chart(s) wider than their place"
