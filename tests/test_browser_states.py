@@ -269,7 +269,7 @@ TAB_PRESSES = 40  # per page, from its top
 KINDS = ("button", "a", "tab", "radio", "switch", "checkbox", "summary")  # radio: a segmented control's option
 
 
-@pytest.mark.parametrize("scheme", ["light", "dark"])
+@pytest.mark.parametrize("scheme", ["light", pytest.param("dark", marks=pytest.mark.slow)])  # one rule draws both
 def test_every_control_reached_by_the_keyboard_is_marked_at_3_to_1(states_url, scheme):
     # Streamlit ringed them in the primary colour at 50 %: 2.5:1 on the light background; a switch or a checkbox
     # (its label, which holds the hidden input that takes the focus) was not marked at all.
