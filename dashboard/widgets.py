@@ -19,6 +19,7 @@ from . import library, state
 
 KIND_TITLES = {kind: info.group for kind, info in KINDS.items()}
 KPI_CARD_PX = 193  # a card's width: "Reserve revenue [kEUR]" whole, four to a row in the 820 px of 1280 px
+NARROW_TICK_HOURS = 2  # a clock label every other hour on a chart that may be narrow (450 px on a laptop at 150 %)
 BIDS_HEIGHT_PX = 300  # about eight periods at a time; the table scrolls
 NET = "Net cost [kEUR]"
 # The one money convention of every page, chart, table and export label, said once.

@@ -9,7 +9,6 @@ from rvpp.service import (SOURCE_TITLES, SourceKind, bands_figure, deviating_per
 
 state.through_app("pages/learn.py")
 
-NARROW_TICK_HOURS = 2  # label every other hour: the charts may be 450 px wide (a laptop at 150 %)
 CONTROL_PX, SLIDER_PX = 220, 260  # a demo's choice and its Γ slider, side by side when the window allows
 
 st.title("Robust bidding explained")
@@ -48,7 +47,7 @@ def budget_demo() -> None:
                     help="Σ deviation × period length over the Γ chosen periods: how much the plan must cover.")
     nominal, adverse = ("upper", "lower") if src.kind is SourceKind.PRODUCTION else ("lower", "upper")
     st.caption(f"Γ = 0 plans on the {nominal} bound everywhere; Γ = {nt} on the {adverse} bound everywhere.")
-    st.plotly_chart(thin_clock_ticks(bands_figure(problem, source, (y > 0).astype(float)), NARROW_TICK_HOURS),
+    st.plotly_chart(thin_clock_ticks(bands_figure(problem, source, (y > 0).astype(float)), widgets.NARROW_TICK_HOURS),
                     key="learn_band")
 
 
@@ -84,7 +83,8 @@ def protection_demo() -> None:
                f"{widgets.keur(sum(plan.protection_eur.values()))} kEUR for every price (the Protection card on "
                "Results). Here the plan stays fixed and only the adversary's budget moves; a new solve would also "
                "change the plan.")
-    st.plotly_chart(thin_clock_ticks(exposure_figure(plan, price, gamma), NARROW_TICK_HOURS), key="learn_exposure")
+    st.plotly_chart(thin_clock_ticks(exposure_figure(plan, price, gamma), widgets.NARROW_TICK_HOURS),
+                    key="learn_exposure")
 
 
 protection_demo()
@@ -122,7 +122,7 @@ if all(state.is_requested(c) for c in variants.values()) or st.button(
         for label, result in (("paper mode", paper), ("planner-chosen", chosen)):
             figure = bands_figure(result.problem, source, deviating_periods(result, source))
             figure.update_layout(title_text=f"{source}, {label}")
-            thin_clock_ticks(figure, NARROW_TICK_HOURS)
+            thin_clock_ticks(figure, widgets.NARROW_TICK_HOURS)
             charts.plotly_chart(figure, key=f"learn_mode_{label}")
 
 st.header("4 · The price of robustness")

@@ -20,7 +20,6 @@ PERIOD_MINUTES = {60: 1.0, 30: 0.5, 15: 0.25}
 TARIFF_KEY = "markets_tariff"
 SETTING_PX = 220        # a number field's width: its label on two lines
 TARIFF_TABLE_PX = 320   # the tariff table's two columns whole (Clock hour, Tariff [EUR/MWh_th])
-NARROW_TICK_HOURS = 2   # the tariff chart beside its table: a clock label every other hour
 
 
 def apply(**changes) -> None:
@@ -119,7 +118,7 @@ with tariff.container(width=TARIFF_TABLE_PX):
     )
 problem = solving.prepare(state.run_case())
 if problem is not None:
-    tariff.plotly_chart(thin_clock_ticks(tariff_figure(problem), NARROW_TICK_HOURS), key="markets_tariff_chart")
+    tariff.plotly_chart(thin_clock_ticks(tariff_figure(problem), widgets.NARROW_TICK_HOURS), key="markets_tariff_chart")
     st.header("Price bands")
     st.caption("The DAM price may fall to its lower percentile when the plan sells and rise to its upper "
                "percentile when it buys; reserve prices are planned at their upper percentile and may fall to "

@@ -12,7 +12,6 @@ state.through_app("pages/portfolio.py")
 BAND_COLUMNS = 2
 SCALE = "scale_with_capacity"   # table column: the unit's forecast band follows its capacity
 FIXED = "portfolio_fixed_scale"  # session key: names of units whose band does not follow
-NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 
 
 def set_csp(on_key: str) -> None:
@@ -123,5 +122,5 @@ if problem is not None:
             columns = st.columns(BAND_COLUMNS)
             for i, unit in enumerate(getattr(run, kind)):
                 with columns[i % BAND_COLUMNS]:
-                    figure = thin_clock_ticks(bands_figure(problem, unit.name), NARROW_TICK_HOURS)
+                    figure = thin_clock_ticks(bands_figure(problem, unit.name), widgets.NARROW_TICK_HOURS)
                     st.plotly_chart(figure, key=f"portfolio_band_{unit.name}")

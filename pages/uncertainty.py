@@ -22,7 +22,6 @@ BAND_COLUMNS = 2
 DATE_PX, SLIDER_PX = 170, 190  # the day, the window and the percentiles in one row from 790 px, two rows when narrower
 CHOICE_PX = 230  # the price point forecast: "same hour last week" whole
 BUDGET_TABLE_PX, VARIANT_PX = 490, 300  # the budget table beside the variant's choices from 806 px
-NARROW_TICK_HOURS = 2  # label every other hour on half-width charts
 TABLE_ROW_PX, TABLE_BORDER_PX = 35, 3  # st.data_editor row height and frame
 PRICE_LABELS = {"price_da": "DAM price", "price_sr_up": "SR up price", "price_sr_dn": "SR down price"}
 GROUPS = {"Prices": ("price",), "Wind": ("wind",), "PV": ("pv",), "CSP": ("csp",), "Demands": ("ed", "td")}
@@ -229,4 +228,4 @@ if problem is not None:
                     row = st.container(horizontal=True)
                 chi = deviating_periods(result, source) if result is not None and result.has_plan else None
                 figure = bands_figure(problem, source, chi, **band_overlays(problem, source))
-                row.plotly_chart(thin_clock_ticks(figure, NARROW_TICK_HOURS), key=f"uncertainty_band_{source}")
+                row.plotly_chart(thin_clock_ticks(figure, widgets.NARROW_TICK_HOURS), key=f"uncertainty_band_{source}")
